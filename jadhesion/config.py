@@ -1,0 +1,31 @@
+"""Process-wide JAX settings applied at the entry points (CLI, benchmarks, tests).
+
+Library functions never call these themselves: they compute in the dtype of their inputs.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+
+def enable_x64() -> None:
+    """Compute in float64 (results of this project are reported in double precision)."""
+    import jax
+
+    jax.config.update("jax_enable_x64", True)
+
+
+def enable_compilation_cache(path: str | os.PathLike | None = None) -> Path:
+    """Persist compiled XLA programs so a second CLI run does not pay compilation again.
+
+    The cache lives in ``$JADHESION_CACHE`` or ``~/.cache/jadhesion/xla`` unless ``path`` is given.
+    """
+    import jax
+
+    cache = Path(path or os.environ.get("JADHESION_CACHE", Path.home() / ".cache" / "jadhesion" / "xla"))
+    cache.mkdir(parents=True, exist_ok=True)
+    jax.config.update("jax_compilation_cache_dir", str(cache))
+    jax.config.update("jax_persistent_cache_min_entry_size_bytes", -1)
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.1)
+    return cache
