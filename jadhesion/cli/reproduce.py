@@ -1,0 +1,39 @@
+"""``jadhesion reproduce [table2|online]``: the papers' results on built-in defaults.
+
+With no target it runs both: paper 001's Table 2 (Polach, offline) and paper 000's online
+identification (Kiencke).
+"""
+
+from __future__ import annotations
+
+import sys
+
+from .common import emit_json
+
+
+def register(sub) -> None:
+    p = sub.add_parser("reproduce", help="reproduce the papers' tables (default: both)")
+    p.add_argument("target", nargs="?", choices=("table2", "online"), default=None)
+    p.add_argument("--seeds", type=int, default=20, help="table2: data/optimiser seeds per cell")
+    p.add_argument("--runs", type=int, default=1000, help="online: Monte Carlo runs per algorithm")
+    p.add_argument("--plot", metavar="DIR", default=None, help="write figures into DIR")
+    p.add_argument("--json", action="store_true", help="one JSON document on stdout")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from ..experiments import online, table2
+
+    out = {}
+    progress = not args.json or sys.stderr.isatty()
+    if args.target in (None, "table2"):
+        out["table2"] = table2.run(seeds=args.seeds, plot_dir=args.plot, progress=progress)
+    if args.target in (None, "online"):
+        out["online"] = online.run(runs=args.runs, plot_dir=args.plot, progress=progress)
+    if args.json:
+        emit_json(out[args.target] if args.target else out)
+    else:
+        for name, result in out.items():
+            module = table2 if name == "table2" else online
+            print(module.format_text(result))
+    return 0
