@@ -1,0 +1,169 @@
+"""Paper 001, Table 2: Polach identification by improved TLBO, TLBO, PSO and Levenberg–Marquardt.
+
+For each simulated 22E traction test (dry, wet, sand; :mod:`jadhesion.data.scenarios`) and each of
+``seeds`` data/optimiser seeds, every method identifies ``[kA, kS, mu0, A, B]`` from the observer's
+output. The *target* on a dataset is 1.01 × the error of the true parameters on that dataset (the
+paper's errors are the noise floor of its recordings, so "reaching the paper's error" means reaching
+the floor). Reported per scenario and method (medians, with IQR):
+
+* ``iterations``/``evaluations``/``seconds`` to the target: population methods stop at the target
+  (bounded while loop, at most ``max_iter`` iterations); LM runs to convergence. Seconds are warm
+  wall-clock times of single fits (compilation excluded, reported separately as ``compile_seconds``).
+* ``error``: the MAE (paper eq 15) at the end of a fixed ``history_iter`` budget (population) or at
+  convergence (LM); ``reached``: the share of seeds that hit the target.
+* ``params``: median identified parameters; ``param_abs_error``: median |identified − true|.
+* ``paper``: the paper's error, iterations and seconds where the paper ran that method.
+"""
+
+from __future__ import annotations
+
+import time
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..data.scenarios import get_scenario
+from ..data.simulator import simulate_batch
+from ..identify.driver import run as run_population
+from ..identify.polach_fit import ALGORITHMS, fit_polach, polach_mae
+from ..models.polach import PARAM_NAMES
+
+SCENARIOS = ("dry", "wet", "sand")
+METHODS = ("itlbo", "tlbo", "pso", "lm")
+
+#: Paper 001, Table 2 (error, iterations, seconds); wet improved TLBO also reached 0.01188 at 421.
+PAPER = {
+    ("dry", "pso"): {"error": 0.0117, "iterations": 890, "seconds": 1469},
+    ("dry", "tlbo"): {"error": 0.0114, "iterations": 724, "seconds": 884},
+    ("dry", "itlbo"): {"error": 0.0108, "iterations": 31, "seconds": 50},
+    ("wet", "tlbo"): {"error": 0.01193, "iterations": 981, "seconds": 1197},
+    ("wet", "itlbo"): {"error": 0.01194, "iterations": 28, "seconds": 45,
+                       "later": {"error": 0.01188, "iterations": 421, "seconds": 695}},
+    ("sand", "tlbo"): {"error": 0.0180, "iterations": 958, "seconds": 1169},
+    ("sand", "itlbo"): {"error": 0.0167, "iterations": 44, "seconds": 70},
+}
+POP_SIZE = 50
+
+
+def _median_iqr(values):
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    if v.size == 0:
+        return None, None
+    q25, q50, q75 = np.percentile(v, [25, 50, 75])
+    return float(q50), [float(q25), float(q75)]
+
+
+def _timed_fits(datasets, method, keys, targets, max_iter):
+    """Single warm fits to the target, one per dataset: (fits, seconds, compile_seconds)."""
+    def one(i):
+        data = jax.tree_util.tree_map(lambda a: a[i], datasets)
+        kw = {} if method == "lm" else {"target": float(targets[i]), "max_iter": max_iter,
+                                         "pop_size": POP_SIZE}
+        t0 = time.perf_counter()
+        fit = jax.block_until_ready(fit_polach(data, method, keys[i], **kw))
+        return fit, time.perf_counter() - t0
+
+    _, compile_seconds = one(0)  # first call compiles; timed separately, not reported as a fit
+    fits, seconds = zip(*(one(i) for i in range(len(targets))))
+    return fits, np.array(seconds), compile_seconds
+
+
+def _histories(datasets, method, keys, history_iter):
+    """Fixed-budget runs (vmapped over seeds) keeping best MAE and parameters per iteration."""
+    bounds = (jnp.zeros(5), jnp.ones(5))
+    batched = jax.jit(jax.vmap(lambda d, k: run_population(
+        ALGORITHMS[method], polach_mae, bounds, k, POP_SIZE, history_iter, args=d)))
+    out = batched(datasets, keys)
+    return np.asarray(out.history.best_f), np.asarray(out.history.best_x), np.asarray(out.best_x)
+
+
+def run_scenario(scenario, seeds=20, max_iter=1000, history_iter=300, progress=None):
+    """Table 2 rows and convergence histories for one scenario."""
+    truth = np.asarray(get_scenario(scenario).params)
+    datasets = simulate_batch(scenario, list(range(seeds)))
+    floors = np.asarray(jax.vmap(polach_mae, in_axes=(None, 0))(jnp.asarray(truth), datasets))
+    targets = 1.01 * floors
+    rows, histories = [], {}
+    for m, method in enumerate(METHODS):
+        keys = jax.random.split(jax.random.fold_in(jax.random.key(2024), m), seeds)
+        fits, seconds, compile_s = _timed_fits(datasets, method, keys, targets, max_iter)
+        maes = np.array([float(f.mae) for f in fits])
+        reached = maes <= targets
+        if method == "lm":
+            final_params = np.stack([np.asarray(f.params) for f in fits])
+            final_err = maes
+        else:
+            hist_f, hist_x, final_params = _histories(datasets, method, keys, history_iter)
+            histories[method] = {"error": hist_f, "params": hist_x}
+            final_err = hist_f[:, -1]
+        iters = np.array([float(f.iterations) for f in fits])
+        evals = np.array([float(f.evaluations) for f in fits])
+        hit = reached if method != "lm" else np.ones_like(reached)
+        row = {"scenario": scenario, "method": method}
+        row["error"], row["error_iqr"] = _median_iqr(final_err)
+        for key, values in (("iterations", iters), ("evaluations", evals), ("seconds", seconds)):
+            row[key], row[key + "_iqr"] = _median_iqr(np.where(hit, values, np.nan))
+        row["reached"] = float(np.mean(reached))
+        row["floor"] = float(np.median(floors))
+        row["compile_seconds"] = float(compile_s)
+        row["params"] = dict(zip(PARAM_NAMES, np.median(final_params, axis=0).tolist()))
+        row["param_abs_error"] = dict(zip(PARAM_NAMES,
+                                          np.median(np.abs(final_params - truth), axis=0).tolist()))
+        row["paper"] = PAPER.get((scenario, method))
+        rows.append(row)
+        if progress is not None:
+            progress.update()
+    return rows, {"histories": histories, "truth": truth, "floor": floors}
+
+
+def run(seeds=20, plot_dir=None, progress=True, max_iter=1000, history_iter=300) -> dict:
+    """The whole Table 2: ``{"rows": [...], "seeds": N, ...}``; figures into ``plot_dir``."""
+    from ..cli.common import Progress
+
+    bar = Progress(len(SCENARIOS) * len(METHODS), "table2", "cells", enabled=progress)
+    rows, traces = [], {}
+    t0 = time.perf_counter()
+    for scenario in SCENARIOS:
+        r, traces[scenario] = run_scenario(scenario, seeds, max_iter, history_iter, bar)
+        rows += r
+    result = {"rows": rows, "seeds": seeds, "pop_size": POP_SIZE, "max_iter": max_iter,
+              "history_iter": history_iter, "target": "1.01 x error of the true parameters",
+              "wall_seconds": time.perf_counter() - t0}
+    if plot_dir is not None:
+        from pathlib import Path
+
+        from ..plots.convergence import convergence_figure
+
+        out = Path(plot_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        for scenario, trace in traces.items():
+            fig = convergence_figure(trace, scenario)
+            fig.savefig(out / f"table2_convergence_{scenario}.png", dpi=120)
+        result["figures"] = sorted(str(p) for p in out.glob("table2_convergence_*.png"))
+    return result
+
+
+def format_text(result) -> str:
+    """Table 2 as text, our medians beside the paper's numbers."""
+    from ..cli.common import table
+
+    lines = [f"Paper 001, Table 2 — medians over {result['seeds']} seeds; target = "
+             f"{result['target']}; population size {result['pop_size']}.", ""]
+    rows = []
+    for r in result["rows"]:
+        paper = r["paper"] or {}
+        rows.append({
+            "scenario": r["scenario"], "method": r["method"], "floor": r["floor"],
+            "error": r["error"], "reached": f"{100 * r['reached']:.0f}%",
+            "iter": "-" if r["iterations"] is None else f"{r['iterations']:.0f}",
+            "evals": "-" if r["evaluations"] is None else f"{r['evaluations']:.0f}",
+            "ms": "-" if r["seconds"] is None else f"{1e3 * r['seconds']:.1f}",
+            "paper err": paper.get("error", "-"), "paper iter": paper.get("iterations", "-"),
+            "paper s": paper.get("seconds", "-"),
+        })
+    cols = ["scenario", "method", "floor", "error", "reached", "iter", "evals", "ms",
+            "paper err", "paper iter", "paper s"]
+    lines.append(table(rows, cols))
+    return "\n".join(lines)
