@@ -1,0 +1,145 @@
+"""22E traction-test simulator: paper envelopes, true-parameter error, batching, effects, CLI.
+
+Every simulation here has the default length and a batch of 1 or 3 seeds, so the whole module
+compiles the simulator twice.
+"""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from jadhesion.data.scenarios import SCENARIOS, envelope, paper_envelope
+from jadhesion.data.simulator import simulate, simulate_batch, simulate_dataset, simulate_many
+from jadhesion.errors import InputError
+from jadhesion.models.effects import EFFECTS, magnitudes
+
+SEEDS = [0, 1, 2]
+ENVELOPE_KEYS = ("mean_speed_kmh", "max_slip_kmh", "max_creep", "mu_low", "mu_high", "mu_mean")
+
+
+@pytest.mark.parametrize("name", sorted(SCENARIOS))
+def test_envelope_and_true_parameter_error_match_the_paper(name):
+    paper = paper_envelope(name)
+    for result in simulate_many(name, SEEDS):
+        env = result.truth["envelope"]
+        for key in ENVELOPE_KEYS:
+            assert env[key] == pytest.approx(paper[key], rel=0.15), (result.truth["seed"], key)
+        assert env["true_param_mae"] == pytest.approx(paper["true_param_mae"], rel=0.10)
+        assert env["mu_min"] <= env["mu_low"] < env["mu_high"] <= env["mu_max"]
+        assert all(np.all(np.isfinite(v)) for v in result.columns.values())
+
+
+def test_batch_equals_single_runs_and_is_a_stacked_dataset():
+    batch = simulate_batch("dry", SEEDS)
+    assert batch.adhesion.shape == (3, 2000) and batch.k_eps.shape == (3,)
+    single = simulate_dataset("dry", 1)
+    for field in ("creep", "slip", "adhesion", "vehicle_speed"):
+        np.testing.assert_allclose(getattr(batch, field)[1], getattr(single, field), atol=1e-9)
+    assert not np.allclose(batch.adhesion[0], batch.adhesion[1])  # seeds differ
+
+
+def test_recording_columns_and_truth():
+    result = simulate("wet", seed=5)
+    cols = result.columns
+    assert set(cols) >= {"time", "vehicle_speed", "wheel_speed", "traction_torque", "creepage",
+                         "slip_velocity", "adhesion"}
+    np.testing.assert_allclose(np.diff(cols["time"]), 0.02)
+    np.testing.assert_allclose(cols["slip_velocity"], cols["wheel_speed"] - cols["vehicle_speed"])
+    truth = result.truth
+    assert truth["scenario"] == "wet" and truth["seed"] == 5 and truth["effects"] == {}
+    assert truth["params"] == {"kA": 1.0, "kS": 1.0, "mu0": 0.261, "A": 0.6858, "B": 0.2251}
+    assert truth["envelope"] == envelope(result)
+    json.dumps(truth, allow_nan=False)
+
+
+def _base_and(effect, mag):
+    base = simulate("dry", 0, noise=False)
+    return base, simulate("dry", 0, effects=[(effect, mag)], noise=False)
+
+
+def test_rail_change_lowers_adhesion_after_the_step():
+    base, eff = _base_and("rail_change", 0.2)
+    t = base.columns["time"]
+    late, early = t > 0.55 * t[-1], t < 0.45 * t[-1]
+    drop = base.latent["adhesion"][late].mean() - eff.latent["adhesion"][late].mean()
+    assert drop > 0.03
+    np.testing.assert_allclose(eff.columns["adhesion"][early], base.columns["adhesion"][early],
+                               atol=1e-6)
+
+
+def test_wheel_radius_error_offsets_slip_and_scales_adhesion():
+    mag = 0.02
+    base, eff = _base_and("wheel_radius_error", mag)
+    # recorded slip (nominal radius) lies below the true slip by mag · v_w
+    offset = eff.latent["slip_velocity"] - eff.columns["slip_velocity"]
+    np.testing.assert_allclose(offset, mag * eff.columns["wheel_speed"], rtol=1e-6)
+    ratio = eff.columns["adhesion"][100:] / eff.latent["adhesion"][100:]
+    assert np.median(ratio) == pytest.approx(1 + mag, abs=2e-3)
+
+
+def test_signal_delay_shifts_the_recorded_torque():
+    base, eff = _base_and("signal_delay", 0.1)
+    lag = 5  # 0.1 s at 50 Hz
+    np.testing.assert_allclose(eff.columns["traction_torque"][lag:],
+                               base.columns["traction_torque"][:-lag], rtol=1e-9)
+
+
+def test_torque_offset_shifts_observed_adhesion():
+    base, eff = _base_and("torque_offset", 0.02)
+    np.testing.assert_allclose(eff.columns["adhesion"] - base.columns["adhesion"], 0.02, atol=1e-9)
+
+
+def test_speed_dependence_lowers_friction_as_speed_rises():
+    base, eff = _base_and("speed_dependence", 0.5)
+    ratio = eff.latent["adhesion"] / base.latent["adhesion"]
+    n = len(ratio)
+    assert ratio[: n // 5].mean() > 1.02 and ratio[-n // 5:].mean() < 0.98
+
+
+def test_thermal_softening_and_load_transfer_lower_observed_adhesion():
+    for name in ("thermal_softening", "load_transfer"):
+        base, eff = _base_and(name, EFFECTS[name].default)
+        assert eff.columns["adhesion"].mean() < base.columns["adhesion"].mean() - 0.005, name
+
+
+def test_effect_and_scenario_input_errors():
+    for bad in (["nope"], [("rail_change", "x")], [("rail_change", 2.0)], ["signal_delay=-1"],
+                ["torque_offset", "torque_offset"]):
+        with pytest.raises(InputError):
+            magnitudes(bad)
+    assert magnitudes(["rail_change"])[0] == EFFECTS["rail_change"].default
+    with pytest.raises(InputError, match="unknown scenario"):
+        simulate("icy")
+
+
+def _cli(*args):
+    return subprocess.run([sys.executable, "-m", "jadhesion", "simulate", *args],
+                          capture_output=True, text=True, timeout=300)
+
+
+def test_cli_writes_recording_sidecar_and_truth(tmp_path):
+    out = tmp_path / "rec.csv"
+    proc = _cli("--scenario", "sand", "--effect", "rail_change=0.3", "--seed", "2",
+                "--out", str(out), "--json")
+    assert proc.returncode == 0, proc.stderr
+    summary = json.loads(proc.stdout)
+    assert summary["n_samples"] == 2000 and summary["effects"]["rail_change"]["magnitude"] == 0.3
+    header = out.read_text().splitlines()[0].split(",")
+    assert header[:4] == ["time", "vehicle_speed", "wheel_speed", "traction_torque"]
+    sidecar = json.loads(out.with_suffix(".json").read_text())
+    assert sidecar["wheel_radius_m"] == 0.61 and sidecar["axle_load_kg"] == 21500.0
+    truth = json.loads((tmp_path / "rec.truth.json").read_text())
+    assert truth["scenario"] == "sand" and truth["params"]["kS"] == 0.4089
+    assert truth["envelope"] == summary["envelope"]
+
+
+@pytest.mark.parametrize("args", [["--scenario", "icy"], ["--scenario", "dry", "--effect", "bogus"],
+                                  ["--scenario", "dry", "--effect", "rail_change=abc"]])
+def test_cli_bad_input_exits_2_and_writes_nothing(tmp_path, args):
+    proc = _cli(*args, "--out", str(tmp_path / "x.csv"))
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr.count("\n") == 1 and "Traceback" not in proc.stderr
+    assert not list(tmp_path.iterdir())
