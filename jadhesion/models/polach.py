@@ -21,12 +21,13 @@ from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from .contact import Contact, contact_stiffness
 
 PARAM_NAMES = ("kA", "kS", "mu0", "A", "B")
 #: Identification box of the paper: every parameter in [0, 1].
-BOUNDS = (jnp.zeros(5), jnp.ones(5))
+BOUNDS = (np.zeros(5), np.ones(5))
 
 _MU_FLOOR = 1e-12
 _EPS_CLIP = 1e8

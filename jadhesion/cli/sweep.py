@@ -1,0 +1,99 @@
+"""``jadhesion sweep``: simulate → observe → fit over a grid, one row per fit (see :mod:`..sweeps`).
+
+Several machines: start one process per node with ``--distributed`` (SLURM/Open MPI/… detected by
+``jax.distributed.initialize()``) or with ``--coordinator HOST:PORT --num-processes P --process-id
+I``; every process takes its share of the chunks and process 0 merges the table. ``out`` must be on
+a file system all processes share.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+
+from .common import UserError, emit_json
+
+
+def _list(kind, name):
+    def parse(text):
+        items = [t.strip() for t in text.split(",") if t.strip()]
+        if not items:
+            raise argparse.ArgumentTypeError(f"{name}: empty list")
+        try:
+            return [kind(t) for t in items]
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name}: cannot read {text!r} as {kind.__name__}s") from None
+    return parse
+
+
+def register(sub) -> None:
+    p = sub.add_parser("sweep", help="vectorised parameter sweep (scenarios × seeds × methods × …)",
+                       description=__doc__.splitlines()[0])
+    p.add_argument("--scenarios", type=_list(str, "--scenarios"), default=["dry", "wet", "sand"],
+                   help="comma-separated scenarios (default dry,wet,sand)")
+    p.add_argument("--seeds", type=int, default=10, help="data seeds 0..N-1 (default 10)")
+    p.add_argument("--methods", type=_list(str, "--methods"), default=["lm"],
+                   help="comma-separated fitting methods: lm, itlbo, tlbo, pso (default lm)")
+    p.add_argument("--noise", type=_list(float, "--noise"), default=[1.0],
+                   help="noise scales around the true curve (default 1 = as simulated)")
+    p.add_argument("--creep-max", type=_list(float, "--creep-max"), default=[math.inf],
+                   help="creep ranges covered by the test, 'inf' = all samples (default inf)")
+    p.add_argument("--pop-size", type=int, default=None, help="population methods: class size (default 50)")
+    p.add_argument("--max-iter", type=int, default=None, help="population methods: iterations (default 300)")
+    p.add_argument("--samples", type=int, default=None, help="samples per simulated test (default 2000)")
+    p.add_argument("--chunk-size", type=int, default=64, help="fits per compiled batch (default 64)")
+    p.add_argument("--out", default="sweep.csv", help="table file, .csv or .parquet (default sweep.csv)")
+    p.add_argument("--resume", action=argparse.BooleanOptionalAction, default=True,
+                   help="skip chunks whose part file exists (default on)")
+    p.add_argument("--distributed", action="store_true",
+                   help="join a multi-process run (cluster auto-detected by jax.distributed)")
+    p.add_argument("--coordinator", metavar="HOST:PORT", help="multi-process run: coordinator address")
+    p.add_argument("--num-processes", type=int, help="multi-process run: number of processes")
+    p.add_argument("--process-id", type=int, help="multi-process run: this process's index")
+    p.add_argument("--json", action="store_true", help="one JSON document on stdout")
+    p.set_defaults(func=run)
+
+
+def _initialize(args) -> None:
+    import jax
+
+    explicit = (args.coordinator, args.num_processes, args.process_id)
+    if not (args.distributed or any(v is not None for v in explicit)) or jax.distributed.is_initialized():
+        return
+    if any(v is None for v in explicit) and not args.distributed:
+        raise UserError("sweep: --coordinator, --num-processes and --process-id go together")
+    try:
+        jax.distributed.initialize(*explicit)
+    except (RuntimeError, ValueError) as exc:
+        raise UserError(f"sweep: cannot join the multi-process run: {exc}") from None
+
+
+def run(args) -> int:
+    _initialize(args)
+    import jax
+
+    from ..sweeps import Grid, run_sweep
+
+    if args.seeds < 1:
+        raise UserError(f"sweep: --seeds must be >= 1, got {args.seeds}")
+    budget = {"pop_size": args.pop_size, "max_iter": args.max_iter}
+    for name, value in budget.items():
+        if value is not None and value < 1:
+            raise UserError(f"sweep: --{name.replace('_', '-')} must be >= 1, got {value}")
+    grid = Grid(scenarios=args.scenarios, seeds=range(args.seeds), methods=args.methods,
+                noise_scale=args.noise, creep_max=args.creep_max, n_samples=args.samples,
+                fit_options={k: v for k, v in budget.items() if v is not None})
+    progress = not args.json or sys.stderr.isatty()
+    _, summary = run_sweep(grid, args.out, chunk_size=args.chunk_size, resume=args.resume,
+                           progress=progress)
+    if jax.process_index() != 0:
+        return 0
+    doc = summary._asdict()
+    if args.json:
+        emit_json(doc)
+    else:
+        print(f"{doc['fits']} fits ({doc['computed']} computed, {doc['chunks_computed']}/{doc['chunks']} "
+              f"chunks) in {doc['seconds']:.1f} s = {doc['fits_per_second']:.1f} fits/s on "
+              f"{doc['devices']} device(s), {doc['processes']} process(es) -> {doc['out']}")
+    return 0

@@ -1,0 +1,20 @@
+"""Vectorised parameter sweeps: a declarative grid → simulate → observe → fit, as sharded batches.
+
+    from jadhesion.sweeps import Grid, run_sweep
+    table, summary = run_sweep(Grid(scenarios=["dry"], seeds=range(8), methods=["lm"],
+                                    noise_scale=[0.5, 1, 2], creep_max=[0.05, 0.2, float("inf")]),
+                               "sweep.csv", chunk_size=64)
+
+One row per fit (columns: :data:`COLUMNS`). Scales from one core (vmap) to all local devices
+(``shard_map`` over a 1-D ``'batch'`` mesh) to many machines (``jax.distributed``: chunks dealt
+round-robin to processes, merged by process 0); chunks are streamed to part files and a rerun
+resumes. Results depend only on the grid coordinates, never on how the work was split.
+"""
+
+from .compute import fit_key, observe
+from .grid import METHODS, Chunk, Grid, grid_hash, plan
+from .runner import SweepSummary, merge, parts_dir, run_sweep
+from .table import COLUMNS, read_table, write_table
+
+__all__ = ["COLUMNS", "METHODS", "Chunk", "Grid", "SweepSummary", "fit_key", "grid_hash", "merge",
+           "observe", "parts_dir", "plan", "read_table", "run_sweep", "write_table"]

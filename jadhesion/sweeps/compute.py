@@ -1,0 +1,111 @@
+"""One chunk of fits as a single jitted program, sharded over the local devices.
+
+The batch axis (grid points) is split over a 1-D ``'batch'`` mesh of ``jax.local_devices()``:
+per-point inputs carry ``NamedSharding(mesh, P('batch'))``, the chunk's datasets (one per distinct
+seed) are replicated, and XLA partitions the vmapped observe → fit → peak program along the batch.
+(``shard_map`` would spare the cross-device "all done?" reduction of a batched while-loop, but
+optimistix's implicit-function machinery does not trace under it.) Fit
+keys come from the grid coordinates only, so the results do not depend on chunking, padding,
+device count or process split.
+"""
+
+from __future__ import annotations
+
+import functools
+import zlib
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax.sharding import Mesh, NamedSharding, PartitionSpec as P
+
+from ..identify.polach_fit import fit_polach_batch
+from ..models.polach import adhesion_peak, polach_adhesion
+
+
+def observe(data, theta_true, noise_scale, creep_max):
+    """The dataset a fit sees at one grid point, with the number of samples it covers.
+
+    * Noise: ``mu_obs = curve + noise_scale · (mu_sim − curve)`` with ``curve`` the true Polach curve
+      at the samples, so the whole simulated observation error (sensor noise and observer error) is
+      scaled.
+    * Creep range: the samples with ``|s| ≤ creep_max`` are kept in their original order and
+      repeated to the dataset's fixed length (each ⌊n/k⌋ or ⌈n/k⌉ times), so any fit sees them with
+      near-equal weights and the shape never changes. If none qualifies, the smallest-creep sample
+      stands alone.
+
+    Returns:
+        ``(dataset, covered)``: the transformed :class:`PolachDataset` and the count ``k`` of samples
+        within the creep range.
+    """
+    curve = polach_adhesion(theta_true, data.creep, data.slip, data.k_eps)
+    data = data._replace(adhesion=curve + noise_scale * (data.adhesion - curve))
+    size = jnp.abs(data.creep)
+    keep = size <= creep_max
+    covered = jnp.sum(keep)
+    n = size.shape[0]
+    order = jnp.argsort(jnp.where(keep, 0.0, size), stable=True)
+    pick = order[(jnp.arange(n) * jnp.maximum(covered, 1)) // n]
+    return jax.tree.map(lambda a: a[pick] if a.ndim == 1 else a, data), covered
+
+
+def method_salt(method: str) -> int:
+    """A stable 31-bit integer naming a method, folded into its fit keys."""
+    return zlib.crc32(method.encode()) & 0x7FFFFFFF
+
+
+def fit_key(seed, method: str):
+    """The fit key of a grid point: ``fold_in(key(seed), method_salt(method))``."""
+    return jax.random.fold_in(jax.random.key(seed), method_salt(method))
+
+
+def _local_chunk(method, options, data, theta_true, index, seed, noise_scale, creep_max):
+    def prepare(i, ns, cm):
+        d = jax.tree.map(lambda a: a[i], data)
+        obs, covered = observe(d, theta_true, ns, cm)
+        return obs, covered, jnp.mean(d.vehicle_speed), d.k_eps
+
+    obs, covered, speed, k_eps = jax.vmap(prepare)(index, noise_scale, creep_max)
+    keys = jax.vmap(lambda s: fit_key(s, method))(seed)
+    fit = fit_polach_batch(obs, method, keys, **dict(options))
+    peak = jax.vmap(adhesion_peak)
+    true_mu_max, true_creep_opt = peak(jnp.broadcast_to(theta_true, fit.params.shape), k_eps, speed)
+    mu_max, creep_opt = peak(fit.params, k_eps, speed)
+    return dict(samples=covered, params=fit.params, mae=fit.mae, iterations=fit.iterations,
+                evaluations=fit.evaluations, true_mu_max=true_mu_max, true_creep_opt=true_creep_opt,
+                mu_max=mu_max, creep_opt=creep_opt)
+
+
+@functools.lru_cache(maxsize=None)
+def _program(method: str, options: tuple, devices: tuple):
+    mesh = Mesh(np.array(devices), ("batch",))
+    full, batch = NamedSharding(mesh, P()), NamedSharding(mesh, P("batch"))
+    return jax.jit(functools.partial(_local_chunk, method, options),
+                   in_shardings=(full, full) + (batch,) * 4, out_shardings=batch)
+
+
+def run_chunk(method: str, data, theta_true, index, seed, noise_scale, creep_max, *, size=None,
+              options=(), devices=None) -> dict:
+    """Fit one chunk of grid points; returns host NumPy arrays, one entry per point.
+
+    Args:
+        method: fitting method (static: one compiled program per method and shape).
+        data: stacked :class:`PolachDataset` of the chunk's distinct seeds, leading axis ``u``.
+        theta_true: true ``[kA, kS, mu0, A, B]`` of the scenario, shape (5,).
+        index: per point, the row of ``data`` to use, shape (m,), int.
+        seed, noise_scale, creep_max: per point grid coordinates, shape (m,).
+        size: the batch length to compile for (default ``m``): the points are padded with copies of
+            the last one to ``size`` rounded up to a multiple of the device count; the padding is
+            dropped from the results.
+        options: ``(name, value)`` pairs passed to :func:`fit_polach_batch` (static).
+        devices: devices of the ``'batch'`` mesh (default ``jax.local_devices()``).
+    """
+    devices = tuple(jax.local_devices() if devices is None else devices)
+    program = _program(method, tuple(options), devices)
+    m = len(index)
+    n = max(m, size or 0)
+    n += -n % len(devices)
+    take = np.concatenate([np.arange(m), np.full(n - m, m - 1)])
+    per_point = [np.asarray(a)[take] for a in (index, seed, noise_scale, creep_max)]
+    out = program(data, jnp.asarray(theta_true), *per_point)
+    return {k: np.asarray(v)[:m] for k, v in out.items()}

@@ -1,0 +1,213 @@
+"""Sweeps: grid expansion, observation, table, chunking + resume, sharding and multi-process runs.
+
+The subprocess runs (4 forced CPU devices; two ``jax.distributed`` processes on localhost) start
+first and overlap the in-process reference run; all use the cheap analytic source of
+``_sweep_worker.py`` and must reproduce the reference table exactly (the ``seconds`` column aside).
+"""
+
+import importlib.util
+import json
+import math
+import os
+import socket
+import subprocess
+import sys
+from pathlib import Path
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from _sweep_worker import toy_grid, toy_simulate
+from jadhesion.cli import main as cli_main
+from jadhesion.data.dataset import PolachDataset
+from jadhesion.data.scenarios import SCENARIOS
+from jadhesion.errors import InputError
+from jadhesion.models.polach import PARAM_NAMES, polach_adhesion
+from jadhesion.sweeps import COLUMNS, Grid, observe, parts_dir, plan, read_table, run_sweep, write_table
+
+REPO = Path(__file__).resolve().parents[1]
+WORKER = REPO / "tests" / "_sweep_worker.py"
+TIMEOUT = 300
+CHUNK = 5
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _spawn(out, *extra, devices=None, cache):
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")]),
+               JADHESION_CACHE=str(cache), JAX_NUMPY_RANK_PROMOTION="raise", JAX_PLATFORMS="cpu")
+    env.pop("XLA_FLAGS", None)
+    if devices:
+        env["XLA_FLAGS"] = f"--xla_force_host_platform_device_count={devices}"
+    return subprocess.Popen([sys.executable, str(WORKER), str(out), "--chunk-size", str(CHUNK), *extra],
+                            env=env, cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def _finish(proc) -> dict:
+    try:
+        stdout, stderr = proc.communicate(timeout=TIMEOUT)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        pytest.fail(f"sweep worker timed out after {TIMEOUT} s")
+    assert proc.returncode == 0, stderr[-3000:]
+    return json.loads(stdout.strip().splitlines()[-1])
+
+
+@pytest.fixture(scope="module")
+def workers(tmp_path_factory):
+    """Subprocess sweeps of the toy grid: 4 forced devices, and 2 processes × 1 device."""
+    root = tmp_path_factory.mktemp("workers")
+    cache = root / "xla-cache"
+    address = f"127.0.0.1:{_free_port()}"
+    procs = {"sharded": _spawn(root / "sharded.csv", devices=4, cache=cache)}
+    for i in range(2):
+        procs[f"rank{i}"] = _spawn(root / "dist.csv", "--coordinator", address, "--num-processes", "2",
+                                   "--process-id", str(i), cache=cache)
+    yield root, procs
+    for proc in procs.values():
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+
+
+@pytest.fixture(scope="module")
+def reference(workers, tmp_path_factory):
+    """The toy grid run in this process on one device (after the workers have started)."""
+    out = tmp_path_factory.mktemp("reference") / "sweep.csv"
+    table, summary = run_sweep(toy_grid(), out, chunk_size=CHUNK, simulate=toy_simulate)
+    return out, table, summary
+
+
+def _assert_same(a, b):
+    for c in COLUMNS:
+        if c != "seconds":
+            np.testing.assert_array_equal(a[c], b[c], err_msg=c)
+
+
+def test_grid_expansion_and_chunks():
+    grid = Grid(scenarios=["dry", "wet"], seeds=range(3), methods=["lm", "pso"], noise_scale=[1, 2],
+                creep_max=[0.1])
+    assert grid.size == 2 * 3 * 2 * 2 and grid.per_seed == 2
+    chunks = plan(grid, 4)
+    assert [c.index for c in chunks] == list(range(len(chunks))) == list(range(8))
+    assert [(c.scenario, c.method, len(c.points)) for c in chunks[:2]] == [("dry", "lm", 4), ("dry", "lm", 2)]
+    cell = np.concatenate([c.points for c in chunks[:2]])
+    np.testing.assert_array_equal(cell, [[s, n, 0] for s in range(3) for n in range(2)])
+    assert sum(len(c.points) for c in chunks) == grid.size
+    for bad in (dict(scenarios=["ice"]), dict(methods=["bfgs"]), dict(seeds=[]), dict(seeds=[1, 1]),
+                dict(noise_scale=[-1.0]), dict(creep_max=[0.0]), dict(n_samples=10)):
+        with pytest.raises(InputError):
+            Grid(**bad)
+    with pytest.raises(InputError):
+        plan(grid, 0)
+
+
+def test_observe_scales_noise_and_selects_creep_range():
+    theta = jnp.asarray(SCENARIOS["dry"].params)
+    creep = jnp.asarray([0.3, 0.01, 0.2, 0.02, 0.05, 0.5])
+    curve = polach_adhesion(theta, creep, creep, 130.0)
+    noise = jnp.asarray([1.0, -1.0, 2.0, -2.0, 0.5, 0.0]) * 1e-2
+    data = PolachDataset(creep, creep, curve + noise, jnp.ones(6), jnp.asarray(130.0))
+    observe_ = jax.jit(observe)
+    same, covered = observe_(data, theta, 1.0, math.inf)
+    np.testing.assert_allclose(same.adhesion, data.adhesion, rtol=0, atol=1e-15)
+    assert int(covered) == 6
+    clean, _ = observe_(data, theta, 0.0, math.inf)
+    np.testing.assert_allclose(clean.adhesion, curve, rtol=0, atol=1e-15)
+    low, covered = observe_(data, theta, 2.0, 0.05)
+    assert int(covered) == 3
+    np.testing.assert_array_equal(low.creep, [0.01, 0.01, 0.02, 0.02, 0.05, 0.05])
+    np.testing.assert_allclose(low.adhesion - polach_adhesion(theta, low.creep, low.slip, 130.0),
+                               2.0 * np.array([-1.0, -1.0, -2.0, -2.0, 0.5, 0.5]) * 1e-2, atol=1e-14)
+    none, covered = observe_(data, theta, 1.0, 1e-3)
+    assert int(covered) == 0 and np.all(none.creep == 0.01)
+
+
+def test_table_columns_and_csv_round_trip(reference):
+    out, table, summary = reference
+    grid = toy_grid()
+    assert tuple(table) == COLUMNS and len(table["seed"]) == grid.size == summary.fits
+    assert summary.computed == grid.size and summary.processes == 1
+    assert list(table["scenario"][:12]) == ["dry"] * 12 and list(table["seed"][:4]) == [0] * 4
+    np.testing.assert_array_equal(table["noise_scale"][:4], [0.5, 0.5, 2.0, 2.0])
+    np.testing.assert_array_equal(table["creep_max"][:2], [0.05, math.inf])
+    for i, p in enumerate(PARAM_NAMES):
+        assert np.all(table[f"true_{p}"][12:] == SCENARIOS["sand"].params[i])
+    assert np.all((table["samples"] > 0) & (table["samples"] <= 120))
+    assert np.all(table["samples"][1::2] == 120)
+    assert np.all(np.isfinite(table["mae"])) and np.all(table["seconds"] > 0)
+    assert np.all(np.abs(table["mu_max"] / table["true_mu_max"] - 1) < 0.2)
+    _assert_same(read_table(out), table)
+    assert np.array_equal(read_table(out)["seconds"], table["seconds"])
+
+
+def test_resume_recomputes_only_missing_chunk(reference, tmp_path):
+    out, table, _ = reference
+    parts = parts_dir(out, toy_grid(), CHUNK, toy_simulate)
+    files = sorted(parts.glob("chunk-*.csv"))
+    assert len(files) == len(plan(toy_grid(), CHUNK)) == 6
+    stamps = {f.name: f.stat().st_mtime_ns for f in files}
+    files[2].unlink()
+    again, summary = run_sweep(toy_grid(), out, chunk_size=CHUNK, simulate=toy_simulate)
+    assert (summary.chunks_computed, summary.computed) == (1, len(plan(toy_grid(), CHUNK)[2].points))
+    assert {f.name: f.stat().st_mtime_ns for f in files if f != files[2]} == \
+        {k: v for k, v in stamps.items() if k != files[2].name}
+    _assert_same(again, table)
+
+
+def test_sharded_over_four_devices_matches_single_device(workers, reference):
+    root, procs = workers
+    summary = _finish(procs["sharded"])
+    assert summary["devices"] == 4 and summary["computed"] == toy_grid().size
+    _assert_same(read_table(root / "sharded.csv"), reference[1])
+
+
+def test_two_processes_match_single_process(workers, reference):
+    root, procs = workers
+    summaries = [_finish(procs[f"rank{i}"]) for i in range(2)]
+    assert [s["processes"] for s in summaries] == [2, 2]
+    assert sum(s["chunks_computed"] for s in summaries) == len(plan(toy_grid(), CHUNK))
+    assert summaries[0]["out"] and summaries[1]["out"] is None
+    _assert_same(read_table(root / "dist.csv"), reference[1])
+
+
+@pytest.mark.skipif(importlib.util.find_spec("pyarrow") is None, reason="pyarrow not installed")
+def test_parquet_round_trip(reference, tmp_path):
+    table = reference[1]
+    path = write_table(table, tmp_path / "sweep.parquet")
+    back = read_table(path)
+    _assert_same(back, table)
+    assert np.array_equal(back["seconds"], table["seconds"])
+
+
+def test_cli_bad_arguments_exit_2(tmp_path, capsys):
+    out = tmp_path / "x.csv"
+    for argv in (["--scenarios", "dry,ice"], ["--methods", "newton"], ["--seeds", "0"], ["--chunk-size", "0"],
+                 ["--creep-max", "-1"], ["--max-iter", "0"]):
+        assert cli_main(["sweep", *argv, "--out", str(out), "--json"]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("jadhesion: error:") and err.count("\n") == 1
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.slow
+def test_cli_end_to_end(tmp_path):
+    out = tmp_path / "sweep.csv"
+    cmd = [sys.executable, "-m", "jadhesion", "sweep", "--scenarios", "dry", "--seeds", "1",
+           "--methods", "pso", "--pop-size", "10", "--max-iter", "10", "--noise", "1,2", "--samples", "100",
+           "--chunk-size", "2", "--out", str(out), "--json"]
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")]))
+    proc = subprocess.run(cmd, cwd=REPO, env=env, capture_output=True, text=True, timeout=TIMEOUT)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    doc = json.loads(proc.stdout)
+    for key in ("fits", "seconds", "fits_per_second", "devices", "processes", "out"):
+        assert key in doc
+    assert doc["fits"] == 2 and doc["processes"] == 1 and doc["out"] == str(out)
+    table = read_table(out)
+    assert list(table["noise_scale"]) == [1.0, 2.0] and np.all(np.isfinite(table["kA"]))
