@@ -3,5 +3,6 @@
 from .models import (PARAM_NAMES, adhesion_peak, hertz_semi_axes, kalker_c11, kiencke_adhesion,
                      kiencke_optimum, polach_adhesion)
 from .data.vehicle import LOCO_22E, Vehicle
+from .identify.curve_fit import curve_fit
 
 __version__ = "0.1.0"

@@ -1,0 +1,52 @@
+"""LM optimum of the Polach parameters and its Laplace (Gauss-Newton) approximation.
+
+At the least-squares optimum ``theta_hat`` with residual Jacobian ``J`` (n, 5)::
+
+    sigma_hat² = SSE / (n − 5),     Cov(theta) ≈ sigma_hat² (JᵀJ)⁻¹
+
+This is the posterior covariance of the Gaussian likelihood under a flat prior when the posterior
+is close to Gaussian — valid for well-identified parameters away from the box faces, not for a
+parameter on a face (kS = 1 on dry rail) or one the data barely constrain (B, A at low speed).
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+
+from ..data.dataset import PolachDataset
+from ..models.polach import BOUNDS, polach_adhesion
+from .lm import multistart
+
+#: Multi-start points of :func:`lm_optimum` (rows of [kA, kS, mu0, A, B]).
+STARTS = jnp.array([[0.5, 0.5, 0.35, 0.5, 0.3],
+                    [0.2, 0.8, 0.30, 0.2, 0.1],
+                    [0.9, 0.3, 0.40, 0.7, 0.6],
+                    [0.6, 0.9, 0.35, 0.4, 0.2]])
+
+
+def residual(theta, data: PolachDataset):
+    """Model minus observation [-], shape (n,)."""
+    return polach_adhesion(theta, data.creep, data.slip, data.k_eps) - data.adhesion
+
+
+def lm_optimum(data: PolachDataset, starts=STARTS):
+    """Least-squares optimum in the box ``[0, 1]^5`` (LM from each of ``starts``, the best kept)."""
+    return multistart(residual, starts, data, BOUNDS).params
+
+
+@jax.jit
+def laplace_covariance(theta_hat, data: PolachDataset):
+    """``sigma_hat² (JᵀJ)⁻¹`` (5, 5) at the optimum; ``inf`` entries when ``JᵀJ`` is singular."""
+    r = residual(theta_hat, data)
+    jac = jax.jacfwd(residual)(theta_hat, data)
+    sigma2 = jnp.sum(r * r) / (r.shape[0] - theta_hat.shape[0])
+    cov = sigma2 * jnp.linalg.inv(jac.T @ jac)
+    return jnp.where(jnp.all(jnp.isfinite(cov)), cov, jnp.inf)
+
+
+def initial_spread(theta_hat, data: PolachDataset, floor: float = 1e-4, cap: float = 0.05):
+    """Per-parameter walker-ball radius (fraction of the unit box): half the Laplace standard
+    deviation, kept within ``[floor, cap]`` (the cap also covers a singular ``JᵀJ``)."""
+    std = jnp.sqrt(jnp.diag(laplace_covariance(theta_hat, data)))
+    return jnp.clip(jnp.where(jnp.isfinite(std), 0.5 * std, cap), floor, cap)

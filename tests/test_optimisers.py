@@ -1,0 +1,190 @@
+"""Conformance tests for every population optimiser, Polach recovery for every method, curve_fit."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+import scipy.optimize
+
+import jadhesion
+from jadhesion.data.dataset import PolachDataset
+from jadhesion.identify import (ALGORITHMS, curve_fit, fit_polach, fit_polach_batch, iteration_key,
+                                run, run_until)
+from jadhesion.identify.tlbo import remedial_size
+
+BOUNDS = (jnp.full(4, -2.0), jnp.full(4, 3.0))
+CENTRE = jnp.array([0.5, -1.0, 1.5, 2.9])
+POP, ITERS, TARGET = 16, 60, 1e-2
+TRACES = {"n": 0}
+
+
+def sphere(x, c):
+    """Shifted sphere; counts its traces (a Python side effect runs only while tracing)."""
+    TRACES["n"] += 1
+    return jnp.sum((x - c) ** 2)
+
+
+def nan_right(x, c):
+    """Sphere that is NaN wherever x[0] > 0 (the unconstrained optimum lies there)."""
+    return jnp.where(x[0] > 0, jnp.nan, jnp.sum((x - c) ** 2))
+
+
+def evals_per_iter(name, n):
+    return {"tlbo": 2 * n, "itlbo": 2 * n + 2 * remedial_size(n), "pso": n}[name]
+
+
+@pytest.fixture(params=sorted(ALGORITHMS))
+def algorithm(request):
+    return ALGORITHMS[request.param]
+
+
+def test_python_loop_equals_scan(algorithm):
+    key = jax.random.key(3)
+    fn = lambda x: sphere(x, CENTRE)  # noqa: E731
+    state = algorithm.init(jax.random.split(key)[0], fn, BOUNDS, POP, algorithm.default_params)
+    step = jax.jit(algorithm.step, static_argnums=2)
+    for i in range(1, ITERS + 1):
+        state, _ = step(iteration_key(key, i), state, fn, BOUNDS, algorithm.default_params)
+    out = run(algorithm, sphere, BOUNDS, key, POP, ITERS, TARGET, args=CENTRE)
+    np.testing.assert_allclose(out.state.population, state.population, rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(out.best_f, state.best_f, rtol=1e-12, atol=1e-14)
+    assert int(out.n_evals) == POP + ITERS * evals_per_iter(algorithm.name, POP)
+    np.testing.assert_array_equal(np.diff(out.history.best_f) <= 0, True)  # elitist best
+
+
+def test_while_loop_matches_scan_history(algorithm):
+    key = jax.random.key(4)
+    full = run(algorithm, sphere, BOUNDS, key, POP, ITERS, TARGET, args=CENTRE)
+    stop = run_until(algorithm, sphere, BOUNDS, key, POP, ITERS, TARGET, args=CENTRE)
+    assert int(full.hit_iteration) >= 0
+    assert int(stop.iterations) == int(full.hit_iteration) == int(stop.hit_iteration)
+    assert int(stop.n_evals) == int(full.hit_evaluations)
+    np.testing.assert_allclose(stop.best_f, full.history.best_f[int(stop.iterations) - 1])
+
+
+def test_vmap_over_problems_equals_separate_runs_without_retrace(algorithm):
+    centres = jnp.array([[0.0, 0.0, 0.0, 0.0], [1.0, -1.0, 2.0, 0.5], [-1.5, 2.5, 0.1, 1.0]])
+    keys = jax.random.split(jax.random.key(5), 3)
+    singles = [run(algorithm, sphere, BOUNDS, k, POP, ITERS, TARGET, args=c) for k, c in zip(keys, centres)]
+    traced = TRACES["n"]
+    batched = jax.vmap(lambda k, c: run(algorithm, sphere, BOUNDS, k, POP, ITERS, TARGET, args=c))(
+        keys, centres)
+    run(algorithm, sphere, BOUNDS, keys[0], POP, ITERS, TARGET, args=centres[2] + 0.1)  # new data
+    assert TRACES["n"] == traced > 0  # neither vmap nor a new dataset traced the objective again
+    for i, s in enumerate(singles):
+        np.testing.assert_allclose(batched.best_x[i], s.best_x, rtol=1e-12, atol=1e-14)
+        np.testing.assert_allclose(batched.best_f[i], s.best_f, rtol=1e-12, atol=1e-14)
+
+
+def test_converges_on_shifted_sphere_and_respects_bounds(algorithm):
+    out = run(algorithm, sphere, BOUNDS, jax.random.key(6), POP, ITERS, TARGET, args=CENTRE)
+    assert float(out.best_f) < 1e-4
+    np.testing.assert_allclose(out.best_x, CENTRE, atol=1e-2)
+    outside = jnp.array([0.5, -1.0, 1.5, 4.0])  # optimum beyond the upper bound in x[3]
+    out = run(algorithm, sphere, BOUNDS, jax.random.key(6), POP, ITERS, TARGET, args=outside)
+    pop = out.state.population
+    assert bool(jnp.all((pop >= BOUNDS[0][None]) & (pop <= BOUNDS[1][None])))
+    np.testing.assert_allclose(out.best_x[3], 3.0, atol=1e-2)
+
+
+def test_nan_objective_is_treated_as_infinite(algorithm):
+    out = run(algorithm, nan_right, BOUNDS, jax.random.key(7), POP, ITERS, TARGET, args=CENTRE)
+    assert np.isfinite(float(out.best_f))
+    assert float(out.best_x[0]) <= 0.0
+    np.testing.assert_allclose(out.best_x[0], 0.0, atol=0.05)  # the constrained optimum
+
+
+# --------------------------------------------------------------------------- Polach recovery
+
+THETA = jnp.array([0.4288, 0.6, 0.3555, 0.3575, 0.1316])
+
+
+def polach_dataset(theta=THETA, n=120):
+    """Noise-free curve over creep 1e-3..0.5 at three speeds (slip up to 10 m/s identifies A, B;
+    the small-creep samples identify kA + kS and the knee kA vs kS)."""
+    k_eps = jadhesion.LOCO_22E.k_eps()
+    creep = jnp.tile(jnp.geomspace(1e-3, 0.5, n // 3), 3)
+    speed = jnp.repeat(jnp.array([1.0, 5.0, 20.0]), n // 3)
+    slip = creep * speed
+    mu = jadhesion.polach_adhesion(theta, creep, slip, k_eps)
+    return PolachDataset(creep, slip, mu, speed, jnp.asarray(k_eps))
+
+
+@pytest.mark.parametrize("method, mae_tol, param_tol", [
+    ("lm", 1e-10, 1e-6), ("tlbo", 1e-4, 2e-2), ("itlbo", 2e-3, None), ("pso", 2e-3, None)])
+def test_fit_polach_recovers_known_parameters(method, mae_tol, param_tol):
+    fit = fit_polach(polach_dataset(), method, jax.random.key(0), pop_size=30, max_iter=200)
+    assert float(fit.mae) < mae_tol
+    assert int(fit.evaluations) > int(fit.iterations) > 0
+    if param_tol is not None:
+        np.testing.assert_allclose(fit.params, THETA, atol=param_tol)
+
+
+def test_fit_polach_batch_equals_separate_fits_and_stops_at_target():
+    data = [polach_dataset(THETA), polach_dataset(THETA.at[2].set(0.25))]
+    stacked = jax.tree.map(lambda *a: jnp.stack(a), *data)
+    keys = jax.random.split(jax.random.key(1), 2)
+    batch = fit_polach_batch(stacked, "pso", keys, pop_size=16, max_iter=40, target=5e-3)
+    for i in range(2):
+        one = fit_polach(data[i], "pso", keys[i], pop_size=16, max_iter=40, target=5e-3)
+        np.testing.assert_allclose(batch.params[i], one.params, rtol=1e-10, atol=1e-12)
+        assert int(batch.iterations[i]) == int(one.iterations)
+        assert bool(one.reached) and float(one.mae) <= 5e-3 and int(one.iterations) < 40
+
+
+# --------------------------------------------------------------------------- curve_fit contract
+
+def decay(x, p):
+    return p[0] * jnp.exp(-p[1] * x) + p[2]
+
+
+def decay_data():
+    x = np.linspace(0.0, 4.0, 40)
+    noise = 0.02 * np.sin(7.3 * x + 0.4)  # deterministic "noise"
+    return x, 2.5 * np.exp(-1.3 * x) + 0.5 + noise
+
+
+def test_curve_fit_lm_matches_scipy():
+    x, y = decay_data()
+    ref, ref_cov = scipy.optimize.curve_fit(lambda x, a, b, c: a * np.exp(-b * x) + c, x, y,
+                                            p0=[1.0, 1.0, 0.0], xtol=1e-14, ftol=1e-14)
+    fit = jadhesion.curve_fit(decay, x, y, jnp.array([1.0, 1.0, 0.0]))
+    np.testing.assert_allclose(fit.params, ref, rtol=1e-8)
+    np.testing.assert_allclose(fit.covariance, ref_cov, rtol=1e-6)
+    r = decay(x, fit.params) - y
+    np.testing.assert_allclose(fit.sse, np.sum(r**2), rtol=1e-12)
+    np.testing.assert_allclose(fit.mae, np.mean(np.abs(r)), rtol=1e-12)
+    assert bool(fit.success) and fit.seconds > 0 and int(fit.evaluations) >= int(fit.iterations)
+
+
+@pytest.mark.parametrize("method", ["itlbo", "tlbo", "pso"])
+def test_curve_fit_population_methods(method):
+    x, y = decay_data()
+    lm = curve_fit(decay, x, y, jnp.array([1.0, 1.0, 0.0]))
+    bounds = (jnp.zeros(3), jnp.full(3, 5.0))
+    fit = curve_fit(decay, x, y, jnp.zeros(3), bounds=bounds, method=method, pop_size=20,
+                    max_iter=150)
+    assert float(fit.sse) < 1.01 * float(lm.sse)
+    assert fit.covariance.shape == (3, 3) and int(fit.iterations) == 150
+
+
+def test_curve_fit_rejects_bad_arguments():
+    x, y = decay_data()
+    with pytest.raises(ValueError, match="bounds"):
+        curve_fit(decay, x, y, jnp.zeros(3), method="itlbo")
+    with pytest.raises(ValueError, match="unknown method"):
+        curve_fit(decay, x, y, jnp.zeros(3), method="bfgs")
+    with pytest.raises(ValueError, match="1-D"):
+        curve_fit(decay, x, y, jnp.zeros((3, 1)))
+
+
+def test_curve_fit_lm_bounded_and_nan_safe():
+    x, y = decay_data()
+    # sqrt of a negative parameter is NaN: the box keeps p[2] >= 0 and LM must not blow up.
+    f = lambda x, p: p[0] * jnp.exp(-p[1] * x) + jnp.sqrt(p[2]) ** 2  # noqa: E731
+    fit = curve_fit(f, x, y, jnp.array([1.0, 1.0, 0.1]), bounds=(jnp.zeros(3), jnp.full(3, 5.0)))
+    ref = curve_fit(decay, x, y, jnp.array([1.0, 1.0, 0.0]))
+    np.testing.assert_allclose(fit.params, ref.params, rtol=1e-7)
+    g = lambda x, p: p[0] * jnp.exp(-p[1] * x) + jnp.log(p[2] - 0.3)  # noqa: E731  NaN below 0.3
+    fit = curve_fit(g, x, y, jnp.array([1.0, 1.0, 2.0]))
+    assert np.all(np.isfinite(fit.params)) and np.isfinite(float(fit.sse))
