@@ -1,0 +1,81 @@
+"""The command line end to end: the DESIGN §3 contracts (JSON keys, exit code 2, nothing written)."""
+
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+
+@pytest.fixture(scope="module")
+def env(tmp_path_factory):
+    e = dict(os.environ)
+    e["JADHESION_CACHE"] = str(tmp_path_factory.mktemp("xla-cache"))
+    return e
+
+
+def jadhesion(env, *args, check=True):
+    proc = subprocess.run([sys.executable, "-m", "jadhesion", *map(str, args)], env=env,
+                          capture_output=True, text=True, timeout=600)
+    if check and proc.returncode != 0:
+        raise AssertionError(f"exit {proc.returncode}: {proc.stderr}")
+    return proc
+
+
+@pytest.fixture(scope="module")
+def recording(env, tmp_path_factory):
+    out = tmp_path_factory.mktemp("rec") / "dry.csv"
+    jadhesion(env, "simulate", "--scenario", "dry", "--seed", "3", "--out", out)
+    return out
+
+
+def test_simulate_writes_recording_sidecar_and_truth(recording):
+    assert recording.exists()
+    assert recording.with_suffix(".json").exists()
+    truth = json.loads(recording.with_name("dry.truth.json").read_text())
+    assert truth["params"]["kA"] == pytest.approx(0.4288)
+
+
+def test_fit_json_contract_and_accuracy(env, recording):
+    proc = jadhesion(env, "fit", recording, "--method", "lm", "--json")
+    doc = json.loads(proc.stdout)
+    assert set(doc) >= {"method", "params", "mae", "iterations", "evaluations", "seconds"}
+    assert set(doc["params"]) == {"kA", "kS", "mu0", "A", "B"}
+    floor = json.loads(recording.with_name("dry.truth.json").read_text())["envelope"]["true_param_mae"]
+    # A least-squares fit cannot beat the noise floor by much, nor should it miss it by much.
+    assert 0.95 * floor < doc["mae"] < 1.02 * floor
+    assert doc["params"]["mu0"] == pytest.approx(0.3555, abs=0.01)
+
+
+def test_bad_row_exits_2_with_one_line_naming_file_column_row(env, recording, tmp_path):
+    lines = recording.read_text().splitlines()
+    header = lines[0].split(",")
+    col = header.index("vehicle_speed")
+    cells = lines[5].split(",")
+    cells[col] = "fast"
+    lines[5] = ",".join(cells)
+    bad = tmp_path / "bad.csv"
+    bad.write_text("\n".join(lines) + "\n")
+    before = set(tmp_path.iterdir())
+    proc = jadhesion(env, "fit", bad, "--json", check=False)
+    assert proc.returncode == 2
+    assert proc.stdout == ""
+    message = proc.stderr.strip()
+    assert "\n" not in message and "Traceback" not in message
+    assert "bad.csv" in message and "vehicle_speed" in message and "row 5" in message
+    assert set(tmp_path.iterdir()) == before
+
+
+def test_missing_file_exits_2(env, tmp_path):
+    proc = jadhesion(env, "fit", tmp_path / "nope.csv", check=False)
+    assert proc.returncode == 2 and "nope.csv" in proc.stderr
+
+
+def test_reproduce_online_json_keys(env):
+    proc = jadhesion(env, "reproduce", "online", "--runs", "8", "--json")
+    doc = json.loads(proc.stdout)
+    for algorithm in ("1", "2"):
+        assert set(doc["algorithms"][algorithm]) >= {
+            "k_p1_1pct", "k_p2_1pct", "k_mumax_01pct", "k_track_after_change", "fluctuation"}
+    assert "paper" in doc
