@@ -1,0 +1,76 @@
+"""Posterior figures: a corner plot of the Polach parameters and a posterior-predictive band over the
+data on the adhesion–creep plane."""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+import numpy as np
+from matplotlib.figure import Figure
+
+from ..data.dataset import PolachDataset
+from ..identify.mcmc import PosteriorResult, posterior_curves
+
+_LABELS = {"kA": r"$k_A$", "kS": r"$k_S$", "mu0": r"$\mu_0$", "A": r"$A$", "B": r"$B$ [s/m]",
+           "sigma": r"$\sigma$", "b": r"$b$"}
+
+
+def corner_plot(result: PosteriorResult, truths=None) -> Figure:
+    """Corner plot of all sampled coordinates with 5/50/95 % quantile lines (``truths``: optional
+    true values, same order as ``result.names``, ``None`` entries allowed)."""
+    import corner
+
+    d = result.samples.shape[1]
+    fig = Figure(figsize=(1.9 * d, 1.9 * d))
+    fig.subplots(d, d)
+    corner.corner(result.samples, fig=fig, labels=[_LABELS.get(n, n) for n in result.names],
+                  quantiles=(0.05, 0.5, 0.95), show_titles=True, title_fmt=".3g",
+                  title_kwargs={"fontsize": 9}, max_n_ticks=4, truths=truths, truth_color="tab:red",
+                  plot_datapoints=False, smooth=1.0, label_kwargs={"fontsize": 10})
+    fig.suptitle(f"Polach posterior ({result.likelihood} likelihood, "
+                 f"{result.diagnostics.n_samples} samples)", fontsize=11)
+    return fig
+
+
+def predictive_plot(result: PosteriorResult, data: PolachDataset, n_draws: int = 1000, seed: int = 0,
+                    truth=None) -> Figure:
+    """Data, posterior-median curve, 90 % credible band of the curve and 90 % posterior-predictive
+    band (curve plus the likelihood's noise), all at the dataset's median vehicle speed."""
+    rng = np.random.default_rng(seed)
+    idx = rng.choice(result.samples.shape[0], size=min(n_draws, result.samples.shape[0]), replace=False)
+    draws = result.samples[idx]
+    s_min = max(float(np.min(np.asarray(data.creep)[np.asarray(data.creep) > 0])), 1e-5)
+    creep = np.geomspace(s_min, float(np.max(np.asarray(data.creep))), 300)
+    k_eps = jnp.asarray(data.k_eps, float)
+    curves = np.asarray(posterior_curves(jnp.asarray(draws[:, :5]), jnp.asarray(creep),
+                                         result.vehicle_speed, k_eps))
+    if draws.shape[1] == 6:
+        noise = (rng.standard_normal(curves.shape) if result.likelihood == "gauss"
+                 else rng.laplace(size=curves.shape)) * draws[:, 5:]
+    else:
+        noise = 0.0
+    band = np.quantile(curves, (0.05, 0.5, 0.95), axis=0)
+    predictive = np.quantile(curves + noise, (0.05, 0.95), axis=0)
+
+    fig = Figure(figsize=(7.5, 4.8), layout="constrained")
+    ax = fig.add_subplot()
+    points = ax.scatter(np.asarray(data.creep), np.asarray(data.adhesion), s=7, c=np.asarray(data.vehicle_speed),
+                        cmap="copper", alpha=0.7, label=f"data (n = {np.asarray(data.creep).shape[0]})",
+                        zorder=1)
+    fig.colorbar(points, ax=ax, label="vehicle speed of the sample [m/s]")
+    ax.fill_between(creep, *predictive, color="tab:blue", alpha=0.18, lw=0, label="90 % predictive")
+    ax.fill_between(creep, band[0], band[2], color="tab:blue", alpha=0.45, lw=0, label="90 % credible curve")
+    ax.plot(creep, band[1], color="tab:blue", lw=1.8, label="posterior median")
+    if truth is not None:
+        true_curve = np.asarray(posterior_curves(jnp.asarray(truth, float)[None, :], jnp.asarray(creep),
+                                                 result.vehicle_speed, k_eps))[0]
+        ax.plot(creep, true_curve, color="tab:red", lw=1.2, ls="--", label="truth")
+    mu_max = result.derived["mu_max"]
+    ax.axhline(mu_max["median"], color="k", lw=0.8, ls=":",
+               label=rf"$\mu_{{max}}$ = {mu_max['median']:.3f} [{mu_max['q05']:.3f}, {mu_max['q95']:.3f}]")
+    ax.set_xscale("log")
+    ax.set_xlabel("creepage s [-]")
+    ax.set_ylabel(r"adhesion coefficient $\mu$ [-]")
+    ax.set_title(f"Posterior predictive at v = {result.vehicle_speed:.2f} m/s (median speed)")
+    ax.legend(loc="lower right", fontsize=8)
+    ax.grid(alpha=0.3, which="both", lw=0.5)
+    return fig

@@ -1,0 +1,178 @@
+"""Bayesian posterior (emcee): log-posterior, sampler wrapper, Laplace agreement, calibration."""
+
+import json
+import warnings
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from scipy import stats
+
+from jadhesion.identify.calibration import (LEVELS, QUANTITIES, binomial_band, coverage_study,
+                                            synthetic_dataset)
+from jadhesion.identify.ensemble import ChainTooShortWarning, Diagnostics, run_ensemble
+from jadhesion.identify.laplace import laplace_covariance, lm_optimum, residual
+from jadhesion.identify.likelihood import LOG_SCALE_BOUNDS, batch_log_posterior, log_likelihood, log_posterior
+from jadhesion.identify.mcmc import PosteriorResult, sample_posterior, table2_row
+
+THETA = np.array([0.5, 0.3, 0.35, 0.4, 0.6])
+# Interior truths of the calibration check (the prior is the whole box [0, 1]^5).
+TRUTH_LO, TRUTH_HI = np.array([0.3, 0.2, 0.25, 0.2, 0.4]), np.array([0.9, 0.8, 0.45, 0.6, 1.0])
+LO, HI = jnp.zeros(5), jnp.ones(5)
+
+
+@pytest.fixture(scope="module")
+def data():
+    return synthetic_dataset(np.random.default_rng(0), THETA, n=300)
+
+
+@pytest.fixture(scope="module")
+def posterior(data):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ChainTooShortWarning)
+        return sample_posterior(data, np.asarray(lm_optimum(data)), walkers=32, steps=2500, seed=1,
+                                 max_derived=800)
+
+
+def test_log_posterior_support_and_batching(data):
+    rng = np.random.default_rng(1)
+    inside = np.column_stack([rng.uniform(0, 1, (64, 5)), rng.uniform(*LOG_SCALE_BOUNDS, 64)])
+    inside[0, :5] = 0.0                                       # corner: zero friction, no slope
+    inside[1, :5] = 1.0
+    outside = inside.copy()
+    col = rng.integers(0, 6, 64)                              # 5 = log-scale: range ~9.2 wide
+    outside[np.arange(64), col] += np.where(rng.random(64) < 0.5, -1.0, 1.0) * np.where(col == 5, 10.0, 1.5)
+    outside[2, 0] = np.nan
+    for lik in ("gauss", "laplace"):
+        lp_in = np.asarray(batch_log_posterior(jnp.asarray(inside), data, LO, HI, 0.0, lik))
+        lp_out = np.asarray(batch_log_posterior(jnp.asarray(outside), data, LO, HI, 0.0, lik))
+        assert np.all(np.isfinite(lp_in)) and np.all(lp_out == -np.inf)
+        one = np.array([log_posterior(jnp.asarray(p), data, LO, HI, 0.0, lik) for p in inside[:8]])
+        np.testing.assert_allclose(lp_in[:8], one, rtol=1e-12)
+
+
+def test_laplace_scale_maximum_is_mae(data):
+    mae = float(jnp.mean(jnp.abs(residual(jnp.asarray(THETA), data))))
+    ll = [float(log_likelihood(jnp.asarray(THETA), np.log(mae * f), data, "laplace")) for f in (0.9, 1, 1.1)]
+    assert ll[1] > ll[0] and ll[1] > ll[2]
+
+
+def test_wrapper_samples_a_known_gaussian():
+    cov = np.array([[1.0, 0.8, 0.0], [0.8, 1.0, -0.3], [0.0, -0.3, 2.0]])
+    prec = np.linalg.inv(cov)
+    log_prob = lambda x: -0.5 * np.einsum("wi,ij,wj->w", x, prec, x)  # noqa: E731
+    p0 = 1e-3 * np.random.default_rng(0).standard_normal((32, 3))
+    chain, diag = run_ensemble(log_prob, p0, 3000, 0, burn=500)
+    samples = chain.reshape(-1, 3)
+    assert 0.2 < diag.acceptance < 0.9
+    tol = 5 * np.sqrt(np.diag(cov) / diag.ess)                # ESS-aware: 5 standard errors
+    np.testing.assert_array_less(np.abs(samples.mean(0)), tol)
+    np.testing.assert_allclose(np.cov(samples.T), cov, atol=0.15)
+    step = int(np.ceil(np.max(diag.tau)))
+    z = chain[::step, :, 2].ravel() / np.sqrt(2.0)
+    assert stats.kstest(z, "norm").pvalue > 0.01
+    assert stats.kstest(z, "norm", args=(0, 1.2)).pvalue < 0.01     # the KS check has power
+
+
+def test_seed_reproducible_and_short_chain_warns(data):
+    theta0 = np.asarray(lm_optimum(data))
+    with pytest.warns(ChainTooShortWarning):
+        a = sample_posterior(data, theta0, walkers=32, steps=80, seed=3, max_derived=800)
+    with pytest.warns(ChainTooShortWarning):
+        b = sample_posterior(data, theta0, walkers=32, steps=80, seed=3, max_derived=800)
+    np.testing.assert_array_equal(a.samples, b.samples)
+    assert a.diagnostics.warnings and "autocorrelation" in a.diagnostics.warnings[0]
+    assert a.samples.shape == (32 * 60, 6) and set(a.derived) == {"mu_max", "creep_opt"}
+
+
+def test_posterior_agrees_with_laplace_where_well_identified(data, posterior):
+    theta_hat = lm_optimum(data)
+    laplace_std = np.sqrt(np.diag(np.asarray(laplace_covariance(theta_hat, data))))
+    mcmc_std = posterior.samples[:, :5].std(axis=0)
+    ratio = mcmc_std / laplace_std
+    np.testing.assert_allclose(ratio[:3], 1.0, atol=0.25)    # kA, kS, mu0: Gaussian, interior
+    for name, q in posterior.params.items():
+        assert q["q05"] < q["median"] < q["q95"], name
+    assert posterior.params["sigma"]["q05"] < 0.013 < posterior.params["sigma"]["q95"]
+
+
+def _coverage_sets(m, seed):
+    rng = np.random.default_rng(seed)
+    thetas = [rng.uniform(TRUTH_LO, TRUTH_HI) for _ in range(m)]
+    return [synthetic_dataset(rng, t, n=150) for t in thetas], thetas
+
+
+SHORT = dict(walkers=32, steps=700, burn=250, max_derived=800)
+
+
+def _within_band(report):
+    """Each coverage inside its binomial band; family-wise 99 % over the 14 checks (Bonferroni)."""
+    ok = {}
+    for level in LEVELS:
+        lo, hi = binomial_band(report.n_datasets, level, 1 - 0.01 / (len(LEVELS) * len(QUANTITIES)))
+        ok[level] = {q: lo <= report.coverage[level][q] <= hi for q in QUANTITIES}
+    return ok
+
+
+@pytest.mark.slow
+def test_intervals_are_calibrated():
+    report = coverage_study(*_coverage_sets(30, 10), seed=100, **SHORT)
+    ok = _within_band(report)
+    assert all(all(v.values()) for v in ok.values()), report.coverage
+
+
+@pytest.mark.slow
+def test_calibration_check_has_power():
+    # sigma fixed 5x too small: intervals far too narrow.
+    report = coverage_study(*_coverage_sets(10, 20), seed=200, fixed_scale=0.013 / 5, **SHORT)
+    assert not all(_within_band(report)[0.9].values()), report.coverage
+    assert np.mean(list(report.coverage[0.9].values())) < 0.6
+    # A sampler that ignores the data (returns the prior): intervals far too wide.
+    prior = lambda d, t0, seed, **kw: _prior_result(seed)  # noqa: E731
+    report = coverage_study(*_coverage_sets(30, 10), sampler=prior)
+    assert not all(_within_band(report)[0.5].values()), report.coverage
+
+
+def _prior_result(seed):
+    rng = np.random.default_rng(seed)
+    samples = rng.uniform(0, 1, (2000, 5))
+    derived = {"mu_max": rng.uniform(0, 1, 2000), "creep_opt": 10 ** rng.uniform(-3, 0, 2000)}
+    diag = Diagnostics(0.3, np.ones(5), np.ones(5), 2000, 1, 0, 1, 0.0, ())
+    return PosteriorResult(samples, samples[:, None], ("kA", "kS", "mu0", "A", "B"), {}, {}, derived,
+                           diag, "gauss", 1.0)
+
+
+def test_inference_data_and_plots(posterior, data, tmp_path):
+    from jadhesion.plots.posterior import corner_plot, predictive_plot
+
+    corner_plot(posterior, truths=list(THETA) + [0.013]).savefig(tmp_path / "corner.png", dpi=40)
+    predictive_plot(posterior, data, n_draws=200, truth=THETA).savefig(tmp_path / "pred.png", dpi=40)
+    az = pytest.importorskip("arviz")
+    idata = posterior.to_inference_data()
+    assert isinstance(idata, az.InferenceData)
+    assert idata.posterior["kA"].shape == (32, posterior.chain.shape[0])
+
+
+def test_cli_posterior_json(tmp_path, capsys):
+    from jadhesion.cli import main
+
+    d = synthetic_dataset(np.random.default_rng(5), THETA, n=120)
+    path = tmp_path / "curve.csv"
+    rows = np.column_stack([np.asarray(d.creep), np.asarray(d.vehicle_speed), np.asarray(d.adhesion)])
+    np.savetxt(path, rows, delimiter=",", header="creepage,vehicle_speed,adhesion", comments="")
+    assert main(["posterior", str(path), "--walkers", "16", "--steps", "300", "--json",
+                 "--plot", str(tmp_path / "fig")]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert set(doc["params"]) == {"kA", "kS", "mu0", "A", "B", "sigma"}
+    assert set(doc["derived"]["mu_max"]) == {"median", "q05", "q95"}
+    assert doc["diagnostics"]["warnings"] and set(doc["diagnostics"]["tau"]) == set(doc["params"])
+    assert (tmp_path / "fig" / "posterior_corner.png").exists()
+    bad = tmp_path / "bad.csv"
+    bad.write_text("creepage,vehicle_speed\n0.1,1.0\n")
+    assert main(["posterior", str(bad), "--json"]) == 2
+
+
+def test_table2_row(data):
+    row = table2_row(data, THETA, walkers=32, steps=80, seed=0)    # short chain: reported, no warning
+    assert row["method"] == "mcmc" and not row["converged"] and row["steps"] > 80
+    assert 0.005 < row["error"] < 0.02 and set(row["width90"]) >= {"kA", "mu_max", "creep_opt"}
