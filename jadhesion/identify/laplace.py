@@ -13,13 +13,14 @@ from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from ..data.dataset import PolachDataset
 from ..models.polach import BOUNDS, polach_adhesion
 from .lm import multistart
 
 #: Multi-start points of :func:`lm_optimum` (rows of [kA, kS, mu0, A, B]).
-STARTS = jnp.array([[0.5, 0.5, 0.35, 0.5, 0.3],
+STARTS = np.array([[0.5, 0.5, 0.35, 0.5, 0.3],
                     [0.2, 0.8, 0.30, 0.2, 0.1],
                     [0.9, 0.3, 0.40, 0.7, 0.6],
                     [0.6, 0.9, 0.35, 0.4, 0.2]])
