@@ -1,0 +1,134 @@
+"""Identification-side extensions of the Polach model, one per catalogue effect (DESIGN §3).
+
+Every candidate is the same *superset* model with a boolean ``active`` mask over the extra
+parameters; an inactive extra is held at its neutral value, where the model is the base Polach fit
+*exactly* (each effect enters as ``x·(1 − 0)``, ``x + 0`` or a zero shift). One compiled function
+therefore fits the base model, every single effect and every pair, vmapped over candidates and
+cross-validation folds. The model predicts the observed adhesion ``mu_hat`` [-]::
+
+    target = mu_hat + τ · d(torque_mu)/dt                   (observer output, torque re-aligned)
+    w, s   = v_w (1 + δ) − v,  w / v                        (true rolling radius r (1 + δ))
+    L      = max(1 − m_L F_t/(M g), 0.1)                    (leading-axle load factor)
+    μ0(t)  = μ0 (1 − m_R σ((t − t_c)/W)) (1 − m_V (v − v̄)/v̄) / (1 + m_T P_th/P_ref)
+    pred   = (1 + δ) L μ_adh(s, w; kA, kS, μ0(t), A, B; k_eps L^(−1/3)) + β
+
+The magnitudes are those of the simulator's catalogue (:mod:`jadhesion.models.effects`), so a
+recovered parameter compares directly with a concealed magnitude. Effects (parameter, unit,
+typical magnitude, signature in the residual of the *base* fit):
+
+* ``rail_change`` — the rail condition changes at an unknown time: μ0 drops by the fraction m_R [-]
+  (0.1–0.5; negative = recovery) at ``t_c``, fitted as ``u = (t_c − t_0)/D`` ∈ [0.02, 0.98] (a change inside the recording: at
+  its very start a step would merely rescale μ0 past its bound); the
+  step is a logistic of width ``W = 1 % · D`` so ``t_c`` is differentiable. Signature: the residual
+  changes level at one time (a CUSUM kink).
+* ``wheel_radius_error`` — true rolling radius ``r(1 + δ)`` (|δ| 0.5–5 %; wear 1220→1180 mm gives
+  δ ≈ −0.03). The recorded wheel speed is ``ω r_nom``: the true slip is ``v_w(1 + δ) − v`` (an
+  offset ∝ speed) and the force is ``T/(r(1 + δ))``, so ``mu_hat = (1 + δ) μ``. Signature: the
+  residual against creep bends at small creep and grows with speed.
+* ``signal_delay`` — the recorded torque lags the speed signals by τ [s] (10–300 ms): re-aligned
+  to first order, ``T(t) ≈ T_rec(t) + τ dT_rec/dt``, with the smoothed torque rate
+  (:attr:`Signals.torque_rate`). Not an interpolation of the noisy torque: a fractional shift
+  averages neighbouring noise samples and would "detect" half-sample delays on clean data.
+  Signature: residual ≈ −τ·d(torque_mu)/dt.
+* ``speed_dependence`` — Curtius–Kniffler-like μ0 linear in speed about the mean speed v̄,
+  relative slope m_V [-] per relative speed change (0.1–0.5). Signature: residual linear in v.
+* ``torque_offset`` — additive torque bias ``b = β m g r`` [N·m]; β [-] (0.005–0.05). Signature:
+  a constant residual; collinear with a μ0 change where the curve is saturated.
+* ``thermal_softening`` — ``μ0 / (1 + m_T P_th/P_ref)``: ``P_th`` [W] is the frictional power
+  ``mu_hat·m g·|w|`` through ``1/(1 + s τ_th)`` (:attr:`Signals.heat`; τ_th [s] is picked from a
+  grid before the LM fit, :func:`jadhesion.diagnose.features.pick_thermal_lag`), ``P_ref`` = 10 kW;
+  m_T [-] (0.1–2). Signature: residual falls with recent slip power.
+* ``load_transfer`` — the measured axle unloads with tractive effort ``F_t = n T/r``:
+  ``N1 = N (1 − m_L F_t/(M g))`` (``F_t/(M g)`` = :attr:`Signals.traction_ratio`; it equals the
+  locomotive's acceleration over g only without a trailing load). The observer divides by the static
+  load, so ``mu_hat = L μ`` with ``L = N1/N``, and Hertz gives ``k_eps ∝ L^(−1/3)``; m_L [-]
+  (0.3–1). Signature: residual ∝ −μ·F_t (nearly a curve-shape change: weakly identifiable).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..models.kinematics import creepage
+from ..models.polach import BOUNDS as POLACH_BOUNDS
+from ..models.polach import PARAM_NAMES, polach_adhesion
+from .signals import Signals
+
+#: Logistic width of the rail-change step, as a fraction of the recording's duration.
+STEP_WIDTH = 0.01
+#: Reference frictional power of the thermal term [W] (as in :mod:`jadhesion.models.effects`).
+POWER_REF = 10e3
+
+
+class Effect(NamedTuple):
+    """A catalogue effect: its extra parameters, their box and neutral (no-effect) values."""
+
+    name: str
+    params: tuple
+    lower: tuple
+    upper: tuple
+    neutral: tuple
+
+
+EFFECTS = (
+    Effect("rail_change", ("drop", "u_change"), (-1.5, 0.02), (0.95, 0.98), (0.0, 0.5)),
+    Effect("wheel_radius_error", ("delta_r",), (-0.2,), (0.2,), (0.0,)),
+    Effect("signal_delay", ("delay_s",), (-0.3,), (0.6,), (0.0,)),
+    Effect("speed_dependence", ("slope",), (-2.0,), (2.0,), (0.0,)),
+    Effect("torque_offset", ("offset",), (-0.3,), (0.3,), (0.0,)),
+    Effect("thermal_softening", ("softening",), (-0.5,), (10.0,), (0.0,)),
+    Effect("load_transfer", ("load_m",), (-0.3,), (3.0,), (0.0,)),
+)
+NAMES = tuple(e.name for e in EFFECTS)
+EXTRA_NAMES = tuple(p for e in EFFECTS for p in e.params)
+N_EXTRA = len(EXTRA_NAMES)
+N_PARAMS = len(PARAM_NAMES) + N_EXTRA
+NEUTRAL = np.array([x for e in EFFECTS for x in e.neutral])
+BOUNDS = (np.concatenate([POLACH_BOUNDS[0], np.array([x for e in EFFECTS for x in e.lower])]),
+          np.concatenate([POLACH_BOUNDS[1], np.array([x for e in EFFECTS for x in e.upper])]))
+
+
+def active_mask(names) -> jax.Array:
+    """Boolean mask over the extra parameters switching on the effects in ``names``."""
+    unknown = set(names) - set(NAMES)
+    if unknown:
+        raise ValueError(f"unknown effect(s) {sorted(unknown)}; expected some of {NAMES}")
+    return jnp.array([e.name in names for e in EFFECTS for _ in e.params])
+
+
+def unpack(params, active):
+    """Split ``params`` (N_PARAMS,) into Polach ``theta`` (5,) and a dict of extras (inactive ones
+    at their neutral value)."""
+    extra = jnp.where(active, params[5:], NEUTRAL)
+    return params[:5], dict(zip(EXTRA_NAMES, extra))
+
+
+def predict(params, active, sig: Signals):
+    """``(target, prediction)`` of the observed adhesion [-], each shape (n,) (module docstring)."""
+    theta, e = unpack(params, active)
+    target = sig.adhesion + e["delay_s"] * sig.torque_rate
+    gain_r = 1.0 + e["delta_r"]
+    slip = sig.wheel_speed * gain_r - sig.speed
+    creep = creepage(slip, sig.speed)
+    t_change = sig.time[0] + e["u_change"] * sig.duration
+    step = jax.nn.sigmoid((sig.time - t_change) / (STEP_WIDTH * sig.duration))
+    scale = ((1.0 - e["drop"] * step) * (1.0 - e["slope"] * (sig.speed - sig.speed_ref)
+                                           / sig.speed_ref)
+             / jnp.maximum(1.0 + e["softening"] * sig.heat / POWER_REF, 0.05))
+    load = jnp.maximum(1.0 - e["load_m"] * sig.traction_ratio, 0.1)
+    ones = jnp.ones_like(creep)
+    thetas = jnp.stack([theta[0] * ones, theta[1] * ones, theta[2] * scale, theta[3] * ones,
+                        theta[4] * ones], axis=-1)
+    mu = polach_adhesion(thetas, creep, slip, sig.k_eps * load ** (-1.0 / 3.0))
+    return target, gain_r * load * mu + e["offset"]
+
+
+def residual(params, args):
+    """Weighted residual ``w·(target − pred)`` for LM; ``args = (active, weights, sig)``."""
+    active, weights, sig = args
+    target, pred = predict(params, active, sig)
+    return weights * (target - pred)

@@ -1,0 +1,121 @@
+"""Markdown report with three figures: μ̂ against creep before/after, the base residual against
+the signal that reveals the effect, and the candidate ranking."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .select import GAIN_THRESHOLD
+
+
+UNITS = {"time": "time [s]", "creep": "creepage [-]", "speed": "vehicle speed [m/s]",
+         "accel": "acceleration [m/s²]", "torque_rate": "torque rate d(T/mgr)/dt [1/s]",
+         "heat": "filtered frictional power [W]", "traction_ratio": "tractive effort F_t/(M g) [-]",
+         "adhesion": "predicted adhesion [-]"}
+
+
+def _binned(x, y, bins=20):
+    edges = np.quantile(x, np.linspace(0, 1, bins + 1))
+    idx = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, bins - 1)
+    centres = np.array([x[idx == k].mean() for k in range(bins) if np.any(idx == k)])
+    means = np.array([y[idx == k].mean() for k in range(bins) if np.any(idx == k)])
+    return centres, means
+
+
+def figures(result: dict, series: dict, out: Path) -> list:
+    """Render the figures into ``out``; returns their file names."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    names = []
+    creep, target = series["creep"], series["target"]
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
+    for ax, key, title in ((axes[0], "base", "base Polach fit"),
+                           (axes[1], "extended", "extended: " + (" + ".join(result["effects"])
+                                                                 or "none"))):
+        ax.plot(creep, target, ".", ms=2, color="0.6", label="observed μ̂")
+        ax.plot(creep, series[f"{key}_pred"], ".", ms=2, color="C3", label="model")
+        ax.set_xscale("symlog", linthresh=0.01)
+        ax.set_xlabel("creepage s [-]")
+        ax.set_title(f"{title}\nheld-out MAE {result[key]['heldout_mae']:.4f}")
+    axes[0].set_ylabel("adhesion μ [-]")
+    axes[0].legend(loc="lower right", markerscale=4)
+    fig.tight_layout()
+    fig.savefig(out / "adhesion_vs_creep.png", dpi=110)
+    plt.close(fig)
+    names.append("adhesion_vs_creep.png")
+
+    signal = series["revealing_signal"]
+    x = series["signals"][signal]
+    fig, ax = plt.subplots(figsize=(6.5, 4))
+    ax.plot(x, series["base_residual"], ".", ms=2, color="0.65", label="base residual")
+    ax.plot(*_binned(x, series["base_residual"]), "o-", color="C0", label="base, binned mean")
+    ax.plot(*_binned(x, series["extended_residual"]), "s-", color="C2",
+            label="extended, binned mean")
+    ax.axhline(0, color="k", lw=0.6)
+    ax.set_xlabel(UNITS[signal])
+    ax.set_ylabel("μ̂ − model [-]")
+    ax.set_title(f"residual against {signal} (η² = {result['residual_signatures'][signal]:.2f})")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(out / "residual_signature.png", dpi=110)
+    plt.close(fig)
+    names.append("residual_signature.png")
+
+    cands = result["candidates"][::-1]
+    fig, ax = plt.subplots(figsize=(6.5, 3.6))
+    colors = ["C3" if c["name"] in result["effects"] else "0.6" for c in cands]
+    ax.barh([c["name"] for c in cands], [100 * c["gain"] for c in cands], color=colors)
+    ax.axvline(100 * GAIN_THRESHOLD, color="k", ls="--", lw=0.8, label="calibrated threshold")
+    ax.set_xlabel("held-out error reduction vs base [%]")
+    ax.legend(loc="lower right")
+    fig.tight_layout()
+    fig.savefig(out / "candidate_ranking.png", dpi=110)
+    plt.close(fig)
+    names.append("candidate_ranking.png")
+    return names
+
+
+def write_report(result: dict, series: dict, directory) -> Path:
+    """Write ``report.md`` and its figures into ``directory``; returns the Markdown path."""
+    out = Path(directory)
+    out.mkdir(parents=True, exist_ok=True)
+    figs = figures(result, series, out)
+    rows = "\n".join(f"| {c['name']} | {c['heldout_mae']:.5f} | {100 * c['gain']:+.1f} % | "
+                     f"{c['delta_bic']:+.1f} | {c['evidence']['signal']} |"
+                     for c in result["candidates"])
+    params = ", ".join(f"{k} = {v:.4g}" for k, v in result["extended"]["params"].items())
+    text = f"""# Diagnosis: {result['verdict']}
+
+{result['explanation']}
+
+| model | MAE | held-out MAE |
+|---|---|---|
+| base Polach | {result['base']['mae']:.5f} | {result['base']['heldout_mae']:.5f} |
+| extended ({' + '.join(result['effects']) or 'none'}) | {result['extended']['mae']:.5f} | \
+{result['extended']['heldout_mae']:.5f} |
+
+Extended parameters: {params}.
+
+![adhesion against creep]({figs[0]})
+
+![residual signature]({figs[1]})
+
+## Candidates (round 1, best held-out error first)
+
+| effect | held-out MAE | gain | ΔBIC | revealing signal |
+|---|---|---|---|---|
+{rows}
+
+![candidate ranking]({figs[2]})
+
+Decision: an effect is accepted when it has the best held-out error, its gain exceeds the
+calibrated {100 * GAIN_THRESHOLD:.1f} % and ΔBIC < 0 (n_eff = {result['n_eff']:.0f}).
+"""
+    path = out / "report.md"
+    path.write_text(text)
+    return path

@@ -1,0 +1,115 @@
+"""The raw signals a diagnosis works on, split so each candidate effect can act where it enters.
+
+The observer (paper 001, eq 19, :mod:`jadhesion.data.observer`) is linear in the torque, so
+
+    mu_hat = T/(m g r) − J d/(m g r) = torque_mu − deriv_mu
+
+with ``d`` the low-passed derivative of ``ω = v_w / r``. Keeping the two terms apart lets an
+observation-side effect (torque delay, torque bias, radius error) correct the torque term without
+re-running the filter on the wheel speed, which none of them changes.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..data.observer import observer_core
+from ..data.vehicle import GRAVITY, Vehicle
+from ..errors import InputError
+from ..models import kinematics
+
+#: Default thermal lag τ_th [s] of :attr:`Signals.heat`.
+THERMAL_LAG_S = 2.0
+#: Half-width [s] of the centred moving average used for the derivatives of v and of torque_mu.
+SMOOTH_HALF_WIDTH_S = 0.25
+
+
+class Signals(NamedTuple):
+    """One recording, float arrays of shape (n,) unless marked (); a pytree, so it vmaps.
+
+    time [s]; speed ``v`` [m/s]; wheel_speed ``v_w`` [m/s, at the nominal radius]; torque_mu
+    ``T/(m g r)`` [-]; deriv_mu ``J d/(m g r)`` [-]; adhesion ``mu_hat = torque_mu − deriv_mu`` [-];
+    accel ``dv/dt`` [m/s²]; torque_rate ``d torque_mu/dt`` [1/s]; power ``|mu_hat m g w|`` [W]
+    (frictional power of the axle); heat: power through ``1/(1 + s τ_th)`` [W] (τ_th =
+    :data:`THERMAL_LAG_S` until :func:`jadhesion.diagnose.features.pick_thermal_lag` sets it);
+    traction_ratio ``F_t/(M g) = n T/(r M g)`` [-] from the smoothed torque; dt () [s];
+    speed_ref () mean speed [m/s];
+    duration () [s]; k_eps () Polach gradient constant [-].
+    """
+
+    time: jax.Array
+    speed: jax.Array
+    wheel_speed: jax.Array
+    torque_mu: jax.Array
+    deriv_mu: jax.Array
+    adhesion: jax.Array
+    accel: jax.Array
+    torque_rate: jax.Array
+    power: jax.Array
+    heat: jax.Array
+    traction_ratio: jax.Array
+    dt: jax.Array
+    speed_ref: jax.Array
+    duration: jax.Array
+    k_eps: jax.Array
+
+
+def smooth(x: np.ndarray, dt: float) -> np.ndarray:
+    """Centred moving average over ±:data:`SMOOTH_HALF_WIDTH_S` (edges padded)."""
+    half = max(1, int(round(SMOOTH_HALF_WIDTH_S / dt)))
+    kernel = np.ones(2 * half + 1) / (2 * half + 1)
+    return np.convolve(np.pad(x, half, mode="edge"), kernel, mode="valid")
+
+
+def smooth_derivative(time: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``dx/dt`` by central differences, then :func:`smooth` (noise of a sample stays out of the
+    regressor at that sample up to 1/(2·half + 1))."""
+    return smooth(np.gradient(x, time), float(np.median(np.diff(time))))
+
+
+def lowpass(u: np.ndarray, dt: float, tau: float) -> np.ndarray:
+    """First-order low-pass ``x_k = α x_{k−1} + (1 − α) u_k``, ``α = exp(−Δt/τ)``, from rest, as a
+    causal FFT convolution with ``h_k = (1 − α) α^k``."""
+    n = u.size
+    alpha = np.exp(-dt / tau)
+    h = (1.0 - alpha) * alpha ** np.arange(n)
+    return np.fft.irfft(np.fft.rfft(u, 2 * n) * np.fft.rfft(h, 2 * n), 2 * n)[:n]
+
+
+def from_columns(columns: dict, vehicle: Vehicle, name: str = "recording") -> Signals:
+    """Build :class:`Signals` from raw recording columns (time, vehicle_speed, wheel_speed,
+    traction_torque) and the vehicle's constants; raises :class:`InputError` if they are missing."""
+    missing = [c for c in ("time", "vehicle_speed", "wheel_speed", "traction_torque")
+               if c not in columns]
+    if missing:
+        raise InputError(f"{name}: diagnosis needs the raw signals; missing column(s) "
+                         f"{', '.join(missing)}")
+    t = np.asarray(columns["time"], float)
+    if t.size < 50:
+        raise InputError(f"{name}: diagnosis needs at least 50 samples, got {t.size}")
+    v = np.asarray(columns["vehicle_speed"], float)
+    vw = np.asarray(columns["wheel_speed"], float)
+    torque = np.asarray(columns["traction_torque"], float)
+    scale = vehicle.axle_load_kg * GRAVITY * vehicle.wheel_radius_m
+    deriv_mu = -np.asarray(observer_core(
+        jnp.asarray(t), jnp.asarray(vw), jnp.zeros_like(jnp.asarray(vw)),
+        vehicle.wheelset_inertia_kgm2, vehicle.wheel_radius_m, vehicle.axle_load_kg,
+        vehicle.observer_time_constant_s))
+    torque_mu = torque / scale
+    adhesion = torque_mu - deriv_mu
+    slip = np.asarray(kinematics.slip_velocity(vw, v))
+    power = np.abs(adhesion * slip) * vehicle.axle_weight_n
+    dt = float(np.median(np.diff(t)))
+    traction = vehicle.n_axles * smooth(torque, dt) / (vehicle.wheel_radius_m
+                                                       * vehicle.locomotive_mass_kg * GRAVITY)
+    f = jnp.asarray
+    return Signals(
+        time=f(t), speed=f(v), wheel_speed=f(vw), torque_mu=f(torque_mu), deriv_mu=f(deriv_mu),
+        adhesion=f(adhesion), accel=f(smooth_derivative(t, v)),
+        torque_rate=f(smooth_derivative(t, torque_mu)), power=f(power),
+        heat=f(lowpass(power, dt, THERMAL_LAG_S)), traction_ratio=f(traction), dt=f(dt),
+        speed_ref=f(np.mean(v)), duration=f(t[-1] - t[0]), k_eps=f(vehicle.k_eps()))
