@@ -10,7 +10,10 @@ import jadhesion
 from jadhesion.data.dataset import PolachDataset
 from jadhesion.identify import (ALGORITHMS, curve_fit, fit_polach, fit_polach_batch, iteration_key,
                                 run, run_until)
+from jadhesion.identify.lm import box_lm
+from jadhesion.identify.polach_fit import polach_residual
 from jadhesion.identify.tlbo import remedial_size
+from jadhesion.models.polach import _arctan
 
 BOUNDS = (jnp.full(4, -2.0), jnp.full(4, 3.0))
 CENTRE = jnp.array([0.5, -1.0, 1.5, 2.9])
@@ -118,6 +121,50 @@ def test_fit_polach_recovers_known_parameters(method, mae_tol, param_tol):
     assert int(fit.evaluations) > int(fit.iterations) > 0
     if param_tol is not None:
         np.testing.assert_allclose(fit.params, THETA, atol=param_tol)
+
+
+def test_arctan_matches_libm_and_jnp_with_exact_gradient():
+    rng = np.random.default_rng(0)
+    x = np.concatenate([np.linspace(-12.0, 12.0, 200_001), 1e3 * rng.standard_normal(100_000),
+                        np.geomspace(1e-300, 1e300, 20_001), -np.geomspace(1e-300, 1e300, 2_001),
+                        [0.0, 0.66, np.nextafter(0.66, 1.0), 2.414213562373095, 2.4142135623730954,
+                         1e308, 5e-324, np.inf, -np.inf]])
+    ours = np.asarray(jax.jit(_arctan)(jnp.asarray(x)))
+    rel = lambda ref: np.abs(ours - ref) / np.maximum(np.abs(ref), 1e-300)  # noqa: E731
+    assert rel(np.arctan(x)).max() <= 2.3e-16  # ~1 ulp of a correctly rounded libm
+    assert rel(np.asarray(jnp.arctan(jnp.asarray(x)))).max() <= 6e-16  # XLA's own error is ~2.5 ulp
+    assert np.isnan(float(_arctan(jnp.nan)))
+    grid = jnp.asarray(np.concatenate([np.linspace(-30.0, 30.0, 1001), [1e200, -1e200]]))
+    np.testing.assert_allclose(jax.vmap(jax.grad(_arctan))(grid), 1.0 / (1.0 + grid**2),
+                               rtol=1e-15, atol=0)
+
+
+def noisy_polach(n=300, seed=0):
+    """Slow speeds (A–B weakly identified) and kS = 1 on its bound: the hard case for bounded LM."""
+    rng = np.random.default_rng(seed)
+    theta = jnp.array([0.4288, 1.0, 0.3555, 0.3575, 0.1316])
+    k_eps = jadhesion.LOCO_22E.k_eps()
+    speed = rng.uniform(0.3, 1.0, n)
+    creep = np.exp(rng.uniform(np.log(1e-3), np.log(0.8), n))
+    mu = np.asarray(jadhesion.polach_adhesion(theta, creep, creep * speed, k_eps))
+    mu = mu + 0.0135 * rng.standard_normal(n)
+    return PolachDataset(*(jnp.asarray(a) for a in (creep, creep * speed, mu, speed)),
+                         jnp.asarray(k_eps))
+
+
+def test_box_lm_matches_scipy_trf_on_noisy_polach_in_few_steps():
+    data = noisy_polach()
+    fun = jax.jit(lambda p: polach_residual(p, data))
+    jac = jax.jit(jax.jacfwd(lambda p: polach_residual(p, data)))
+    ref = scipy.optimize.least_squares(lambda p: np.asarray(fun(p)), np.full(5, 0.5),
+                                       jac=lambda p: np.asarray(jac(p)), bounds=(0.0, 1.0),
+                                       xtol=1e-15, ftol=1e-15, gtol=1e-15)
+    box = (jnp.zeros(5), jnp.ones(5))
+    out = box_lm(polach_residual, jnp.full(5, 0.5), data, box)
+    assert bool(out.success) and int(out.steps) <= 60  # A → 0 along the A–B valley: 44 (scipy: 52)
+    assert float(out.sse) <= 2 * ref.cost * (1 + 1e-10)
+    np.testing.assert_allclose(out.params, ref.x, atol=1e-4)
+    assert bool(jnp.all((out.params >= 0) & (out.params <= 1)))
 
 
 def test_fit_polach_batch_equals_separate_fits_and_stops_at_target():
