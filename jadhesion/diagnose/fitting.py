@@ -70,7 +70,7 @@ def _free_residual(z, args):
 def _solve(full, idx, active, weights, sig, max_steps):
     """LM over the free entries ``idx`` of ``full`` (P + 1,), started 0.1 % inside the box (the
     sine map is flat on the bounds); returns the updated ``full``."""
-    lo, hi = _LO[idx], _HI[idx]
+    lo, hi = jnp.asarray(_LO)[idx], jnp.asarray(_HI)[idx]
     margin = 1e-3 * (hi - lo)
     z0 = jnp.clip(full[idx], lo + margin, hi - margin)
     z = lm_solve(_free_residual, z0, (full, idx, active, weights, sig), (lo, hi), rtol=RTOL,
