@@ -48,7 +48,7 @@ class Progress:
         rate = self.done / elapsed if elapsed > 0 else float("nan")
         eta = (self.total - self.done) / rate if rate > 0 else float("nan")
         sys.stderr.write(f"\r{self.label}: {self.done}/{self.total} {self.unit} "
-                         f"[{elapsed:6.1f} s, {rate:8.1f} {self.unit}/s, ETA {eta:5.0f} s]")
+                         f"[{elapsed:6.1f} s, {rate:.3g} {self.unit}/s, ETA {eta:5.0f} s]")
         if self.done >= self.total:
             sys.stderr.write("\n")
         sys.stderr.flush()
