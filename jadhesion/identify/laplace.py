@@ -16,8 +16,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..data.dataset import PolachDataset
-from ..models.polach import BOUNDS, polach_adhesion
+from ..models.polach import BOUNDS
 from .lm import multistart
+from .polach_fit import polach_residual
 
 #: Multi-start points of :func:`lm_optimum` (rows of [kA, kS, mu0, A, B]).
 STARTS = np.array([[0.5, 0.5, 0.35, 0.5, 0.3],
@@ -26,21 +27,16 @@ STARTS = np.array([[0.5, 0.5, 0.35, 0.5, 0.3],
                     [0.6, 0.9, 0.35, 0.4, 0.2]])
 
 
-def residual(theta, data: PolachDataset):
-    """Model minus observation [-], shape (n,)."""
-    return polach_adhesion(theta, data.creep, data.slip, data.k_eps) - data.adhesion
-
-
 def lm_optimum(data: PolachDataset, starts=STARTS):
     """Least-squares optimum in the box ``[0, 1]^5`` (LM from each of ``starts``, the best kept)."""
-    return multistart(residual, starts, data, BOUNDS).params
+    return multistart(polach_residual, starts, data, BOUNDS).params
 
 
 @jax.jit
 def laplace_covariance(theta_hat, data: PolachDataset):
     """``sigma_hat² (JᵀJ)⁻¹`` (5, 5) at the optimum; ``inf`` entries when ``JᵀJ`` is singular."""
-    r = residual(theta_hat, data)
-    jac = jax.jacfwd(residual)(theta_hat, data)
+    r = polach_residual(theta_hat, data)
+    jac = jax.jacfwd(polach_residual)(theta_hat, data)
     sigma2 = jnp.sum(r * r) / (r.shape[0] - theta_hat.shape[0])
     cov = sigma2 * jnp.linalg.inv(jac.T @ jac)
     return jnp.where(jnp.all(jnp.isfinite(cov)), cov, jnp.inf)

@@ -25,6 +25,7 @@ from ..data.dataset import PolachDataset
 from ..models.polach import PARAM_NAMES, adhesion_peak, polach_adhesion
 from .ensemble import MIN_TAU_MULTIPLE, ChainTooShortWarning, Diagnostics, run_ensemble  # noqa: F401
 from .likelihood import LOG_SCALE_BOUNDS, ensemble_log_prob
+from .polach_fit import polach_mae, polach_residual
 
 QUANTILES = (0.05, 0.5, 0.95)
 
@@ -85,8 +86,7 @@ def initial_ball(theta0, log_scale0: Optional[float], walkers: int, rng: np.rand
 
 
 def _initial_log_scale(data: PolachDataset, theta0, likelihood: str) -> float:
-    r = np.asarray(data.adhesion) - np.asarray(polach_adhesion(jnp.asarray(theta0), data.creep,
-                                                               data.slip, data.k_eps))
+    r = np.asarray(polach_residual(jnp.asarray(theta0), data))
     scale = np.sqrt(np.mean(r**2)) if likelihood == "gauss" else np.mean(np.abs(r))
     return float(np.log(max(scale, 1e-4)))
 
@@ -162,9 +162,8 @@ def table2_row(data: PolachDataset, theta0, *, walkers: int = 32, steps: int = 5
                                   likelihood=likelihood)
     d = result.diagnostics
     median = np.array([result.params[n]["median"] for n in PARAM_NAMES])
-    model = polach_adhesion(jnp.asarray(median), data.creep, data.slip, data.k_eps)
     needed = int(np.ceil(d.burn + MIN_TAU_MULTIPLE * np.max(d.tau) * d.thin))
-    return {"method": "mcmc", "error": float(jnp.mean(jnp.abs(model - data.adhesion))),
+    return {"method": "mcmc", "error": float(polach_mae(jnp.asarray(median), data)),
             "params": dict(zip(PARAM_NAMES, median.tolist())), "steps": needed,
             "evaluations": needed * walkers, "seconds": d.seconds * needed / d.steps,
             "converged": not d.warnings,
