@@ -13,7 +13,7 @@ from jadhesion.identify import (ALGORITHMS, curve_fit, fit_polach, fit_polach_ba
 from jadhesion.identify.lm import box_lm
 from jadhesion.identify.polach_fit import polach_residual
 from jadhesion.identify.tlbo import remedial_size
-from jadhesion.models.polach import _arctan
+from jadhesion.models.polach import atan_ratio, polach_adhesion
 
 BOUNDS = (jnp.full(4, -2.0), jnp.full(4, 3.0))
 CENTRE = jnp.array([0.5, -1.0, 1.5, 2.9])
@@ -123,20 +123,48 @@ def test_fit_polach_recovers_known_parameters(method, mae_tol, param_tol):
         np.testing.assert_allclose(fit.params, THETA, atol=param_tol)
 
 
-def test_arctan_matches_libm_and_jnp_with_exact_gradient():
+def test_atan_ratio_matches_arctan2_with_exact_gradient():
     rng = np.random.default_rng(0)
     x = np.concatenate([np.linspace(-12.0, 12.0, 200_001), 1e3 * rng.standard_normal(100_000),
-                        np.geomspace(1e-300, 1e300, 20_001), -np.geomspace(1e-300, 1e300, 2_001),
-                        [0.0, 0.66, np.nextafter(0.66, 1.0), 2.414213562373095, 2.4142135623730954,
-                         1e308, 5e-324, np.inf, -np.inf]])
-    ours = np.asarray(jax.jit(_arctan)(jnp.asarray(x)))
-    rel = lambda ref: np.abs(ours - ref) / np.maximum(np.abs(ref), 1e-300)  # noqa: E731
-    assert rel(np.arctan(x)).max() <= 2.3e-16  # ~1 ulp of a correctly rounded libm
-    assert rel(np.asarray(jnp.arctan(jnp.asarray(x)))).max() <= 6e-16  # XLA's own error is ~2.5 ulp
-    assert np.isnan(float(_arctan(jnp.nan)))
-    grid = jnp.asarray(np.concatenate([np.linspace(-30.0, 30.0, 1001), [1e200, -1e200]]))
-    np.testing.assert_allclose(jax.vmap(jax.grad(_arctan))(grid), 1.0 / (1.0 + grid**2),
-                               rtol=1e-15, atol=0)
+                        np.geomspace(1e-280, 1e8, 20_001), -np.geomspace(1e-280, 1e8, 2_001),
+                        [0.0, 0.66, np.nextafter(0.66, 1.0), 2.414213562373095, 2.4142135623730954]])
+    for d in (1.0, 0.37, 1e-3, 1e-12):
+        n = x * d
+        ours = np.asarray(jax.jit(atan_ratio)(jnp.asarray(n), jnp.full(n.shape, d)))
+        ref = np.arctan2(n, d)
+        assert np.max(np.abs(ours - ref) / np.maximum(np.abs(ref), 1e-300)) <= 4.5e-16  # ~2 ulp
+    n, d = jnp.asarray(rng.normal(0.0, 3.0, 2000)), jnp.asarray(rng.uniform(1e-3, 1.0, 2000))
+    dn, dd = jax.vmap(jax.grad(atan_ratio, argnums=(0, 1)))(n, d)
+    np.testing.assert_allclose(dn, d / (n**2 + d**2), rtol=1e-15, atol=0)
+    np.testing.assert_allclose(dd, -n / (n**2 + d**2), rtol=1e-15, atol=0)
+
+
+def test_polach_matches_the_textbook_form():
+    """The division-saving evaluation equals eq 8 written with eps = k_eps s / mu."""
+    rng = np.random.default_rng(3)
+    theta = rng.uniform(0.0, 1.0, (64, 1, 5))
+    s = np.sign(rng.normal(size=(1, 500))) * np.exp(rng.uniform(np.log(1e-6), 0.0, (1, 500)))
+    w = s * rng.uniform(0.1, 30.0, (1, 500))
+    ka, ks, mu0, a, b = np.moveaxis(theta, -1, 0)
+    mu = mu0 * ((1 - a) * np.exp(-b * np.abs(w)) + a)
+    eps = 130.0 * s / mu
+    ref = 2 * mu / np.pi * (ka * eps / (1 + (ka * eps) ** 2) + np.arctan(ks * eps))
+    ours = np.asarray(polach_adhesion(jnp.asarray(theta), jnp.asarray(s), jnp.asarray(w), 130.0))
+    np.testing.assert_allclose(ours, ref, rtol=1e-14, atol=1e-17)
+
+    def textbook(th, s, w):
+        mu = jnp.maximum(th[2] * ((1 - th[3]) * jnp.exp(-th[4] * jnp.abs(w)) + th[3]), 1e-12)
+        eps = jnp.clip(130.0 * s / mu, -1e8, 1e8)
+        return 2 * mu / jnp.pi * (th[0] * eps / (1 + (th[0] * eps) ** 2) + jnp.arctan(th[1] * eps))
+
+    s, w = jnp.asarray(s[0]), jnp.asarray(w[0])
+    for th in (theta[0, 0], np.array([0.4, 1.0, 1e-9, 0.36, 0.13])):  # the second clips eps
+        th = jnp.asarray(th)
+        for argnum in (0, 1, 2):
+            ref = jax.jacfwd(textbook, argnums=argnum)(th, s, w)
+            for jac in (jax.jacfwd, jax.jacrev):
+                got = jac(lambda *a: polach_adhesion(a[0], a[1], a[2], 130.0), argnums=argnum)(th, s, w)
+                assert np.max(np.abs(got - ref)) <= 1e-14 * np.max(np.abs(ref))
 
 
 def noisy_polach(n=300, seed=0):
