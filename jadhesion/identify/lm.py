@@ -26,6 +26,8 @@ gain ratio ``ρ = (C − C')/(−gᵀs − ½ sᵀHs) > 10⁻⁴`` (``s = u' −
 Nielsen's rule. It stops after an accepted step with ``C − C' ≤ ftol·C`` and
 ``‖s‖∞ ≤ xtol (xtol + ‖u‖∞)``, when the projected gradient ``‖clip(u − g) − u‖∞ ≤ gtol``, when
 ``λ > 10¹⁶`` (no decrease is representable), or at ``max_steps`` (``success`` false).
+:func:`box_lm_queue` runs many such problems as a work queue over a few vmapped lanes, so a batch
+costs its total number of steps rather than (batch size × the slowest member's steps).
 """
 
 from __future__ import annotations
@@ -147,7 +149,8 @@ class BoxLMOptions(NamedTuple):
 
 class _BoxState(NamedTuple):
     """Iterate ``u`` (box-scaled), residual, Jacobian, cost ``½‖r‖²``, running ``max diag JᵀJ``,
-    damping ``λ`` and its growth factor ``ν``, steps, done (converged or stalled)."""
+    damping ``λ`` and its growth factor ``ν``, steps, done (converged or stalled), and ``fresh``
+    (not yet linearised: the first iteration only evaluates ``r`` and ``J`` at ``u``)."""
 
     u: jax.Array
     r: jax.Array
@@ -158,34 +161,34 @@ class _BoxState(NamedTuple):
     nu: jax.Array
     steps: jax.Array
     done: jax.Array
+    fresh: jax.Array
 
 
-def _box_lm(residual, p0, args, bounds, options, max_steps):
+def _box_lm_stepper(residual, bounds, options, n_residuals):
+    """``(init, step)`` of the projected LM: ``init(p0)`` is a fresh state (no evaluation, so
+    restarting a lane is free), ``step(state, args)`` one iteration (one residual and Jacobian)."""
     res = safe_residual(residual)
     lo, hi = bounds
     width = hi - lo
+    d = lo.shape[0]
 
-    def linearise(u):
+    def linearise(u, args):
         def f(v):
             r = res(lo + width * v, args)
             return r, r
         jac, r = jax.jacfwd(f, has_aux=True)(u)
         return r, jac
 
-    def cost(r):
-        return 0.5 * jnp.sum(r * r)
+    def init(p0):
+        dtype = p0.dtype
+        scalar = lambda v: jnp.asarray(v, dtype)  # noqa: E731
+        return _BoxState(jnp.clip((p0 - lo) / width, 0.0, 1.0), jnp.zeros(n_residuals, dtype),
+                         jnp.zeros((n_residuals, d), dtype), scalar(jnp.inf), jnp.zeros(d, dtype),
+                         scalar(1e-3), scalar(2.0), jnp.asarray(0), jnp.asarray(False),
+                         jnp.asarray(True))
 
-    u0 = jnp.clip((p0 - lo) / width, 0.0, 1.0)
-    r0, j0 = linearise(u0)
-    scalar = lambda v: jnp.asarray(v, p0.dtype)  # noqa: E731
-    init = _BoxState(u0, r0, j0, cost(r0), jnp.sum(j0 * j0, axis=0), scalar(1e-3), scalar(2.0),
-                     jnp.asarray(0), jnp.asarray(False))
-
-    def cond(st):
-        return ~st.done & (st.steps < max_steps)
-
-    def body(st):
-        u, r, jac, c = st.u, st.r, st.jac, st.cost
+    def step(st, args):
+        u, r, jac, c, fresh = st.u, st.r, st.jac, st.cost, st.fresh
         g = jac.T @ r
         h = jac.T @ jac
         active = ((u <= 0.0) & (g > 0.0)) | ((u >= 1.0) & (g < 0.0))
@@ -193,40 +196,90 @@ def _box_lm(residual, p0, args, bounds, options, max_steps):
         dmax = jnp.maximum(st.dmax, jnp.diag(h))
         damp = jnp.maximum(dmax, 1e-12 * jnp.max(dmax) + jnp.finfo(u.dtype).tiny)
         a = h * free[:, None] * free[None, :] + jnp.diag(jnp.where(active, 1.0, st.lam * damp))
-        u_new = jnp.clip(u + jnp.linalg.solve(a, -g * free), 0.0, 1.0)
+        u_new = jnp.where(fresh, u, jnp.clip(u + jnp.linalg.solve(a, -g * free), 0.0, 1.0))
         s = u_new - u
-        r_new, jac_new = linearise(u_new)
-        c_new = cost(r_new)
+        r_new, jac_new = linearise(u_new, args)
+        c_new = 0.5 * jnp.sum(r_new * r_new)
         predicted = -(g @ s) - 0.5 * (s @ (h @ s))
         rho = (c - c_new) / jnp.where(predicted > 0, predicted, jnp.inf)
-        accept = (rho > 1e-4) & jnp.isfinite(c_new)
+        accept = fresh | ((rho > 1e-4) & jnp.isfinite(c_new))
         small = ((c - c_new <= options.ftol * c)
                  & (jnp.max(jnp.abs(s)) <= options.xtol * (options.xtol + jnp.max(jnp.abs(u)))))
         pick = lambda new, old: jnp.where(accept, new, old)  # noqa: E731
         u, r, jac, c = pick(u_new, u), pick(r_new, r), pick(jac_new, jac), pick(c_new, c)
         stationary = jnp.max(jnp.abs(jnp.clip(u - jac.T @ r, 0.0, 1.0) - u)) <= options.gtol
-        lam = jnp.where(accept, st.lam * jnp.maximum(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3),
-                        st.lam * st.nu)
+        lam = jnp.where(fresh, st.lam, jnp.where(
+            accept, st.lam * jnp.maximum(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3), st.lam * st.nu))
         nu = jnp.where(accept, 2.0, 2.0 * st.nu)
-        done = (accept & small) | stationary | (lam > 1e16)
-        return _BoxState(u, r, jac, c, dmax, lam, nu, st.steps + 1, done)
+        done = (accept & small & ~fresh) | stationary | (lam > 1e16)
+        steps = st.steps + jnp.where(fresh, 0, 1)
+        return _BoxState(u, r, jac, c, dmax, lam, nu, steps, done, jnp.asarray(False))
 
-    final = jax.lax.while_loop(cond, body, init)
-    return lo + width * final.u, final.steps, final.done
+    def result(st):
+        p = lo + width * st.u
+        finite = jnp.all(jnp.abs(st.r) < jnp.finfo(st.r.dtype).max ** 0.25) & jnp.isfinite(st.cost)
+        ok = st.done & finite & jnp.all(jnp.isfinite(p))
+        return LMResult(p, jnp.where(finite, 2.0 * st.cost, jnp.inf), st.steps, ok)
+
+    return init, step, result
+
+
+def _prepare(p0, bounds, options):
+    p0 = jnp.asarray(p0)
+    bounds = tuple(jnp.asarray(b, p0.dtype) for b in bounds)
+    return p0, bounds, BoxLMOptions(*(jnp.asarray(o, p0.dtype) for o in options))
 
 
 @functools.partial(jax.jit, static_argnames=("residual", "max_steps"))
 def box_lm(residual, p0, args, bounds, options=BoxLMOptions(), *, max_steps=100):
     """Projected LM on the box ``bounds = (lo, hi)`` from ``p0`` (see the module docstring).
     ``steps`` counts iterations; each costs one residual and one forward Jacobian."""
-    p0 = jnp.asarray(p0)
-    bounds = tuple(jnp.asarray(b, p0.dtype) for b in bounds)
-    options = BoxLMOptions(*(jnp.asarray(o, p0.dtype) for o in options))
-    p, steps, ok = _box_lm(residual, p0, args, bounds, options, max_steps)
-    r = residual(p, args)
-    sse = jnp.sum(r * r)
-    ok = ok & jnp.isfinite(sse) & jnp.all(jnp.isfinite(p))
-    return LMResult(p, jnp.where(jnp.isfinite(sse), sse, jnp.inf), steps, ok)
+    p0, bounds, options = _prepare(p0, bounds, options)
+    n = jax.eval_shape(residual, p0, args).shape[0]
+    init, step, result = _box_lm_stepper(residual, bounds, options, n)
+    final = jax.lax.while_loop(lambda st: ~st.done & (st.steps < max_steps),
+                               lambda st: step(st, args), init(p0))
+    return result(final)
+
+
+@functools.partial(jax.jit, static_argnames=("residual", "max_steps", "lanes"))
+def box_lm_queue(residual, starts, args, bounds, options=BoxLMOptions(), *, max_steps=100,
+                 lanes=8):
+    """:func:`box_lm` on many problems — row ``i`` of ``starts`` (N, d) with the ``i``-th slice of
+    the stacked pytree ``args`` — as a work queue: ``lanes`` problems iterate side by side (one
+    vmapped step) and a lane that converges takes the next waiting problem at once. A plain
+    ``vmap`` of :func:`box_lm` runs every member for as many steps as the slowest; the queue's
+    cost follows the *total* steps instead. Returns a stacked :class:`LMResult` in input order."""
+    starts, bounds, options = _prepare(starts, bounds, options)
+    n_problems = starts.shape[0]
+    lanes = min(lanes, n_problems)
+    take = lambda i: jax.tree.map(lambda a: a[i], args)  # noqa: E731
+    n_res = jax.eval_shape(residual, starts[0], take(0)).shape[0]
+    init, step, result = _box_lm_stepper(residual, bounds, options, n_res)
+    finished = lambda st: st.done | (st.steps >= max_steps)  # noqa: E731
+    out0 = jax.vmap(lambda p: result(init(p)))(starts)
+
+    def body(carry):
+        states, index, next_index, out = carry
+        live = index < n_problems
+        lane_args = take(jnp.minimum(index, n_problems - 1))
+        stepped = jax.vmap(step)(states, lane_args)
+        states = jax.tree.map(lambda new, old: jnp.where(
+            live.reshape((-1,) + (1,) * (new.ndim - 1)), new, old), stepped, states)
+        ending = live & jax.vmap(finished)(states)
+        out = jax.tree.map(lambda o, v: o.at[jnp.where(ending, index, n_problems)].set(v, mode="drop"),
+                           out, jax.vmap(result)(states))
+        new_index = next_index + jnp.cumsum(ending) - 1
+        index = jnp.where(ending, jnp.where(new_index < n_problems, new_index, n_problems), index)
+        fresh = jax.vmap(init)(starts[jnp.minimum(index, n_problems - 1)])
+        states = jax.tree.map(lambda f, s: jnp.where(
+            ending.reshape((-1,) + (1,) * (f.ndim - 1)), f, s), fresh, states)
+        return states, index, next_index + jnp.sum(ending), out
+
+    first = jnp.arange(lanes)
+    carry = (jax.vmap(init)(starts[first]), first, jnp.asarray(lanes), out0)
+    _, _, _, out = jax.lax.while_loop(lambda c: jnp.any(c[1] < n_problems), body, carry)
+    return out
 
 
 def global_lm(residual, bounds, key, args=None, *, n_starts=4, pop_size=20, search_iter=5,

@@ -19,7 +19,7 @@ import numpy as np
 from ..data.dataset import PolachDataset
 from ..models.polach import polach_adhesion
 from .driver import run, run_until
-from .lm import global_lm
+from .lm import box_lm_queue, global_lm
 from .pso import PSO
 from .tlbo import ITLBO, TLBO
 
@@ -104,7 +104,29 @@ _fit_one = jax.jit(_fit, static_argnames=_STATIC)
 
 @functools.partial(jax.jit, static_argnames=_STATIC)
 def _fit_many(method, pop_size, max_iter, use_target, data, keys, target):
-    return jax.vmap(lambda d, k: _fit(method, pop_size, max_iter, use_target, d, k, target))(data, keys)
+    if method == "lm" and data.adhesion.shape[-1] > SEED_SAMPLES:
+        return _global_lm_many(data, keys, target, use_target)
+    return jax.vmap(lambda d, k, t: _fit(method, pop_size, max_iter, use_target, d, k, t))(
+        data, keys, target)
+
+
+def _global_lm_many(data, keys, target, use_target):
+    """Global LM on a stack of datasets: the seeding (random search and multi-start LM on each
+    subsample) is vmapped; the full-data polish runs as a work queue (:func:`.lm.box_lm_queue`),
+    so the batch costs the total of its LM steps rather than the slowest member's, times N."""
+    bounds = _box(data.adhesion.dtype)
+
+    def seed(d, key):
+        return global_lm(polach_residual, bounds, key, subsample(d), n_starts=LM_STARTS,
+                         pop_size=LM_POP, search_iter=LM_SEARCH_ITER, max_steps=LM_MAX_STEPS)
+
+    seeded, n_pop = jax.vmap(seed)(data, keys)
+    polish = box_lm_queue(polach_residual, seeded.params, data, bounds, max_steps=LM_MAX_STEPS)
+    r = jax.vmap(polach_residual)(polish.params, data)
+    mae = jnp.mean(jnp.abs(r), axis=-1)
+    steps = seeded.steps + polish.steps
+    reached = (mae <= target) if use_target else jnp.isfinite(mae)
+    return PolachFit(polish.params, mae, jnp.sum(r * r, axis=-1), steps, n_pop + steps, reached, None)
 
 
 def _check(method):
@@ -130,11 +152,14 @@ def fit_polach(dataset: PolachDataset, method: str, key, *, pop_size: int = 50,
 
 def fit_polach_batch(datasets: PolachDataset, method: str, keys, *, pop_size: int = 50,
                      max_iter: int = 300, target: Optional[float] = None) -> PolachFit:
-    """:func:`fit_polach` vmapped over a leading axis of stacked ``datasets`` and ``keys``.
+    """:func:`fit_polach` vmapped over a leading axis of stacked ``datasets`` and ``keys``;
+    ``target`` is a scalar or one MAE per dataset.
 
     Stack datasets with ``jax.tree.map(lambda *a: jnp.stack(a), *datasets)`` (equal lengths).
-    Note that a batched while loop (``target`` given) runs until its slowest member stops.
+    A batched population fit with a ``target`` (a vmapped while loop) runs until its slowest member
+    stops; batched LM polishes through a work queue and costs the batch's total LM steps.
     """
     _check(method)
-    target_ = jnp.asarray(0.0 if target is None else target, datasets.adhesion.dtype)
+    target_ = jnp.broadcast_to(jnp.asarray(0.0 if target is None else target,
+                                           datasets.adhesion.dtype), datasets.adhesion.shape[:1])
     return _fit_many(method, pop_size, max_iter, target is not None, datasets, keys, target_)
