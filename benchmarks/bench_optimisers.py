@@ -67,7 +67,7 @@ def numpy_residual(ds):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--json", action="store_true")
-    parser.add_argument("--trials", type=int, default=20, help="starts for success rates")
+    parser.add_argument("--trials", type=int, default=200, help="datasets for success rates")
     args = parser.parse_args()
     rows = []
     ds = dataset(0)
@@ -100,7 +100,7 @@ def main():
     rows.append(dict(name="optimistix LM, sine map, single start", value=1e3 * warm, unit="ms",
                      compile_s=comp, steps=int(lm_solve(polach_residual, p0, ds, box).steps)))
     rows += scipy_rows(ds, args.trials)
-    rows.append(success_rate(ds, args.trials, truth_mae))
+    rows.append(success_rate(args.trials))
     rows += batched(64)
 
     if args.json:
@@ -150,19 +150,25 @@ def scipy_rows(ds, trials):
                  unit="ms", nfev=int(out.nfev))]
 
 
-def success_rate(ds, trials, truth_mae):
-    """Share of runs reaching MAE within 0.1 % of the best found (global LM vs scipy random start)."""
+def success_rate(trials, points=1000):
+    """Share of datasets on which a fit reaches the global basin: MAE within 0.1 % of the best of
+    (global LM, scipy from a random start, box LM started at the truth). One global-LM run and one
+    scipy run per dataset, ``trials`` datasets (different noise), all fits of ours in one call."""
     from scipy.optimize import least_squares
-    f = numpy_residual(ds)
-    keys = jax.random.split(jax.random.key(1), trials)
-    ours = [float(fit_polach(ds, "lm", k).mae) for k in keys]
+    stack = jax.tree.map(lambda *a: jnp.stack(a), *[dataset(1000 + i, points) for i in range(trials)])
+    ours = np.asarray(fit_polach_batch(stack, "lm", jax.random.split(jax.random.key(1), trials)).mae)
+    box = (jnp.zeros(5), jnp.ones(5))
+    from_truth = jax.vmap(lambda d: box_lm(polach_residual, jnp.asarray(THETA), d, box).params)(stack)
+    truth_basin = np.asarray(jax.vmap(polach_mae)(from_truth, stack))
     rng = np.random.default_rng(1)
-    theirs = [float(np.mean(np.abs(f(least_squares(f, rng.uniform(0, 1, 5), bounds=(0, 1)).x))))
-              for _ in range(trials)]
-    best = min(ours + theirs)
-    ok = lambda m: m <= 1.001 * best  # noqa: E731
-    return dict(name="success rate: global LM / scipy random start", value=np.mean(list(map(ok, ours))),
-                unit="", scipy=float(np.mean(list(map(ok, theirs)))), truth_mae=truth_mae)
+    theirs = []
+    for i in range(trials):
+        f = numpy_residual(jax.tree.map(lambda a: a[i], stack))
+        theirs.append(float(np.mean(np.abs(f(least_squares(f, rng.uniform(0, 1, 5), bounds=(0, 1)).x)))))
+    best = np.minimum(np.minimum(ours, np.asarray(theirs)), truth_basin)
+    ok = lambda m: np.mean(np.asarray(m) <= 1.001 * best)  # noqa: E731
+    return dict(name=f"global basin reached: global LM / scipy random start ({trials} datasets)",
+                value=float(ok(ours)), unit="", goal=">= 0.99", scipy=float(ok(theirs)))
 
 
 @jax.jit
