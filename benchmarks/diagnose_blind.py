@@ -1,14 +1,20 @@
-"""Blind benchmark of ``jadhesion diagnose``: simulated recordings with 0, 1 or 2 concealed effects.
+"""Blind benchmark of ``jadhesion diagnose``: simulated recordings with 0, 1 or 2 concealed effects,
+plus a null set of clean recordings for the false-alarm rate.
 
 Each case: random scenario (dry/wet/sand), seed (profile wander, excursions, noise), vehicle (the
-22E or a variant with a worn radius 0.57–0.61 m and inertia ±25 %), and effects with log-uniform
+22E or a variant: worn radius 0.57–0.61 m, inertia ±25 %, axle load 18–23 t), driving profile (the
+published test or, with probability ``--p-varied``, a different one: speed, ramp, creep level,
+wander, excursions, Polach parameters ×0.8–1.2, 1500–3000 samples) and effects with log-uniform
 magnitudes over :data:`jadhesion.diagnose.calibrate.MAGNITUDE_RANGE` (reaching well below the
 detection thresholds). The diagnoser sees only the CSV and a vehicle-only sidecar, through the CLI's
-code path. Reported: confusion matrix (true primary effect × verdict), false-alarm rate on clean
-recordings, top-1 accuracy per effect in magnitude bins, relative error of recovered magnitudes,
-seconds per diagnosis.
+code path. Reported: confusion matrix (true primary effect × verdict), false alarms on clean
+recordings (k/n with a 95 % Clopper–Pearson interval), per effect top-1 accuracy in magnitude bins
+and above its documented detection threshold (:data:`jadhesion.diagnose.DETECTION_THRESHOLDS`),
+"truth in the reported set" (verdict or its indistinguishable set), the measured 90 % threshold,
+relative error of the recovered magnitude, base-fit parameter errors, seconds per diagnosis.
 
-    python benchmarks/diagnose_blind.py [--n 200] [--json] [--seed 0] [--samples N]
+    python benchmarks/diagnose_blind.py [--n 220] [--null 80] [--seed 0] [--json]
+    python benchmarks/diagnose_blind.py --from-cases benchmarks/results/diagnose_blind_cases.json
 """
 
 from __future__ import annotations
@@ -17,6 +23,7 @@ import argparse
 import json
 import sys
 import tempfile
+from pathlib import Path
 
 import numpy as np
 
@@ -25,9 +32,12 @@ from jadhesion.config import enable_compilation_cache, enable_x64
 from jadhesion.diagnose.calibrate import MAGNITUDE_RANGE, random_effects, run_case
 from jadhesion.diagnose.extensions import NAMES
 from jadhesion.diagnose.select import GAIN_THRESHOLD, effects_from
+from jadhesion.diagnose.thresholds import DETECTION_THRESHOLDS, MIN_CASES, TARGET_ACCURACY
+from jadhesion.models.polach import PARAM_NAMES
 
-#: Mix of cases: clean, one effect, two effects.
-P_CLEAN, P_PAIR = 0.25, 0.1
+RESULTS = Path(__file__).resolve().parent / "results"
+#: Mix of the main cases: clean, one effect, two effects.
+P_CLEAN, P_PAIR = 0.15, 0.1
 #: The parameter of the extended model that estimates each effect's magnitude.
 MAGNITUDE_PARAM = {"rail_change": "drop", "wheel_radius_error": "delta_r",
                    "signal_delay": "delay_s", "speed_dependence": "slope",
@@ -48,64 +58,143 @@ def redecide(cases, threshold=GAIN_THRESHOLD) -> None:
     always fitted above :data:`~jadhesion.diagnose.select.ROUND2_MIN`)."""
     for c in cases:
         d = c["diagnosis"]
-        d["effects"], _ = effects_from(d["candidates"], d["second_round"], threshold)
+        d["effects"], close = effects_from(d["candidates"], d["second_round"], threshold)
         d["verdict"] = d["effects"][0] if d["effects"] else "none"
+        d["indistinguishable"] = [{"name": n} for n in close]
+
+
+def clopper_pearson(k: int, n: int, level: float = 0.95) -> list:
+    """Exact binomial interval for k successes in n trials."""
+    from scipy.stats import beta
+
+    a = 1.0 - level
+    lo = float(beta.ppf(a / 2, k, n - k + 1)) if k > 0 else 0.0
+    hi = float(beta.ppf(1 - a / 2, k + 1, n - k)) if k < n else 1.0
+    return [lo, hi]
+
+
+def _rate(hits) -> dict:
+    k, n = int(sum(hits)), len(hits)
+    return {"k": k, "n": n, "rate": k / n if n else None,
+            "ci95": clopper_pearson(k, n) if n else None}
+
+
+def reported_set(d) -> set:
+    """The verdict's effects and the effects reported as indistinguishable from it."""
+    return set(d["effects"]) | {c["name"] for c in d.get("indistinguishable", [])}
+
+
+def measured_threshold(mags, hits, target=TARGET_ACCURACY, min_cases=MIN_CASES):
+    """Smallest |magnitude| m such that the cases with |magnitude| ≥ m (at least ``min_cases``)
+    are named correctly in ≥ ``target`` of cases; None if no such m."""
+    order = np.argsort(mags)[::-1]
+    m, h = np.asarray(mags)[order], np.asarray(hits, float)[order]
+    acc = np.cumsum(h) / np.arange(1, len(h) + 1)
+    ok = [i for i in range(len(h)) if i + 1 >= min_cases and acc[i] >= target]
+    return float(m[max(ok)]) if ok else None
 
 
 def summarise(cases) -> dict:
+    main = [c for c in cases if c.get("set", "main") == "main"]
     labels = ["none", *NAMES]
     confusion = {t: {p: 0 for p in labels} for t in labels}
-    for c in cases:
+    for c in main:
         truth = c["effects"][0][0] if c["effects"] else "none"
         confusion[truth][c["diagnosis"]["verdict"]] += 1
     clean = [c for c in cases if not c["effects"]]
-    false_alarm = (sum(c["diagnosis"]["verdict"] != "none" for c in clean) / len(clean)
-                   if clean else float("nan"))
+    alarms = {
+        "all_clean": _rate([c["diagnosis"]["verdict"] != "none" for c in clean]),
+        "null_set": _rate([c["diagnosis"]["verdict"] != "none" for c in clean
+                           if c.get("set") == "null"]),
+        "varied_vehicle_or_profile": _rate([c["diagnosis"]["verdict"] != "none" for c in clean
+                                            if c["vehicle_varied"] or c.get("profile_varied")]),
+        "generic_term_used": _rate([c["diagnosis"]["generic"]["used"] for c in clean]),
+    }
     per_effect = {}
     for name in NAMES:
-        single = [c for c in cases if len(c["effects"]) == 1 and c["effects"][0][0] == name]
+        single = [c for c in main if len(c["effects"]) == 1 and c["effects"][0][0] == name]
+        mags = [abs(c["effects"][0][1]) for c in single]
+        hits = [c["diagnosis"]["verdict"] == name for c in single]
+        in_set = [name in reported_set(c["diagnosis"]) for c in single]
         lo, hi = MAGNITUDE_RANGE[name]
         edges = np.exp(np.linspace(np.log(lo), np.log(hi), 4))
         bins = []
         for a, b in zip(edges[:-1], edges[1:]):
-            sel = [c for c in single if a <= abs(c["effects"][0][1]) <= b]
-            hits = [c["diagnosis"]["verdict"] == name for c in sel]
+            sel = [i for i, m in enumerate(mags) if a <= m <= b]
             bins.append({"range": [float(a), float(b)], "n": len(sel),
-                         "top1": float(np.mean(hits)) if hits else None})
+                         "top1": float(np.mean([hits[i] for i in sel])) if sel else None,
+                         "in_set": float(np.mean([in_set[i] for i in sel])) if sel else None})
+        documented = DETECTION_THRESHOLDS.get(name, {}).get("magnitude")
+        above = [i for i, m in enumerate(mags) if documented is not None and m >= documented]
         errors = []
         for c in single:
             if c["diagnosis"]["verdict"] == name:
                 cand = next(x for x in c["diagnosis"]["candidates"] if x["name"] == name)
-                est = cand["params"][MAGNITUDE_PARAM[name]]
-                true = c["effects"][0][1]
+                est, true = cand["params"][MAGNITUDE_PARAM[name]], c["effects"][0][1]
                 errors.append(abs(est - true) / abs(true))
-        per_effect[name] = {"n": len(single), "bins": bins,
-                            "top1": float(np.mean([c["diagnosis"]["verdict"] == name
-                                                   for c in single])) if single else None,
-                            "median_rel_error": float(np.median(errors)) if errors else None}
-    pairs = [c for c in cases if len(c["effects"]) == 2]
-    pair_hits = [set(c["diagnosis"]["effects"]) == {e[0] for e in c["effects"]} for c in pairs]
-    pair_any = [bool(set(c["diagnosis"]["effects"]) & {e[0] for e in c["effects"]}) for c in pairs]
-    varied = [c for c in cases if c["vehicle_varied"] and not c["effects"]]
+        default = [i for i, c in enumerate(single) if not c.get("profile_varied")]
+        varied = [i for i, c in enumerate(single) if c.get("profile_varied")]
+        per_effect[name] = {
+            "n": len(single), "bins": bins,
+            "top1": _rate(hits), "in_set": _rate(in_set),
+            "top1_default_profile": _rate([hits[i] for i in default]),
+            "top1_varied_profile": _rate([hits[i] for i in varied]),
+            "measured_threshold": measured_threshold(mags, hits),
+            "measured_threshold_in_set": measured_threshold(mags, in_set),
+            "documented_threshold": documented,
+            "top1_above_documented": _rate([hits[i] for i in above]),
+            "in_set_above_documented": _rate([in_set[i] for i in above]),
+            "confused_with": {k: v for k, v in confusion[name].items() if v and k != name},
+            "median_rel_error": float(np.median(errors)) if errors else None,
+            "cases": [[m, bool(h), bool(s)] for m, h, s in zip(mags, hits, in_set)],
+        }
+    pairs = [c for c in main if len(c["effects"]) == 2]
+    truth_sets = [{e[0] for e in c["effects"]} for c in pairs]
+    base_err = {k: [] for k in PARAM_NAMES}
+    for c in clean:
+        if "true_params" in c:
+            for k in PARAM_NAMES:
+                base_err[k].append(abs(c["diagnosis"]["base"]["params"][k] - c["true_params"][k]))
+    single_all = [c for c in main if len(c["effects"]) == 1]
+    seconds = [c["diagnosis"]["seconds"] for c in cases]
     return {
-        "n": len(cases), "confusion": confusion, "false_alarm_rate": false_alarm,
-        "n_clean": len(clean),
-        "false_alarm_rate_varied_vehicle": (float(np.mean([c["diagnosis"]["verdict"] != "none"
-                                                            for c in varied])) if varied else None),
+        "n": len(cases), "n_main": len(main), "n_clean": len(clean),
+        "confusion": confusion, "false_alarms": alarms,
+        "false_alarm_rate": alarms["all_clean"]["rate"],
         "per_effect": per_effect,
-        "pairs": {"n": len(pairs), "both_named": float(np.mean(pair_hits)) if pairs else None,
-                  "one_named": float(np.mean(pair_any)) if pairs else None},
-        "seconds_per_diagnosis": float(np.median([c["diagnosis"]["seconds"] for c in cases])),
+        "single_effect": {"top1": _rate([c["diagnosis"]["verdict"] == c["effects"][0][0]
+                                         for c in single_all]),
+                          "in_set": _rate([c["effects"][0][0] in reported_set(c["diagnosis"])
+                                           for c in single_all]),
+                          "missed": _rate([c["diagnosis"]["verdict"] == "none"
+                                           for c in single_all])},
+        "pairs": {"n": len(pairs),
+                  "both_named": _rate([set(c["diagnosis"]["effects"]) == t
+                                       for c, t in zip(pairs, truth_sets)]),
+                  "one_named": _rate([bool(set(c["diagnosis"]["effects"]) & t)
+                                      for c, t in zip(pairs, truth_sets)])},
+        "base_params_clean_median_abs_error": {k: float(np.median(v)) if v else None
+                                               for k, v in base_err.items()},
+        "seconds_per_diagnosis": {"median": float(np.median(seconds)),
+                                  "p90": float(np.quantile(seconds, 0.9)),
+                                  "max": float(np.max(seconds))},
     }
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--n", type=int, default=200, help="number of recordings (default 200)")
+    parser.add_argument("--n", type=int, default=220, help="main recordings (default 220)")
+    parser.add_argument("--null", type=int, default=80, help="extra clean recordings (default 80)")
+    parser.add_argument("--p-varied", type=float, default=0.3,
+                        help="probability of a varied driving profile (default 0.3)")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--samples", type=int, default=None, help="samples per recording")
+    parser.add_argument("--samples", type=int, default=None, help="samples per default recording")
     parser.add_argument("--json", action="store_true", help="one JSON document on stdout")
-    parser.add_argument("--cases", metavar="FILE", default=None, help="also write all cases")
+    parser.add_argument("--out", default=str(RESULTS / "diagnose_blind.json"),
+                        help="summary JSON (default benchmarks/results/diagnose_blind.json)")
+    parser.add_argument("--cases", metavar="FILE", default=str(RESULTS / "diagnose_blind_cases.json"),
+                        help="all cases, rewritten after every case (summarise early with "
+                             "--from-cases)")
     parser.add_argument("--from-cases", metavar="FILE", default=None,
                         help="summarise stored cases (re-deciding at the current threshold)")
     args = parser.parse_args(argv)
@@ -113,40 +202,63 @@ def main(argv=None) -> int:
         with open(args.from_cases) as fh:
             cases = json.load(fh)
         redecide(cases)
-        return report(summarise(cases), args.json)
+        summary = summarise(cases)
+        summary["settings"] = {"from_cases": args.from_cases, "gain_threshold": GAIN_THRESHOLD}
+        return report(summary, args.json, args.out)
     enable_x64()
     enable_compilation_cache()
     rng = np.random.default_rng(args.seed)
-    progress = Progress(args.n, "diagnoses", enabled=not args.json or sys.stderr.isatty())
+    total = args.n + args.null
+    progress = Progress(total, "diagnoses", enabled=not args.json or sys.stderr.isatty())
     cases = []
+    Path(args.cases).parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
-        for _ in range(args.n):
-            cases.append(run_case(draw(rng), rng, tmp, args.samples))
+        for i in range(total):  # null cases spread evenly, so a cut-short run has both kinds
+            is_main = (i + 1) * args.null // total == i * args.null // total
+            case = run_case(draw(rng) if is_main else [], rng, tmp, args.samples,
+                            p_varied_profile=args.p_varied)
+            case["set"] = "main" if is_main else "null"
+            cases.append(case)
             progress.update()
-            if args.cases:  # rewritten after every case: a long run can be summarised early
-                with open(args.cases, "w") as fh:
-                    json.dump(cases, fh, default=float)
-    return report(summarise(cases), args.json)
+            with open(args.cases, "w") as fh:
+                json.dump(cases, fh, default=float)
+    summary = summarise(cases)
+    summary["settings"] = {"n": args.n, "null": args.null, "p_varied": args.p_varied,
+                           "seed": args.seed, "samples": args.samples,
+                           "gain_threshold": GAIN_THRESHOLD}
+    return report(summary, args.json, args.out)
 
 
-def report(summary, as_json: bool) -> int:
+def report(summary, as_json: bool, out) -> int:
+    if out:
+        with open(out, "w") as fh:
+            json.dump(summary, fh, indent=1, default=float)
     if as_json:
         emit_json(summary)
         return 0
     labels = ["none", *NAMES]
     rows = [{"truth": t, **{p[:8]: summary["confusion"][t][p] for p in labels}} for t in labels]
     print(table(rows, ["truth", *[p[:8] for p in labels]]))
-    print(f"false alarms on clean recordings: {summary['false_alarm_rate']:.1%} "
-          f"({summary['n_clean']} clean)")
+    for key, r in summary["false_alarms"].items():
+        if r["n"]:
+            print(f"false alarms, {key}: {r['k']}/{r['n']} = {r['rate']:.1%} "
+                  f"(95 % CI {r['ci95'][0]:.1%}–{r['ci95'][1]:.1%})")
     for name, s in summary["per_effect"].items():
         bins = ", ".join(f"[{b['range'][0]:.3g}, {b['range'][1]:.3g}]: "
-                         + (f"{b['top1']:.0%} of {b['n']}" if b["n"] else "-") for b in s["bins"])
+                         + (f"{b['top1']:.0%}/{b['in_set']:.0%} of {b['n']}" if b["n"] else "-")
+                         for b in s["bins"])
         err = s["median_rel_error"]
-        print(f"{name:20s} top-1 by |magnitude|: {bins}; median rel. error "
-              f"{'-' if err is None else f'{err:.3f}'}")
+        above = s["top1_above_documented"]
+        print(f"{name:20s} top-1/in-set by |magnitude|: {bins}; measured 90 % threshold "
+              f"{s['measured_threshold']} (in set {s['measured_threshold_in_set']}); above the "
+              f"documented {s['documented_threshold']}: "
+              + (f"{above['k']}/{above['n']}" if above["n"] else "-")
+              + f"; median rel. error {'-' if err is None else f'{err:.3f}'}")
+    print(f"single effects: {summary['single_effect']}")
     print(f"pairs: {summary['pairs']}")
-    print(f"median seconds per diagnosis: "
-          f"{summary['seconds_per_diagnosis']:.1f}")
+    print(f"base params on clean recordings, median |error|: "
+          f"{summary['base_params_clean_median_abs_error']}")
+    print(f"seconds per diagnosis: {summary['seconds_per_diagnosis']}")
     return 0
 
 

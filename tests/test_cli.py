@@ -79,3 +79,26 @@ def test_reproduce_online_json_keys(env):
         assert set(doc["algorithms"][algorithm]) >= {
             "k_p1_1pct", "k_p2_1pct", "k_mumax_01pct", "k_track_after_change", "fluctuation"}
     assert "paper" in doc
+
+
+def test_reproduce_table2_json_rows_include_mcmc(env):
+    proc = jadhesion(env, "reproduce", "table2", "--seeds", "2", "--json")
+    doc = json.loads(proc.stdout)
+    keys = {"scenario", "method", "error", "iterations", "evaluations", "seconds", "params", "paper"}
+    methods = {(r["scenario"], r["method"]) for r in doc["rows"]}
+    assert methods == {(s, m) for s in ("dry", "wet", "sand") for m in ("itlbo", "tlbo", "pso", "lm", "mcmc")}
+    for row in doc["rows"]:
+        assert set(row) >= keys, row["method"]
+    for row in (r for r in doc["rows"] if r["method"] == "mcmc"):
+        assert row["likelihood"] == doc["mcmc"]["likelihood"] and row["paper"] is None
+        assert set(row["width90"]) >= {"kA", "kS", "mu0", "A", "B", "mu_max", "creep_opt"}
+        assert row["iterations"] >= row["steps_run"] // 3 and row["evaluations"] == row["iterations"] * row["walkers"]
+        assert 0.005 < row["error"] < 0.05 and row["seconds"] > 0
+
+
+def test_posterior_auto_likelihood_uses_the_observer_on_a_raw_recording(env, recording):
+    proc = jadhesion(env, "posterior", recording, "--walkers", "16", "--steps", "120", "--json")
+    doc = json.loads(proc.stdout)
+    assert doc["likelihood"] == "observer" and doc["likelihood_note"].startswith("auto")
+    assert set(doc["params"]) == {"kA", "kS", "mu0", "A", "B", "sigma", "rho"}
+    assert doc["diagnostics"]["compile_seconds"] >= 0

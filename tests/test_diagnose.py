@@ -11,8 +11,10 @@ import pytest
 from jadhesion.cli import main
 from jadhesion.data.recording import save_recording
 from jadhesion.data.simulator import simulate
-from jadhesion.diagnose import diagnose
+from jadhesion.diagnose import DETECTION_THRESHOLDS, EFFECT_NAMES, diagnose
 from jadhesion.diagnose import extensions as ext
+from jadhesion.diagnose import fitting
+from jadhesion.data.scenarios import SCENARIOS
 from jadhesion.diagnose.signals import from_columns
 from jadhesion.models.polach import polach_adhesion
 
@@ -60,10 +62,51 @@ def test_gradients_finite(clean):
     assert np.all(np.asarray(g)[5:] != 0.0)
 
 
-def test_clean_is_none(clean):
+def test_base_starts_are_generic():
+    """The base fit starts from a space-filling design of the box, not from the paper's sets."""
+    starts = fitting.BASE_STARTS
+    assert starts.shape == (fitting.N_SCREEN, 5)
+    assert np.all((starts > 0.0) & (starts < 1.0))
+    for scenario in SCENARIOS.values():
+        assert np.min(np.max(np.abs(starts - np.asarray(scenario.params)), axis=1)) > 0.01
+
+
+def test_padding_and_fold_weights(clean):
+    sig = from_columns(_raw(clean), clean.vehicle)
+    padded = fitting.pad_signals(sig)
+    assert padded.time.shape == (fitting.padded_length(N),) and padded.time.shape[0] % 1000 == 0
+    np.testing.assert_array_equal(np.asarray(padded.adhesion)[:N], np.asarray(sig.adhesion))
+    w = np.asarray(fitting.fold_weights(N, fitting.N_FOLDS, padded.time.shape[0]))
+    assert np.all(w[:, N:] == 0.0) and np.all(w[0, :N] == 1.0)
+    held = 1.0 - w[1:, :N]  # each valid sample is held out by exactly one contiguous block
+    np.testing.assert_array_equal(held.sum(axis=0), np.ones(N))
+    assert all(np.all(np.diff(np.flatnonzero(h)) == 1) for h in held)
+
+
+def test_clean_is_none_and_base_fit(clean):
     result = diagnose(_raw(clean), clean.vehicle)
     assert result["verdict"] == "none", result["candidates"][:2]
     assert result["effects"] == []
+    # generic starts still find the dry-rail optimum: the base fit is as good as the truth
+    assert result["base"]["mae"] <= 1.02 * clean.truth["envelope"]["true_param_mae"]
+
+
+def test_one_program_per_padded_length(clean):
+    """Base fit, round 1 and round 2 share one compiled fit; another length in the same padding
+    bucket compiles nothing new."""
+    diagnose(_raw(clean), clean.vehicle)
+    before = fitting.fit_candidates._cache_size()
+    sim = simulate("sand", 4, [("rail_change", 0.3)], 1800)
+    result = diagnose(_raw(sim), sim.vehicle)
+    assert result["second_round"] is not None  # round 2 ran
+    assert fitting.fit_candidates._cache_size() == before
+
+
+def test_thresholds_documented():
+    assert set(DETECTION_THRESHOLDS) == set(EFFECT_NAMES)
+    for name, row in DETECTION_THRESHOLDS.items():
+        assert row["unit"], name
+        assert row["magnitude"] is None or row["magnitude"] > 0.0, name
 
 
 @pytest.mark.parametrize("name", sorted(CLEAR))

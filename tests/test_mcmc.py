@@ -13,7 +13,9 @@ from jadhesion.identify.calibration import (LEVELS, QUANTITIES, binomial_band, c
 from jadhesion.identify.ensemble import ChainTooShortWarning, Diagnostics, run_ensemble
 from jadhesion.identify.laplace import laplace_covariance, lm_optimum
 from jadhesion.identify.polach_fit import polach_mae
-from jadhesion.identify.likelihood import LOG_SCALE_BOUNDS, batch_log_posterior, log_likelihood, log_posterior
+from jadhesion.identify.likelihood import (LOG_SCALE_BOUNDS, ar1_log_likelihood, batch_log_posterior,
+                                          log_likelihood, log_posterior, lowpass, observer_terms,
+                                          prediction)
 from jadhesion.identify.mcmc import PosteriorResult, sample_posterior, table2_row
 
 THETA = np.array([0.5, 0.3, 0.35, 0.4, 0.6])
@@ -50,6 +52,81 @@ def test_log_posterior_support_and_batching(data):
         assert np.all(np.isfinite(lp_in)) and np.all(lp_out == -np.inf)
         one = np.array([log_posterior(jnp.asarray(p), data, LO, HI, 0.0, lik) for p in inside[:8]])
         np.testing.assert_allclose(lp_in[:8], one, rtol=1e-12)
+
+
+def _obs_terms(n, rng, dt=0.02):
+    time = np.cumsum(np.full(n, dt)) + 0.01 * dt * rng.random(n)      # slightly uneven spacing
+    return observer_terms(time, 2e4 * rng.standard_normal(n), 21500.0, 0.61, 0.05)
+
+
+def test_autoregressive_support_and_batching(data):
+    rng = np.random.default_rng(2)
+    obs = _obs_terms(data.creep.shape[0], rng)
+    inside = np.column_stack([rng.uniform(0, 1, (32, 5)), rng.uniform(*LOG_SCALE_BOUNDS, 32),
+                              rng.uniform(-0.98, 0.98, 32)])
+    outside = inside.copy()
+    outside[:16, 6] = rng.choice([-1.0, 1.0], 16) * rng.uniform(0.995, 2.0, 16)   # |rho| > 0.99
+    outside[16:, 2] += 1.5
+    for lik in ("ar1", "observer"):
+        lp_in = np.asarray(batch_log_posterior(jnp.asarray(inside), data, LO, HI, 0.0, lik, obs))
+        lp_out = np.asarray(batch_log_posterior(jnp.asarray(outside), data, LO, HI, 0.0, lik, obs))
+        assert np.all(np.isfinite(lp_in)) and np.all(lp_out == -np.inf)
+        one = np.array([log_posterior(jnp.asarray(p), data, LO, HI, 0.0, lik, obs) for p in inside[:4]])
+        np.testing.assert_allclose(lp_in[:4], one, rtol=1e-12)
+        fixed = np.asarray(batch_log_posterior(jnp.asarray(inside[:, [0, 1, 2, 3, 4, 6]]), data, LO, HI,
+                                               np.log(0.01), lik, obs))
+        assert np.all(np.isfinite(fixed))
+    with pytest.raises(ValueError):
+        log_posterior(jnp.asarray(inside[0, :5]), data, LO, HI, 0.0, "ar1")     # rho missing
+
+
+def test_ar1_log_likelihood_is_the_exact_gaussian():
+    from scipy.stats import multivariate_normal
+
+    rng = np.random.default_rng(3)
+    n, rho, sigma = 40, 0.7, 0.02
+    r = rng.standard_normal(n) * 0.03
+    lags = np.abs(np.subtract.outer(np.arange(n), np.arange(n)))
+    cov = sigma**2 / (1 - rho**2) * rho ** lags
+    expected = multivariate_normal(np.zeros(n), cov).logpdf(r)
+    np.testing.assert_allclose(float(ar1_log_likelihood(jnp.asarray(r), np.log(sigma), rho)), expected,
+                               rtol=1e-10)
+    # rho = 0 is the i.i.d. Gaussian
+    d = synthetic_dataset(np.random.default_rng(4), THETA, n=50)
+    np.testing.assert_allclose(float(log_likelihood(jnp.asarray(THETA), -4.0, d, "ar1", 0.0)),
+                               float(log_likelihood(jnp.asarray(THETA), -4.0, d, "gauss")), rtol=1e-12)
+
+
+def test_lowpass_matches_the_observer_filter():
+    from jadhesion.data.observer import lowpass_foh
+
+    rng = np.random.default_rng(5)
+    n = 257
+    time = np.cumsum(rng.uniform(0.01, 0.03, n))
+    obs = observer_terms(time, np.zeros(n), 21500.0, 0.61, 0.05)
+    u = np.cumsum(rng.standard_normal(n))
+    np.testing.assert_allclose(np.asarray(lowpass(jnp.asarray(u), obs)),
+                               np.asarray(lowpass_foh(jnp.asarray(time), jnp.asarray(u), 0.05)),
+                               rtol=1e-10, atol=1e-10)
+
+
+def test_observer_prediction_is_exact_on_a_noise_free_recording():
+    """The observer's lag and torque leak, modelled, leave ~nothing at the true parameters; the
+    plain curve leaves the lag (large in the sand test's fast slip excursion)."""
+    from jadhesion.data.dataset import PolachDataset
+    from jadhesion.data.simulator import simulate
+
+    sim = simulate("sand", 1, n_samples=400, noise=False)
+    c, v = sim.columns, sim.vehicle
+    data = PolachDataset(*(jnp.asarray(c[k]) for k in ("creepage", "slip_velocity", "adhesion",
+                                                       "vehicle_speed")), jnp.asarray(sim.truth["k_eps"]))
+    obs = observer_terms(c["time"], c["traction_torque"], v.axle_load_kg, v.wheel_radius_m,
+                         v.observer_time_constant_s)
+    theta = jnp.asarray([sim.truth["params"][k] for k in ("kA", "kS", "mu0", "A", "B")])
+    plain = np.asarray(data.adhesion - prediction(theta, data, "gauss"))
+    observed = np.asarray(data.adhesion - prediction(theta, data, "observer", obs))
+    assert np.max(np.abs(plain)) > 0.05
+    assert np.max(np.abs(observed)) < 0.01 and np.std(observed) < 0.1 * np.std(plain)
 
 
 def test_laplace_scale_maximum_is_mae(data):
@@ -174,6 +251,22 @@ def test_cli_posterior_json(tmp_path, capsys):
 
 
 def test_table2_row(data):
-    row = table2_row(data, THETA, walkers=32, steps=80, seed=0)    # short chain: reported, no warning
+    row = table2_row(data, THETA, walkers=32, steps=80, seed=0, truth=THETA)  # short: reported, no warning
     assert row["method"] == "mcmc" and not row["converged"] and row["steps"] > 80
     assert 0.005 < row["error"] < 0.02 and set(row["width90"]) >= {"kA", "mu_max", "creep_opt"}
+    assert set(row["param_abs_error"]) == {"kA", "kS", "mu0", "A", "B"}
+
+
+def test_ar1_posterior_names_and_no_retrace(data):
+    from jadhesion.identify.likelihood import batch_log_posterior as blp
+
+    theta0 = np.asarray(lm_optimum(data))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ChainTooShortWarning)
+        res = sample_posterior(data, theta0, walkers=16, steps=60, seed=0, likelihood="ar1", max_derived=100)
+        before = blp._cache_size()
+        other = synthetic_dataset(np.random.default_rng(9), THETA, n=300)       # same shape: no retrace
+        sample_posterior(other, theta0, walkers=16, steps=60, seed=1, likelihood="ar1", max_derived=100)
+    assert res.names[-2:] == ("sigma", "rho") and res.samples.shape[1] == 7
+    assert np.all(res.samples[:, 5] > 0) and np.all(np.abs(res.samples[:, 6]) <= 0.99)
+    assert blp._cache_size() == before

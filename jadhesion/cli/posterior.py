@@ -3,6 +3,13 @@
 Walkers start around the LM optimum; the output gives per-parameter medians and 90 % intervals,
 the derived peak adhesion and optimal creepage, and sampler diagnostics (acceptance, τ, ESS, and a
 warning when the chain is shorter than 50 τ).
+
+``--likelihood auto`` (the default) picks ``observer`` — the observer's lag and torque leak
+modelled, AR(1) noise (:mod:`jadhesion.identify.likelihood`), the best-calibrated choice on
+simulated recordings (``benchmarks/results/mcmc_coverage_recordings.json``) — when the file has the
+raw signals (``time``, speeds, ``traction_torque``) and its ``adhesion`` column, if any, is the
+paper observer's output of them; otherwise ``gauss`` (i.i.d. Gaussian). The JSON's ``likelihood``
+says which one ran and ``likelihood_note`` why.
 """
 
 from __future__ import annotations
@@ -19,17 +26,54 @@ def register(sub) -> None:
     p.add_argument("file", help="recording or creepage CSV")
     p.add_argument("--walkers", type=int, default=32, help="ensemble size (default 32)")
     p.add_argument("--steps", type=int, default=5000, help="steps per walker, burn-in included")
-    p.add_argument("--likelihood", choices=("gauss", "laplace"), default="gauss")
+    p.add_argument("--likelihood", choices=("auto", "gauss", "laplace", "ar1", "observer"),
+                   default="auto",
+                   help="auto (default): observer when the file has raw signals, else gauss; ar1: "
+                        "AR(1) residuals in time order; observer: the adhesion observer's lag "
+                        "modelled, AR(1) noise (needs time and traction_torque)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--json", action="store_true", help="one JSON document on stdout")
     p.add_argument("--plot", metavar="DIR", default=None, help="write corner and predictive figures")
     p.set_defaults(func=run)
 
 
-def _document(result, theta0) -> dict:
+def _choose_likelihood(recording, requested: str):
+    """``(likelihood, ObserverTerms or None, note)`` for the loaded recording."""
+    import numpy as np
+
+    from ..data.observer import observe_adhesion
+    from ..identify.likelihood import recording_observer_terms
+
+    if requested not in ("auto", "observer"):
+        return requested, None, "requested"
+    if not recording.has_raw_signals:
+        if requested == "observer":
+            raise UserError(f"{recording.path}: --likelihood observer needs the columns time, "
+                            f"vehicle_speed, wheel_speed and traction_torque")
+        return "gauss", None, "auto: no raw signals (time, speeds, torque), i.i.d. Gaussian"
+    cols = recording.columns
+    if recording.has_adhesion:
+        mu = np.asarray(observe_adhesion(cols["time"], cols["wheel_speed"], cols["traction_torque"],
+                                         recording.vehicle))
+        if not np.allclose(mu, cols["adhesion"], rtol=1e-6, atol=1e-6):
+            if requested == "observer":
+                raise UserError(f"{recording.path}: column adhesion is not the paper observer's "
+                                f"output of the raw signals; --likelihood observer does not apply")
+            return "gauss", None, ("auto: the adhesion column is not the paper observer's output "
+                                   "of the raw signals, i.i.d. Gaussian")
+    try:
+        obs = recording_observer_terms(recording)
+    except ValueError as err:
+        raise UserError(f"{recording.path}: {err}") from None
+    return "observer", obs, "requested" if requested == "observer" else (
+        "auto: raw signals present, the observer's lag modelled")
+
+
+def _document(result, theta0, note="") -> dict:
     diag = result.diagnostics
     return {
         "likelihood": result.likelihood,
+        "likelihood_note": note,
         "lm_start": dict(zip(result.names, map(float, theta0))),
         "params": result.params,
         "derived": result.derived,
@@ -39,7 +83,8 @@ def _document(result, theta0) -> dict:
             "tau": dict(zip(result.names, diag.tau.tolist())),
             "ess": dict(zip(result.names, diag.ess.tolist())),
             "n_samples": diag.n_samples, "steps": diag.steps, "burn": diag.burn,
-            "seconds": diag.seconds, "warnings": list(diag.warnings),
+            "seconds": diag.seconds, "compile_seconds": diag.compile_seconds,
+            "warnings": list(diag.warnings),
         },
     }
 
@@ -56,15 +101,17 @@ def run(args) -> int:
         raise UserError(f"--walkers must be an even number >= 12, got {args.walkers}")
     if args.steps < 50:
         raise UserError(f"--steps must be at least 50, got {args.steps}")
-    data = load_recording(args.file).dataset()
-    theta0 = lm_optimum(data)
-    spread = np.asarray(initial_spread(theta0, data))
+    recording = load_recording(args.file)
+    data = recording.dataset()
+    likelihood, obs, note = _choose_likelihood(recording, args.likelihood)
+    theta0 = lm_optimum(data, obs=obs)
+    spread = np.asarray(initial_spread(theta0, data, obs=obs))
     theta0 = np.asarray(theta0)
     progress = Progress(args.steps, "posterior", "steps", enabled=not args.json or sys.stderr.isatty())
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ChainTooShortWarning)   # reported in diagnostics instead
         result = sample_posterior(data, theta0, walkers=args.walkers, steps=args.steps,
-                                  likelihood=args.likelihood, seed=args.seed, spread=spread,
+                                  likelihood=likelihood, seed=args.seed, spread=spread, obs=obs,
                                   callback=lambda i: progress.update(i - progress.done))
     for message in result.diagnostics.warnings:
         sys.stderr.write(f"jadhesion: warning: {message}\n")
@@ -75,11 +122,12 @@ def run(args) -> int:
         out.mkdir(parents=True, exist_ok=True)
         corner_plot(result).savefig(out / "posterior_corner.png", dpi=90)
         predictive_plot(result, data).savefig(out / "posterior_predictive.png", dpi=110)
-    doc = _document(result, theta0)
+    doc = _document(result, theta0, note)
     if args.json:
         emit_json(doc)
         return 0
     rows = [{"quantity": k, **v} for k, v in {**result.params, **result.derived}.items()]
+    print(f"likelihood: {likelihood} ({note})")
     print(table(rows, ["quantity", "median", "q05", "q95"]))
     d = doc["diagnostics"]
     print(f"acceptance {d['acceptance']:.2f}, tau max {max(d['tau'].values()):.0f} steps, "

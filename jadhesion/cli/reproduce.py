@@ -1,7 +1,8 @@
 """``jadhesion reproduce [table2|online]``: the papers' results on built-in defaults.
 
 With no target it runs both: paper 001's Table 2 (Polach, offline) and paper 000's online
-identification (Kiencke).
+identification (Kiencke). Table 2 gains one ``mcmc`` row per scenario (the emcee posterior,
+:func:`jadhesion.experiments.table2.mcmc_row`) unless ``--no-mcmc``.
 """
 
 from __future__ import annotations
@@ -16,6 +17,8 @@ def register(sub) -> None:
     p.add_argument("target", nargs="?", choices=("table2", "online"), default=None)
     p.add_argument("--seeds", type=int, default=20, help="table2: data/optimiser seeds per cell")
     p.add_argument("--runs", type=int, default=1000, help="online: Monte Carlo runs per algorithm")
+    p.add_argument("--no-mcmc", action="store_true",
+                   help="table2: leave out the emcee posterior row of each scenario")
     p.add_argument("--plot", metavar="DIR", default=None, help="write figures into DIR")
     p.add_argument("--json", action="store_true", help="one JSON document on stdout")
     p.set_defaults(func=run)
@@ -27,7 +30,8 @@ def run(args) -> int:
     out = {}
     progress = not args.json or sys.stderr.isatty()
     if args.target in (None, "table2"):
-        out["table2"] = table2.run(seeds=args.seeds, plot_dir=args.plot, progress=progress)
+        out["table2"] = table2.run(seeds=args.seeds, plot_dir=args.plot, progress=progress,
+                                   mcmc=not args.no_mcmc)
     if args.target in (None, "online"):
         out["online"] = online.run(runs=args.runs, plot_dir=args.plot, progress=progress)
     if args.json:

@@ -4,10 +4,12 @@ from the catalogue (DESIGN §3), model it, and show the held-out fit improve.
 Modules: :mod:`.signals` (the recording split at the observer), :mod:`.extensions` (the extended
 models), :mod:`.fitting` (vmapped LM + blocked CV), :mod:`.features` (residual analysis, starts,
 sparse discrepancy), :mod:`.select` (statistics, calibrated decision), :mod:`.diagnosis` (the
-pipeline), :mod:`.explain`, :mod:`.report`, :mod:`.calibrate`.
+pipeline), :mod:`.explain`, :mod:`.report`, :mod:`.calibrate`, :mod:`.thresholds` (documented
+detection thresholds).
 """
 
 from .diagnosis import diagnose
 from .extensions import NAMES as EFFECT_NAMES
+from .thresholds import DETECTION_THRESHOLDS
 
-__all__ = ["diagnose", "EFFECT_NAMES"]
+__all__ = ["diagnose", "EFFECT_NAMES", "DETECTION_THRESHOLDS"]

@@ -30,14 +30,41 @@ SIGNED = {"wheel_radius_error", "speed_dependence", "torque_offset"}
 SCENARIOS = ("dry", "wet", "sand")
 
 
-def random_vehicle(rng):
-    """The 22E, or (half the time) a variant: worn wheel radius 0.57–0.61 m, inertia ±25 %."""
+#: Samples per recording of a varied driving profile (the default profile has the simulator's
+#: default, 2000 = 40 s).
+VARIED_SAMPLES = (1500, 2000, 2500, 3000)
+
+
+def random_vehicle(rng, p_varied: float = 0.5):
+    """The 22E, or (with probability ``p_varied``) a variant: worn wheel radius 0.57–0.61 m,
+    inertia ±25 %, axle load 18–23 t (locomotive mass six axle loads)."""
     from ..data.vehicle import LOCO_22E
 
-    if rng.random() < 0.5:
+    if rng.random() >= p_varied:
         return LOCO_22E, False
+    axle = float(rng.uniform(18000.0, 23000.0))
     return LOCO_22E.replace(wheel_radius_m=float(rng.uniform(0.57, 0.61)),
-                            wheelset_inertia_kgm2=float(rng.uniform(2250, 3750))), True
+                            wheelset_inertia_kgm2=float(rng.uniform(2250, 3750)),
+                            axle_load_kg=axle, locomotive_mass_kg=6.0 * axle), True
+
+
+def random_profile(rng, name: str, p_varied: float = 0.0):
+    """``(scenario, n_samples, varied)``: the named test as published, or (with probability
+    ``p_varied``) a different driving profile and friction condition — mean speed ×0.6–1.8, speed
+    ramp 0.2–0.8, creep level ×0.6–1.6, wander 0.1–0.4, 0–3 minor excursions, each Polach
+    parameter ×0.8–1.2 (clipped to the box), 1500–3000 samples."""
+    from ..data.scenarios import get_scenario
+
+    base = get_scenario(name)
+    if rng.random() >= p_varied:
+        return base, None, False
+    params = tuple(float(np.clip(p * rng.uniform(0.8, 1.2), 0.0, 1.0)) for p in base.params)
+    scenario = base.replace(
+        params=params, mean_speed_kmh=base.mean_speed_kmh * float(rng.uniform(0.6, 1.8)),
+        speed_ramp=float(rng.uniform(0.2, 0.8)),
+        creep_base=base.creep_base * float(rng.uniform(0.6, 1.6)),
+        wander=float(rng.uniform(0.1, 0.4)), minor_excursions=int(rng.integers(0, 4)))
+    return scenario, int(rng.choice(VARIED_SAMPLES)), True
 
 
 def random_effects(rng, names) -> list:
@@ -50,24 +77,29 @@ def random_effects(rng, names) -> list:
     return out
 
 
-def run_case(effects, rng, directory, n_samples=None) -> dict:
+def run_case(effects, rng, directory, n_samples=None, p_varied_profile: float = 0.0,
+             p_varied_vehicle: float = 0.5) -> dict:
     """Simulate one recording, write CSV + sidecar into ``directory``, diagnose it through the CLI
     code path; returns the truth and the diagnosis (without its arrays)."""
     from ..cli.diagnose import diagnose_file
     from ..data.recording import save_recording
     from ..data.simulator import simulate
 
-    scenario = str(rng.choice(SCENARIOS))
+    name = str(rng.choice(SCENARIOS))
     seed = int(rng.integers(0, 2**31 - 1))
-    vehicle, varied = random_vehicle(rng)
-    sim = simulate(scenario, seed, effects, n_samples, vehicle=vehicle)
+    vehicle, varied = random_vehicle(rng, p_varied_vehicle)
+    scenario, n_varied, profile_varied = random_profile(rng, name, p_varied_profile)
+    n = n_varied if profile_varied else n_samples
+    sim = simulate(scenario, seed, effects, n, vehicle=vehicle)
     raw = {k: sim.columns[k] for k in ("time", "vehicle_speed", "wheel_speed", "traction_torque")}
     path = save_recording(raw, sim.vehicle, Path(directory) / f"case_{seed}.csv")
     start = time.perf_counter()
     result, _ = diagnose_file(path)
     result["seconds"] = time.perf_counter() - start
     result.pop("_series")
-    return {"scenario": scenario, "seed": seed, "vehicle_varied": varied,
+    return {"scenario": name, "seed": seed, "vehicle_varied": varied,
+            "profile_varied": profile_varied, "n_samples": int(raw["time"].size),
+            "true_params": sim.truth["params"],
             "effects": [list(e) for e in effects], "truth": sim.truth["effects"],
             "diagnosis": result}
 

@@ -13,6 +13,7 @@ the extended model's residual), ``residual_signatures`` (η² of the base residu
 
 from __future__ import annotations
 
+import jax
 import numpy as np
 
 from ..data.vehicle import Vehicle
@@ -25,7 +26,10 @@ from .signals import from_columns, lowpass
 #: Extra round-1 starts for the wheel-radius error, whose fit from δ = 0 can end in a degenerate
 #: minimum (a large δ with a flattened creep slope): δ0 = ±3 %; the best full-data fit is kept.
 RADIUS_STARTS = (-0.03, 0.03)
-N_CANDIDATES = 1 + len(ext.NAMES) + len(RADIUS_STARTS)
+N_CANDIDATES = fitting.N_CANDIDATES
+assert N_CANDIDATES >= 1 + len(ext.NAMES) + len(RADIUS_STARTS)
+#: The extended model's (target, prediction), compiled once per recording length.
+_predict = jax.jit(ext.predict)
 
 
 def _row(params, active, sig, tau_th: float) -> dict:
@@ -41,10 +45,12 @@ def _row(params, active, sig, tau_th: float) -> dict:
     return out
 
 
-def _fit_round(sig, p0, sets, width):
-    """Fit the effect sets (the first is the reference) from ``p0``, plus the wheel-radius error
-    from :data:`RADIUS_STARTS` where it is a set's only effect or its addition, keeping the better
-    full-data fit; rows are padded to :data:`N_CANDIDATES` so each width compiles once."""
+def _fit_round(sig, n, p0, sets):
+    """Fit the effect sets (the first is the reference) from ``p0`` on the padded signals ``sig``
+    (``n`` valid samples), plus the wheel-radius error from :data:`RADIUS_STARTS` where it is a
+    set's only effect or its addition, keeping the better full-data fit; rows are padded to
+    :data:`N_CANDIDATES` and indices to :data:`fitting.WIDTH`, so every round runs one compiled
+    program."""
     radius = [i for i, s in enumerate(sets) if s and s[-1] == "wheel_radius_error"]
     rows = list(sets) + [sets[i] for i in radius for _ in RADIUS_STARTS]
     starts = np.tile(np.asarray(p0, float), (N_CANDIDATES, 1))
@@ -53,9 +59,10 @@ def _fit_round(sig, p0, sets, width):
         starts[len(sets) + k, col] = d
     rows += [sets[0]] * (N_CANDIDATES - len(rows))
     actives = np.stack([np.asarray(ext.active_mask(s)) for s in rows])
-    idx = np.array([fitting.free_indices(s, width) for s in rows])
+    idx = np.array([fitting.free_indices(s) for s in rows])
     table = {k: np.array(v) for k, v in
-             fitting.fit_candidates(starts, idx, actives, sig)._asdict().items()}
+             fitting.fit_candidates(starts, idx, actives, sig, n)._asdict().items()}
+    table["residual"] = table["residual"][:, :n]
     for i in radius:
         alts = [i] + [len(sets) + k for k in range(len(RADIUS_STARTS))]
         best = alts[int(np.argmin(table["sse"][alts]))]
@@ -92,21 +99,23 @@ def _generic(sig, residual, mu_pred) -> dict:
 def diagnose(columns: dict, vehicle: Vehicle, name: str = "recording") -> dict:
     """Diagnose a recording's raw columns (time, vehicle_speed, wheel_speed, traction_torque)."""
     sig = from_columns(columns, vehicle, name)
-    p_base = np.asarray(fitting.fit_base(sig))
+    n_valid = int(sig.time.shape[0])
+    p_base = fitting.fit_base(fitting.pad_signals(sig), n_valid)
     none = np.zeros(ext.N_EXTRA, bool)
-    target, pred = (np.asarray(x) for x in ext.predict(p_base, none, sig))
+    target, pred = (np.asarray(x) for x in _predict(p_base, none, sig))
     r_base = target - pred
     lib = features.library(sig, pred)
     sigs = features.signatures(r_base, lib)
     drop, u_change, tau_th = features.starting_values(sig, r_base, pred)
     sig = sig._replace(heat=np.asarray(lowpass(np.asarray(sig.power), float(sig.dt), tau_th)))
+    padded = fitting.pad_signals(sig)
     p0 = p_base.copy()
     start = {"drop": drop, "u_change": u_change}
     for k, v in start.items():
         p0[5 + ext.EXTRA_NAMES.index(k)] = v
 
     sets1 = [()] + [(n,) for n in ext.NAMES]
-    t1, act1 = _fit_round(sig, p0, sets1, 7)
+    t1, act1 = _fit_round(padded, n_valid, p0, sets1)
     n_eff = select.effective_samples(r_base)
     k1 = [_n_extra(s) for s in sets1]
     gain1, dbic1 = select.scores(t1["heldout_mae"], t1["sse"], k1, 0, n_eff)
@@ -126,7 +135,7 @@ def diagnose(columns: dict, vehicle: Vehicle, name: str = "recording") -> dict:
         i1 = names1.index(first)
         others = [n for n in ext.NAMES if n != first]
         sets2 = [(first,)] + [(first, n) for n in others]
-        t2, act2 = _fit_round(sig, t1["params"][i1], sets2, 9)
+        t2, act2 = _fit_round(padded, n_valid, t1["params"][i1], sets2)
         n_eff2 = select.effective_samples(t1["residual"][i1])
         gain2, dbic2 = select.scores(t2["heldout_mae"], t2["sse"],
                                      [_n_extra(s) for s in sets2], 0, n_eff2)
@@ -139,7 +148,7 @@ def diagnose(columns: dict, vehicle: Vehicle, name: str = "recording") -> dict:
     elif effects:
         final = names1.index(effects[0])
     ext_params = _row(table["params"][final], acts[final], sig, tau_th)
-    t_ext, p_ext = (np.asarray(x) for x in ext.predict(table["params"][final], acts[final], sig))
+    t_ext, p_ext = (np.asarray(x) for x in _predict(table["params"][final], acts[final], sig))
     generic = _generic(sig, t_ext - p_ext, p_ext)
     generic["used"] = generic["gain"] >= select.GENERIC_THRESHOLD
     strongest = max(sigs, key=sigs.get)

@@ -5,6 +5,12 @@ Held-out error is measured by blocked cross-validation in time: the recording is
 block k. Contiguous blocks keep autocorrelated neighbours out of the training set, so the held-out
 error is honest for slowly varying effects. Every fit uses :func:`jadhesion.identify.lm.lm_solve`
 (optimistix Levenberg–Marquardt, sine-map box).
+
+Compilation: a diagnosis compiles :func:`fit_candidates` **once** per padded length. Recordings
+are padded (edge values, zero weight) to a multiple of :data:`PAD_BLOCK` samples
+(:func:`pad_signals`); every candidate row has the same number of free parameters
+(:data:`WIDTH`, unused slots point at a dummy entry); the base fit, round 1 and round 2 all go
+through the same program with :data:`N_CANDIDATES` rows.
 """
 
 from __future__ import annotations
@@ -16,6 +22,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..identify.lm import lm_solve
+from ..models.polach import polach_adhesion
 from . import extensions as ext
 from .signals import Signals
 
@@ -24,20 +31,46 @@ N_FOLDS = 5
 #: errors at the 1 % level, so 1e-5 relative is ample.
 MAX_STEPS, MAX_STEPS_FOLD = 30, 10
 RTOL, ATOL = 1e-5, 1e-8
-#: Base-fit starts: the paper's three identified parameter sets and two generic points.
-BASE_STARTS = np.array([[0.4288, 1.0, 0.3555, 0.3575, 0.1316], [1.0, 1.0, 0.2610, 0.6858, 0.2251],
-                         [1.0, 0.4089, 0.4205, 0.0, 0.1554], [0.5, 0.5, 0.3, 0.5, 0.3],
-                         [0.1, 0.05, 0.5, 0.2, 0.6]])
-#: The superset vector gets one unused slot, so candidates with fewer free parameters than the
-#: round's width pad their index list with it (one compiled program per width).
+#: Rows of every :func:`fit_candidates` call (base + 7 effects + 2 extra radius starts) and free
+#: parameters per row (the Polach five + at most three extras: a pair with the rail change).
+N_CANDIDATES = 10
+WIDTH = 8
+#: Recordings are padded to a multiple of this many samples (one compiled program per multiple).
+PAD_BLOCK = 1000
+#: Base-fit starts: a fixed space-filling design — the first :data:`N_SCREEN` points of the
+#: 5-D Halton sequence (bases 2, 3, 5, 7, 11; leaped past the origin) over the box ``[0, 1]⁵``
+#: of ``[kA, kS, mu0, A, B]`` — screened by their SSE on the recording; the best
+#: :data:`N_CANDIDATES` start LM runs and the lowest-SSE result is kept. Nothing in it depends
+#: on the simulated scenarios (the paper's identified sets are *not* among the starts).
+N_SCREEN = 128
+#: The superset vector gets one unused slot, so candidates with fewer free parameters than
+#: :data:`WIDTH` pad their index list with it.
 PAD = ext.N_PARAMS
 _LO = np.concatenate([ext.BOUNDS[0], [-1.0]])
 _HI = np.concatenate([ext.BOUNDS[1], [1.0]])
 
 
+def halton(n: int, dim: int = 5, skip: int = 1) -> np.ndarray:
+    """First ``n`` points (after ``skip``) of the Halton sequence in ``[0, 1)^dim``."""
+    primes = [2, 3, 5, 7, 11, 13, 17, 19][:dim]
+    out = np.zeros((n, dim))
+    for j, p in enumerate(primes):
+        for i in range(n):
+            k, f, x = i + skip, 1.0, 0.0
+            while k > 0:
+                f /= p
+                x += f * (k % p)
+                k //= p
+            out[i, j] = x
+    return out
+
+
+BASE_STARTS = halton(N_SCREEN)
+
+
 class FitTable(NamedTuple):
     """Fits of C candidates: ``params`` (C, P) on all data, ``mae``/``sse`` (C,) in-sample,
-    ``heldout_mae`` (C,) blocked-CV, ``residual`` (C, n) of the full-data fit."""
+    ``heldout_mae`` (C,) blocked-CV, ``residual`` (C, n) of the full-data fit (zero on padding)."""
 
     params: jax.Array
     mae: jax.Array
@@ -46,14 +79,31 @@ class FitTable(NamedTuple):
     residual: jax.Array
 
 
-def fold_weights(n: int, n_folds: int = N_FOLDS) -> jax.Array:
-    """(n_folds + 1, n) weights: row 0 all ones; row k + 1 zero on contiguous block k."""
-    block = jnp.minimum(jnp.arange(n) * n_folds // n, n_folds - 1)
-    rows = [jnp.ones(n)] + [(block != k).astype(float) for k in range(n_folds)]
+def fold_weights(n: int, n_folds: int = N_FOLDS, n_total=None) -> jax.Array:
+    """(n_folds + 1, n_total) weights: row 0 one on the ``n`` valid samples; row k + 1 also zero
+    on contiguous block k. Samples from ``n`` to ``n_total`` (padding) are zero in every row."""
+    n_total = n if n_total is None else n_total
+    i = jnp.arange(n_total)
+    valid = (i < n).astype(float)
+    block = jnp.minimum(i * n_folds // n, n_folds - 1)
+    rows = [valid] + [(block != k).astype(float) * valid for k in range(n_folds)]
     return jnp.stack(rows)
 
 
-def free_indices(names, width: int):
+def padded_length(n: int) -> int:
+    """The length a recording of ``n`` samples is padded to."""
+    return int(-(-n // PAD_BLOCK) * PAD_BLOCK)
+
+
+def pad_signals(sig: Signals) -> Signals:
+    """``sig`` with its (n,) arrays extended by their last value to :func:`padded_length`."""
+    n = sig.time.shape[0]
+    extra = padded_length(n) - n
+    return jax.tree_util.tree_map(
+        lambda x: np.pad(np.asarray(x), (0, extra), mode="edge") if np.ndim(x) == 1 else x, sig)
+
+
+def free_indices(names, width: int = WIDTH):
     """Indices of the Polach five and the extras of ``names`` in the padded superset vector."""
     idx = list(range(5)) + [5 + ext.EXTRA_NAMES.index(p) for e in ext.EFFECTS if e.name in names
                             for p in e.params]
@@ -83,26 +133,33 @@ def _pad(p):
 
 
 @jax.jit
-def fit_base(sig: Signals) -> jax.Array:
-    """Best LM fit of the plain Polach model from :data:`BASE_STARTS`; the full vector (P,)."""
-    inactive = jnp.zeros(ext.N_EXTRA, bool)
-    weights = jnp.ones_like(sig.time)
-    idx = jnp.arange(5)
-    starts = jnp.concatenate([BASE_STARTS, jnp.broadcast_to(ext.NEUTRAL, (BASE_STARTS.shape[0],
-                                                                           ext.N_EXTRA))], axis=1)
-    params = jax.vmap(lambda p: _solve(_pad(p), idx, inactive, weights, sig, MAX_STEPS))(starts)
-    params = params[:, :PAD]
-    sse = jax.vmap(lambda p: jnp.sum(ext.residual(p, (inactive, weights, sig)) ** 2))(params)
-    return params[jnp.argmin(jnp.where(jnp.isfinite(sse), sse, jnp.inf))]
+def screen_starts(sig: Signals, n_valid) -> jax.Array:
+    """SSE of the plain Polach model at each :data:`BASE_STARTS` point, shape (N_SCREEN,)."""
+    slip = sig.wheel_speed - sig.speed
+    creep = slip / jnp.maximum(jnp.abs(sig.speed), 0.01)
+    valid = jnp.arange(sig.time.shape[0]) < n_valid
+    sse = jax.vmap(lambda th: jnp.sum(jnp.where(
+        valid, (sig.adhesion - polach_adhesion(th, creep, slip, sig.k_eps)) ** 2, 0.0)))(
+        jnp.asarray(BASE_STARTS))
+    return jnp.where(jnp.isfinite(sse), sse, jnp.inf)
+
+
+def base_rows(sig: Signals, n_valid: int) -> tuple:
+    """Starts (C, P), free indices (C, WIDTH) and masks (C, N_EXTRA) for the plain-Polach fit from
+    the :data:`N_CANDIDATES` best-screened :data:`BASE_STARTS`."""
+    best = np.argsort(np.asarray(screen_starts(sig, n_valid)))[:N_CANDIDATES]
+    starts = np.column_stack([BASE_STARTS[best], np.tile(ext.NEUTRAL, (N_CANDIDATES, 1))])
+    idx = np.tile(np.array(free_indices(())), (N_CANDIDATES, 1))
+    return starts, idx, np.zeros((N_CANDIDATES, ext.N_EXTRA), bool)
 
 
 @jax.jit
-def fit_candidates(p0, idx, actives, sig: Signals) -> FitTable:
+def fit_candidates(p0, idx, actives, sig: Signals, n_valid) -> FitTable:
     """Fit every candidate — free indices ``idx`` (C, K), effect masks ``actives`` (C, N_EXTRA),
-    starts ``p0`` (C, P) — on the full recording, then on each CV fold warm-started from that fit;
-    evaluate in-sample and held-out errors."""
+    starts ``p0`` (C, P) — on the first ``n_valid`` samples of the (padded) recording, then on
+    each CV fold warm-started from that fit; evaluate in-sample and held-out errors."""
     n = sig.time.shape[0]
-    weights = fold_weights(n)
+    weights = fold_weights(n_valid, N_FOLDS, n)
     full = jax.vmap(lambda p, i, a: _solve(_pad(p), i, a, weights[0], sig, MAX_STEPS))(
         p0, idx, actives)
     folds = jax.vmap(lambda p, i, a: jax.vmap(
@@ -110,10 +167,20 @@ def fit_candidates(p0, idx, actives, sig: Signals) -> FitTable:
 
     def resid(p, a):
         target, pred = ext.predict(p[:PAD], a, sig)
-        return target - pred
+        return (target - pred) * weights[0]
 
     r_full = jax.vmap(resid)(full, actives)  # (C, n)
     r_folds = jax.vmap(lambda ps, a: jax.vmap(lambda p: resid(p, a))(ps))(folds, actives)
-    heldout = jnp.sum(jnp.abs(r_folds) * (1.0 - weights[None, 1:]), axis=(1, 2)) / n
-    return FitTable(full[:, :PAD], jnp.mean(jnp.abs(r_full), axis=1), jnp.sum(r_full**2, axis=1),
-                    heldout, r_full)
+    heldout = jnp.sum(jnp.abs(r_folds) * (1.0 - weights[None, 1:]), axis=(1, 2)) / n_valid
+    sse = jnp.sum(r_full**2, axis=1)
+    return FitTable(full[:, :PAD], jnp.sum(jnp.abs(r_full), axis=1) / n_valid,
+                    jnp.where(jnp.isfinite(sse), sse, jnp.inf), heldout, r_full)
+
+
+def fit_base(sig: Signals, n_valid=None) -> np.ndarray:
+    """Best LM fit of the plain Polach model (full vector (P,)) from the screened
+    :data:`BASE_STARTS`, through :func:`fit_candidates` (no extra compilation)."""
+    n_valid = sig.time.shape[0] if n_valid is None else n_valid
+    starts, idx, actives = base_rows(sig, n_valid)
+    table = fit_candidates(starts, idx, actives, sig, n_valid)
+    return np.asarray(table.params)[int(np.argmin(np.asarray(table.sse)))]

@@ -13,6 +13,13 @@ the floor). Reported per scenario and method (medians, with IQR):
   convergence (LM); ``reached``: the share of seeds that hit the target.
 * ``params``: median identified parameters; ``param_abs_error``: median |identified − true|.
 * ``paper``: the paper's error, iterations and seconds where the paper ran that method.
+
+Beside them, one ``mcmc`` row per scenario (:func:`mcmc_row`): the Bayesian posterior (emcee,
+:mod:`jadhesion.identify.mcmc`) of the first seed's recording under :data:`MCMC_LIKELIHOOD`, started
+at that seed's LM fit. ``error`` is the MAE of the posterior medians; ``iterations``/``evaluations``
+/``seconds`` are the steps, log-density evaluations and warm seconds of a *converged* chain (burn-in
+plus 50 τ_max, scaled from a :data:`MCMC_STEPS`-step run; ``converged`` says whether the run itself
+was that long); ``width90`` are the 90 % interval widths. The paper has no such row.
 """
 
 from __future__ import annotations
@@ -24,10 +31,11 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..data.scenarios import get_scenario
-from ..data.simulator import simulate_batch
+from ..data.dataset import PolachDataset
+from ..data.simulator import simulate_many
 from ..identify.driver import run as run_population
 from ..identify.polach_fit import ALGORITHMS, fit_polach, polach_mae
-from ..models.polach import PARAM_NAMES
+from ..models.polach import BOUNDS, PARAM_NAMES
 
 SCENARIOS = ("dry", "wet", "sand")
 METHODS = ("itlbo", "tlbo", "pso", "lm")
@@ -44,6 +52,10 @@ PAPER = {
     ("sand", "itlbo"): {"error": 0.0167, "iterations": 44, "seconds": 70},
 }
 POP_SIZE = 50
+#: The mcmc rows: likelihood, ensemble size, steps run (burn-in: a third).
+MCMC_LIKELIHOOD = "observer"
+MCMC_WALKERS = 32
+MCMC_STEPS = 1500
 
 
 def _median_iqr(values):
@@ -79,10 +91,48 @@ def _histories(datasets, method, keys, history_iter):
     return np.asarray(out.history.best_f), np.asarray(out.history.best_x), np.asarray(out.best_x)
 
 
-def run_scenario(scenario, seeds=20, max_iter=1000, history_iter=300, progress=None):
+def _stack(sims) -> PolachDataset:
+    """The batched fitting datasets (leading seed axis) of simulated recordings."""
+    cols = [s.columns for s in sims]
+    field = lambda k: jnp.asarray(np.stack([c[k] for c in cols]))  # noqa: E731
+    return PolachDataset(field("creepage"), field("slip_velocity"), field("adhesion"),
+                         field("vehicle_speed"), jnp.full((len(sims),), sims[0].truth["k_eps"]))
+
+
+def mcmc_row(sim, data, theta_lm, *, likelihood=MCMC_LIKELIHOOD, walkers=MCMC_WALKERS,
+             steps=MCMC_STEPS, seed=0) -> dict:
+    """The ``mcmc`` row of one simulated recording ``sim`` (its dataset ``data``), walkers started
+    at the LM fit ``theta_lm`` — for the observer likelihood polished by a projected LM on the
+    observer's view of the curve (:func:`jadhesion.identify.lm.box_lm`)."""
+    from ..identify.laplace import initial_spread, observer_residual
+    from ..identify.likelihood import observer_terms
+    from ..identify.lm import box_lm
+    from ..identify.mcmc import table2_row
+
+    t0 = time.perf_counter()
+    obs = None
+    theta0 = jnp.asarray(theta_lm)
+    if likelihood == "observer":
+        v = sim.vehicle
+        obs = observer_terms(sim.columns["time"], sim.columns["traction_torque"], v.axle_load_kg,
+                             v.wheel_radius_m, v.observer_time_constant_s)
+        theta0 = box_lm(observer_residual, theta0, (data, obs), BOUNDS).params
+    spread = np.asarray(initial_spread(theta0, data, obs=obs))
+    start_seconds = time.perf_counter() - t0
+    row = table2_row(data, np.asarray(theta0), walkers=walkers, steps=steps, seed=seed,
+                     likelihood=likelihood, obs=obs, spread=spread, burn=steps // 3,
+                     truth=np.asarray(get_scenario(sim.truth["scenario"]).params))
+    row["start_seconds"] = start_seconds
+    row["compile_seconds"] = row.pop("log_prob_compile_seconds")
+    row["iterations"] = row["steps"]
+    return row
+
+
+def run_scenario(scenario, seeds=20, max_iter=1000, history_iter=300, progress=None, mcmc=True):
     """Table 2 rows and convergence histories for one scenario."""
     truth = np.asarray(get_scenario(scenario).params)
-    datasets = simulate_batch(scenario, list(range(seeds)))
+    sims = simulate_many(scenario, list(range(seeds)))
+    datasets = _stack(sims)
     floors = np.asarray(jax.vmap(polach_mae, in_axes=(None, 0))(jnp.asarray(truth), datasets))
     targets = 1.01 * floors
     rows, histories = [], {}
@@ -113,24 +163,45 @@ def run_scenario(scenario, seeds=20, max_iter=1000, history_iter=300, progress=N
                                           np.median(np.abs(final_params - truth), axis=0).tolist()))
         row["paper"] = PAPER.get((scenario, method))
         rows.append(row)
+        if method == "lm":
+            theta_lm = np.asarray(fits[0].params)
+        if progress is not None:
+            progress.update()
+    if mcmc:
+        data0 = jax.tree_util.tree_map(lambda a: a[0], datasets)
+        t0 = time.perf_counter()
+        row = {"scenario": scenario, **mcmc_row(sims[0], data0, theta_lm)}
+        row["row_wall_seconds"] = time.perf_counter() - t0   # start, compiles and the run itself
+        row["floor"] = float(floors[0])
+        row["reached"] = float(row["error"] <= targets[0])
+        row["paper"] = None
+        rows.append(row)
         if progress is not None:
             progress.update()
     return rows, {"histories": histories, "truth": truth, "floor": floors}
 
 
-def run(seeds=20, plot_dir=None, progress=True, max_iter=1000, history_iter=300) -> dict:
-    """The whole Table 2: ``{"rows": [...], "seeds": N, ...}``; figures into ``plot_dir``."""
+def run(seeds=20, plot_dir=None, progress=True, max_iter=1000, history_iter=300,
+        mcmc=True) -> dict:
+    """The whole Table 2: ``{"rows": [...], "seeds": N, ...}``; figures into ``plot_dir``.
+    ``mcmc``: add the :func:`mcmc_row` of each scenario."""
     from ..cli.common import Progress
 
-    bar = Progress(len(SCENARIOS) * len(METHODS), "table2", "cells", enabled=progress)
+    bar = Progress(len(SCENARIOS) * (len(METHODS) + bool(mcmc)), "table2", "cells",
+                   enabled=progress)
     rows, traces = [], {}
     t0 = time.perf_counter()
     for scenario in SCENARIOS:
-        r, traces[scenario] = run_scenario(scenario, seeds, max_iter, history_iter, bar)
+        r, traces[scenario] = run_scenario(scenario, seeds, max_iter, history_iter, bar, mcmc)
         rows += r
     result = {"rows": rows, "seeds": seeds, "pop_size": POP_SIZE, "max_iter": max_iter,
               "history_iter": history_iter, "target": "1.01 x error of the true parameters",
               "wall_seconds": time.perf_counter() - t0}
+    if mcmc:
+        result["mcmc"] = {"likelihood": MCMC_LIKELIHOOD, "walkers": MCMC_WALKERS,
+                          "steps_run": MCMC_STEPS, "data_seed": 0,
+                          "note": "one posterior per scenario (seed 0); iterations = steps to a "
+                                  "converged chain (burn-in + 50 tau_max), seconds scaled to it"}
     if plot_dir is not None:
         from pathlib import Path
 
@@ -166,4 +237,16 @@ def format_text(result) -> str:
     cols = ["scenario", "method", "floor", "error", "reached", "iter", "evals", "ms",
             "paper err", "paper iter", "paper s"]
     lines.append(table(rows, cols))
+    mc = [r for r in result["rows"] if r["method"] == "mcmc"]
+    if mc:
+        info = result.get("mcmc", {})
+        lines += ["", f"mcmc: emcee posterior of seed 0 ({info.get('likelihood', mc[0].get('likelihood'))} "
+                      f"likelihood, {mc[0]['walkers']} walkers); error = MAE of the posterior "
+                      f"medians; iter/evals/ms = steps/log-density evaluations/time of a converged "
+                      f"chain (burn-in + 50 tau); 90 % interval widths:"]
+        names = ["kA", "kS", "mu0", "A", "B", "mu_max", "creep_opt"]
+        lines.append(table([{"scenario": r["scenario"], **{n: r["width90"][n] for n in names},
+                             "tau": f"{r['tau_max']:.0f}",
+                             "converged": "yes" if r["converged"] else "estimate"} for r in mc],
+                           ["scenario", *names, "tau", "converged"]))
     return "\n".join(lines)

@@ -93,23 +93,30 @@ def posterior_draws(result) -> np.ndarray:
 
 
 def coverage_study(datasets, thetas, *, sampler: Optional[Callable] = None, seed: int = 0,
-                   progress: Optional[Callable[[int], None]] = None, **options) -> CoverageReport:
+                   progress: Optional[Callable[[int], None]] = None, observers=None,
+                   on_result: Optional[Callable] = None, **options) -> CoverageReport:
     """Posterior for each (dataset, true theta) pair; interval hits at :data:`LEVELS`.
 
     ``sampler(data, theta0, seed=..., spread=..., **options)`` defaults to :func:`sample_posterior`;
     walkers start around the LM optimum (:func:`lm_optimum`, ball from :func:`initial_spread`),
-    never at the truth. Short-chain warnings are silenced
-    here (the study reports coverage; chain length is the caller's choice).
+    never at the truth. ``observers``: one :class:`~.likelihood.ObserverTerms` per dataset, passed
+    on as ``obs`` (and used for the LM start) — for ``likelihood="observer"``.
+    ``on_result(i, result)`` sees each posterior (e.g. to collect diagnostics). Short-chain
+    warnings are silenced here (the study reports coverage; chain length is the caller's choice).
     """
     sampler = sample_posterior if sampler is None else sampler
     hits = {level: [] for level in LEVELS}
     widths, seconds = [], []
     for i, (data, theta) in enumerate(zip(datasets, thetas)):
+        obs = None if observers is None else observers[i]
+        extra = {} if obs is None else {"obs": obs}
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", ChainTooShortWarning)
-            theta0 = lm_optimum(data)
+            theta0 = lm_optimum(data, obs=obs)
             result = sampler(data, np.asarray(theta0), seed=seed + i,
-                             spread=np.asarray(initial_spread(theta0, data)), **options)
+                             spread=np.asarray(initial_spread(theta0, data, obs=obs)), **options, **extra)
+        if on_result is not None:
+            on_result(i, result)
         draws, truth = posterior_draws(result), truth_quantities(theta, data)
         widths.append(np.diff(np.quantile(draws, [0.05, 0.95], axis=0), axis=0)[0])
         seconds.append(result.diagnostics.seconds)

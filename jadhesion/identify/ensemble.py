@@ -36,6 +36,13 @@ class Diagnostics(NamedTuple):
     thin: int
     seconds: float           # wall time of the sampling loop [s]
     warnings: tuple          # messages (e.g. chain too short)
+    compile_seconds: float = 0.0   # first (compiling) log-probability calls, outside ``seconds``
+
+
+def integrated_time(chain: np.ndarray) -> np.ndarray:
+    """emcee's integrated autocorrelation time per coordinate of ``chain`` (steps, walkers, d),
+    computed whatever the chain length (``tol=0``; judge it against the length yourself)."""
+    return emcee.autocorr.integrated_time(chain, tol=0)
 
 
 def run_ensemble(log_prob: Callable[[np.ndarray], np.ndarray], p0: np.ndarray, steps: int,

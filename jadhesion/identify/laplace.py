@@ -17,6 +17,7 @@ import numpy as np
 
 from ..data.dataset import PolachDataset
 from ..models.polach import BOUNDS
+from .likelihood import ObserverTerms, prediction
 from .lm import multistart
 from .polach_fit import polach_residual
 
@@ -27,23 +28,44 @@ STARTS = np.array([[0.5, 0.5, 0.35, 0.5, 0.3],
                     [0.6, 0.9, 0.35, 0.4, 0.2]])
 
 
-def lm_optimum(data: PolachDataset, starts=STARTS):
-    """Least-squares optimum in the box ``[0, 1]^5`` (LM from each of ``starts``, the best kept)."""
-    return multistart(polach_residual, starts, data, BOUNDS).params
+def observer_residual(theta, args):
+    """``prediction − mu_hat`` of the ``"observer"`` likelihood; ``args = (data, obs)``."""
+    data, obs = args
+    return prediction(theta, data, "observer", obs) - data.adhesion
+
+
+def _residual(obs):
+    if obs is None:
+        return polach_residual, lambda data: data
+    return observer_residual, lambda data: (data, obs)
+
+
+def lm_optimum(data: PolachDataset, starts=STARTS, obs: ObserverTerms | None = None):
+    """Least-squares optimum in the box ``[0, 1]^5`` (LM from each of ``starts``, the best kept);
+    with ``obs`` (:class:`ObserverTerms`), of the observer's view of the curve instead."""
+    residual, args = _residual(obs)
+    return multistart(residual, starts, args(data), BOUNDS).params
+
+
+def laplace_covariance(theta_hat, data: PolachDataset, obs: ObserverTerms | None = None):
+    """``sigma_hat² (JᵀJ)⁻¹`` (5, 5) at the optimum; ``inf`` entries when ``JᵀJ`` is singular.
+    With ``obs``, of the observer residual (i.i.d. errors assumed: a starting scale only)."""
+    return _laplace_covariance(theta_hat, data, obs)
 
 
 @jax.jit
-def laplace_covariance(theta_hat, data: PolachDataset):
-    """``sigma_hat² (JᵀJ)⁻¹`` (5, 5) at the optimum; ``inf`` entries when ``JᵀJ`` is singular."""
-    r = polach_residual(theta_hat, data)
-    jac = jax.jacfwd(polach_residual)(theta_hat, data)
+def _laplace_covariance(theta_hat, data, obs):
+    residual, args = _residual(obs)
+    r = residual(theta_hat, args(data))
+    jac = jax.jacfwd(residual)(theta_hat, args(data))
     sigma2 = jnp.sum(r * r) / (r.shape[0] - theta_hat.shape[0])
     cov = sigma2 * jnp.linalg.inv(jac.T @ jac)
     return jnp.where(jnp.all(jnp.isfinite(cov)), cov, jnp.inf)
 
 
-def initial_spread(theta_hat, data: PolachDataset, floor: float = 1e-4, cap: float = 0.05):
+def initial_spread(theta_hat, data: PolachDataset, floor: float = 1e-4, cap: float = 0.05,
+                   obs: ObserverTerms | None = None):
     """Per-parameter walker-ball radius (fraction of the unit box): half the Laplace standard
     deviation, kept within ``[floor, cap]`` (the cap also covers a singular ``JᵀJ``)."""
-    std = jnp.sqrt(jnp.diag(laplace_covariance(theta_hat, data)))
+    std = jnp.sqrt(jnp.diag(laplace_covariance(theta_hat, data, obs)))
     return jnp.clip(jnp.where(jnp.isfinite(std), 0.5 * std, cap), floor, cap)

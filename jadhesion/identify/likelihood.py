@@ -1,20 +1,49 @@
-"""Log-posterior of the Polach parameters for MCMC: priors, Gaussian and Laplace likelihoods.
+"""Log-posterior of the Polach parameters for MCMC: priors and four likelihoods.
 
-The sampled vector is ``phi = [kA, kS, mu0, A, B, log_scale]`` (6 entries), or the five Polach
-parameters alone when the noise scale is fixed (``fixed_log_scale`` given).
+The sampled vector is ``phi = [kA, kS, mu0, A, B, log_scale(, rho)]``: the five Polach parameters,
+the log noise scale (left out when it is fixed, ``fixed_log_scale``), and for the autoregressive
+likelihoods the AR(1) coefficient ``rho`` last (:func:`noise_names` gives the layout).
 
 Priors (documented choices):
 
 * Polach parameters: uniform on the box ``[lower, upper]`` — by default the identification box
   ``[0, 1]^5`` of DESIGN §1 (:data:`jadhesion.models.polach.BOUNDS`); outside the box ``-inf``.
-* noise scale (sigma [-] for ``"gauss"``, b [-] for ``"laplace"``): log-uniform on
-  ``[SCALE_MIN, SCALE_MAX] = [1e-4, 1]``, i.e. ``log_scale`` uniform on ``[log 1e-4, 0]``.
+* noise scale (sigma [-] for ``"gauss"``/``"ar1"``/``"observer"``, b [-] for ``"laplace"``):
+  log-uniform on ``[SCALE_MIN, SCALE_MAX] = [1e-4, 1]``, i.e. ``log_scale`` uniform on
+  ``[log 1e-4, 0]``.
+* AR(1) coefficient ``rho``: uniform on ``[-RHO_MAX, RHO_MAX]`` (stationary noise).
 
-Likelihoods of the residuals ``r_i = mu_hat_i − mu_adh(s_i, w_i; theta)`` (n samples):
+Likelihoods of the residuals ``r_i = mu_hat_i − prediction_i`` (n samples, time order for the
+autoregressive two):
 
-* ``"gauss"``:   ``log L = −n log sigma − Σ r²/(2 sigma²) − (n/2) log 2π``
+* ``"gauss"``:   ``log L = −n log sigma − Σ r²/(2 sigma²) − (n/2) log 2π``, prediction
+  ``mu_adh(s_i, w_i; theta)``.
 * ``"laplace"``: ``log L = −n log(2 b) − Σ |r| / b`` — the Bayesian counterpart of the paper's MAE
   fitness (eq 15): its maximum over b is at b = MAE.
+* ``"ar1"``: the same prediction, residuals an AR(1) process ``r_i = rho r_{i−1} + e_i``,
+  ``e_i ~ N(0, sigma²)`` (sigma = the innovation scale), exact (stationary) first-sample term::
+
+      log L = −n log sigma − (n/2) log 2π + ½ log(1 − rho²)
+              − [(1 − rho²) r_1² + Σ_{i≥2} (r_i − rho r_{i−1})²] / (2 sigma²)
+
+  It needs the rows in time order at a (roughly) uniform sample period.
+* ``"observer"``: the ``"ar1"`` noise model around the *observer's* view of the curve. The paper's
+  observer (eq 19) low-passes the wheel-speed derivative but not the torque; from the wheelset
+  balance ``J ω̇ = T − mu m g r`` its output is exactly
+
+      mu_hat = LP[mu] + (T − LP[T]) / (m g r) + LP[torque noise] / (m g r) + …
+
+  (``LP`` the observer's first-order low-pass ``1/(1 + s T0)``): in transients the observed curve
+  lags the true one and the unfiltered torque leaks through. The prediction is therefore
+  ``LP[mu_adh(s, w; theta)] + (T − LP[T])/(m g r)`` with the recorded torque ``T`` and the same exact
+  first-order-hold discretisation as :mod:`jadhesion.data.observer` (:class:`ObserverTerms`, built
+  by :func:`observer_terms` from a recording's ``time`` and ``traction_torque``); what is left is
+  the low-passed (coloured) sensor noise, modelled as AR(1). For the ``"filtered_torque"`` variant
+  the torque term is zero. Creepage-only datasets cannot use it (no time, no torque).
+
+Why: on simulated 22E recordings the i.i.d. likelihoods are biased by the observer's lag during the
+slip excursions — the very samples that carry ``mu0`` and ``B`` — so their 90 % intervals miss the
+truth (``benchmarks/bench_mcmc.py --coverage``).
 
 Any non-finite value becomes ``-inf``, so emcee never sees a NaN.
 """
@@ -23,82 +52,214 @@ from __future__ import annotations
 
 import math
 from functools import partial
+from typing import NamedTuple, Optional
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
 from ..data.dataset import PolachDataset
+from ..data.observer import _foh_coefficients, lowpass_foh
+from ..data.vehicle import GRAVITY
 from ..models.polach import polach_adhesion
 
-LIKELIHOODS = ("gauss", "laplace")
+LIKELIHOODS = ("gauss", "laplace", "ar1", "observer")
+#: Likelihoods with an AR(1) noise coefficient ``rho`` (the last sampled coordinate).
+AUTOREGRESSIVE = ("ar1", "observer")
 SCALE_MIN, SCALE_MAX = 1e-4, 1.0
 LOG_SCALE_BOUNDS = (math.log(SCALE_MIN), math.log(SCALE_MAX))
+RHO_MAX = 0.99
 
 
-def log_likelihood(theta, log_scale, data: PolachDataset, likelihood: str = "gauss"):
-    """Log-likelihood of the dataset's adhesion samples given ``theta`` (5,) and ``log_scale``."""
-    r = data.adhesion - polach_adhesion(theta, data.creep, data.slip, data.k_eps)
+class ObserverTerms(NamedTuple):
+    """What the ``"observer"`` likelihood needs besides the dataset (a pytree, arrays float64).
+
+    Attributes:
+        torque_term: ``(T − LP[T]) / (m g r)`` [-], shape (n,) (zeros for ``filtered_torque``).
+        alpha, gain0, gain1: first-order-hold low-pass coefficients per step, shape (n − 1,):
+            ``x_{k+1} = alpha x_k + gain0 u_k + gain1 u_{k+1}``, ``x_0 = u_0``.
+    """
+
+    torque_term: jax.Array
+    alpha: jax.Array
+    gain0: jax.Array
+    gain1: jax.Array
+
+
+def observer_terms(time, torque, axle_load_kg: float, wheel_radius_m: float, t0: float,
+                   variant: str = "paper", gravity: float = GRAVITY) -> ObserverTerms:
+    """:class:`ObserverTerms` of a recording: ``time`` [s] (n,), recorded ``torque`` [N·m] (n,),
+    the observer's axle load [kg], nominal radius [m] and time constant ``T0`` [s]."""
+    time = jnp.asarray(time, jnp.float64)
+    torque = jnp.asarray(torque, jnp.float64)
+    if time.ndim != 1 or time.shape != torque.shape or time.shape[0] < 3:
+        raise ValueError(f"time and torque must be 1-D of equal length >= 3, got {time.shape}, "
+                         f"{torque.shape}")
+    if variant == "paper":
+        term = (torque - lowpass_foh(time, torque, t0)) / (axle_load_kg * gravity * wheel_radius_m)
+    elif variant == "filtered_torque":
+        term = jnp.zeros_like(torque)
+    else:
+        raise ValueError(f"unknown observer variant {variant!r}")
+    alpha, one_minus_alpha, beta = _foh_coefficients(jnp.diff(time), t0)
+    return ObserverTerms(term, alpha, one_minus_alpha - beta, beta)
+
+
+def recording_observer_terms(recording, variant: str = "paper") -> ObserverTerms:
+    """:func:`observer_terms` of a :class:`jadhesion.data.recording.Recording` (its vehicle's
+    constants); ``ValueError`` when it has no ``time`` or ``traction_torque`` column."""
+    cols = recording.columns
+    missing = [c for c in ("time", "traction_torque") if c not in cols]
+    if missing:
+        raise ValueError(f"the observer likelihood needs the column(s) {', '.join(missing)} "
+                         f"(a raw recording, not a creepage-only dataset)")
+    v = recording.vehicle
+    return observer_terms(cols["time"], cols["traction_torque"], v.axle_load_kg, v.wheel_radius_m,
+                          v.observer_time_constant_s, variant)
+
+
+def lowpass(u, obs: ObserverTerms):
+    """The observer's low-pass of a sampled signal ``u`` (n,), exact for first-order hold; a
+    parallel (associative) scan of the linear recurrence, so it vectorises over walkers."""
+    a = jnp.concatenate([jnp.zeros(1, u.dtype), obs.alpha])
+    b = jnp.concatenate([u[:1], obs.gain0 * u[:-1] + obs.gain1 * u[1:]])
+
+    def compose(first, second):
+        a1, b1 = first
+        a2, b2 = second
+        return a1 * a2, a2 * b1 + b2
+
+    return jax.lax.associative_scan(compose, (a, b))[1]
+
+
+def noise_names(likelihood: str, fixed_scale: bool = False) -> tuple:
+    """Names of the sampled noise coordinates after the five Polach parameters."""
+    if likelihood not in LIKELIHOODS:
+        raise ValueError(f"likelihood must be one of {LIKELIHOODS}, got {likelihood!r}")
+    scale = () if fixed_scale else ("b" if likelihood == "laplace" else "sigma",)
+    return scale + (("rho",) if likelihood in AUTOREGRESSIVE else ())
+
+
+def prediction(theta, data: PolachDataset, likelihood: str = "gauss",
+               obs: Optional[ObserverTerms] = None):
+    """The predicted ``mu_hat`` (n,) of a likelihood (the observer's view for ``"observer"``)."""
+    mu = polach_adhesion(theta, data.creep, data.slip, data.k_eps)
+    if likelihood != "observer":
+        return mu
+    if obs is None:
+        raise ValueError("the observer likelihood needs ObserverTerms (observer_terms(...))")
+    return lowpass(mu, obs) + obs.torque_term
+
+
+def ar1_log_likelihood(r, log_sigma, rho):
+    """Exact Gaussian AR(1) log-likelihood of the time-ordered residuals ``r`` (n,)."""
     n = r.shape[0]
+    one_m = 1.0 - rho * rho
+    e = r[1:] - rho * r[:-1]
+    sse = one_m * r[0] ** 2 + jnp.sum(e * e)
+    return (-n * log_sigma - 0.5 * n * math.log(2.0 * math.pi) + 0.5 * jnp.log(one_m)
+            - 0.5 * sse * jnp.exp(-2.0 * log_sigma))
+
+
+def log_likelihood(theta, log_scale, data: PolachDataset, likelihood: str = "gauss", rho=0.0,
+                   obs: Optional[ObserverTerms] = None):
+    """Log-likelihood of the dataset's adhesion samples given ``theta`` (5,), ``log_scale`` and,
+    for ``"ar1"``/``"observer"``, the AR(1) coefficient ``rho`` and (observer) ``obs``."""
+    if likelihood not in LIKELIHOODS:
+        raise ValueError(f"likelihood must be one of {LIKELIHOODS}, got {likelihood!r}")
+    r = data.adhesion - prediction(theta, data, likelihood, obs)
+    n = r.shape[0]
+    if likelihood in AUTOREGRESSIVE:
+        return ar1_log_likelihood(r, log_scale, rho)
     scale = jnp.exp(log_scale)
     if likelihood == "gauss":
         return -n * log_scale - 0.5 * jnp.sum(r * r) / scale**2 - 0.5 * n * math.log(2.0 * math.pi)
-    if likelihood == "laplace":
-        return -n * (log_scale + math.log(2.0)) - jnp.sum(jnp.abs(r)) / scale
-    raise ValueError(f"likelihood must be one of {LIKELIHOODS}, got {likelihood!r}")
+    return -n * (log_scale + math.log(2.0)) - jnp.sum(jnp.abs(r)) / scale
 
 
-def log_prior(phi, lower, upper):
-    """Log prior density up to a constant: 0 inside the box (and scale range), ``-inf`` outside."""
-    theta = phi[:5]
+def _split(phi, likelihood: str, fixed_log_scale):
+    """``(theta, log_scale or None, rho or None)`` from the sampled vector."""
+    n_noise = phi.shape[0] - 5
+    has_rho = likelihood in AUTOREGRESSIVE
+    expected = {False: (0, 1), True: (1, 2)}[has_rho]
+    if n_noise not in expected:
+        raise ValueError(f"phi for likelihood {likelihood!r} must have {5 + expected[0]} or "
+                         f"{5 + expected[1]} entries, got shape {phi.shape}")
+    has_scale = n_noise == expected[1]
+    log_scale = phi[5] if has_scale else None
+    rho = phi[-1] if has_rho else None
+    return phi[:5], log_scale, rho
+
+
+def log_prior(phi, lower, upper, likelihood: str = "gauss"):
+    """Log prior density up to a constant: 0 inside the box (and scale, rho ranges), else ``-inf``."""
+    theta, log_scale, rho = _split(phi, likelihood, None)
     inside = jnp.all((theta >= lower) & (theta <= upper))
-    if phi.shape[0] == 6:
-        inside &= (phi[5] >= LOG_SCALE_BOUNDS[0]) & (phi[5] <= LOG_SCALE_BOUNDS[1])
+    if log_scale is not None:
+        inside &= (log_scale >= LOG_SCALE_BOUNDS[0]) & (log_scale <= LOG_SCALE_BOUNDS[1])
+    if rho is not None:
+        inside &= jnp.abs(rho) <= RHO_MAX
     return jnp.where(inside, 0.0, -jnp.inf)
 
 
 def log_posterior(phi, data: PolachDataset, lower, upper, fixed_log_scale=0.0,
-                  likelihood: str = "gauss"):
-    """Unnormalised log-posterior of one parameter vector ``phi`` (6,) — or (5,) with the scale
-    fixed at ``exp(fixed_log_scale)``. ``-inf`` outside the prior support or when not finite."""
-    if phi.shape[0] not in (5, 6):
-        raise ValueError(f"phi must have 5 or 6 entries, got shape {phi.shape}")
+                  likelihood: str = "gauss", obs: Optional[ObserverTerms] = None):
+    """Unnormalised log-posterior of one parameter vector ``phi`` (see the module docstring for its
+    layout; the scale fixed at ``exp(fixed_log_scale)`` when left out). ``-inf`` outside the prior
+    support or when not finite."""
+    theta, log_scale, rho = _split(phi, likelihood, fixed_log_scale)
     # The likelihood is evaluated at the point clipped into the support: finite everywhere, so an
     # out-of-box walker gets exactly -inf from the prior and never a NaN.
-    log_scale = jnp.clip(phi[5], *LOG_SCALE_BOUNDS) if phi.shape[0] == 6 else fixed_log_scale
-    theta = jnp.clip(phi[:5], lower, upper)
-    ll = log_likelihood(theta, log_scale, data, likelihood)
-    value = log_prior(phi, lower, upper) + ll
+    log_scale = fixed_log_scale if log_scale is None else jnp.clip(log_scale, *LOG_SCALE_BOUNDS)
+    rho = 0.0 if rho is None else jnp.clip(rho, -RHO_MAX, RHO_MAX)
+    ll = log_likelihood(jnp.clip(theta, lower, upper), log_scale, data, likelihood, rho, obs)
+    value = log_prior(phi, lower, upper, likelihood) + ll
     return jnp.where(jnp.isfinite(value), value, -jnp.inf)
 
 
 @partial(jax.jit, static_argnames=("likelihood",))
 def batch_log_posterior(phis, data: PolachDataset, lower, upper, fixed_log_scale=0.0,
-                        likelihood: str = "gauss"):
+                        likelihood: str = "gauss", obs: Optional[ObserverTerms] = None):
     """:func:`log_posterior` of a whole ensemble ``phis`` (W, d) in one jitted, vmapped call."""
-    return jax.vmap(log_posterior, in_axes=(0, None, None, None, None, None))(
-        phis, data, lower, upper, fixed_log_scale, likelihood)
+    return jax.vmap(log_posterior, in_axes=(0, None, None, None, None, None, None))(
+        phis, data, lower, upper, fixed_log_scale, likelihood, obs)
 
 
 def ensemble_log_prob(data: PolachDataset, likelihood: str = "gauss", bounds=None,
-                      fixed_scale: float | None = None):
+                      fixed_scale: float | None = None, obs: Optional[ObserverTerms] = None):
     """A NumPy-in/NumPy-out log-probability for ``emcee.EnsembleSampler(vectorize=True)``.
+
+    The dataset, box and observer terms become float64 device arrays once; each call is one
+    dispatch of the module-level jitted :func:`batch_log_posterior` (compiled once per likelihood,
+    walker count and data shape — a new dataset of the same shape does not re-trace) on the NumPy
+    walker array, and one device→host copy of W numbers.
 
     Args:
         data: the dataset (arrays become float64 device arrays once).
-        likelihood: ``"gauss"`` or ``"laplace"``.
+        likelihood: one of :data:`LIKELIHOODS`.
         bounds: prior box ``(lower, upper)`` of the five Polach parameters; default ``[0, 1]^5``.
-        fixed_scale: fix the noise scale [-] instead of sampling ``log_scale`` (then d = 5).
+        fixed_scale: fix the noise scale [-] instead of sampling ``log_scale``.
+        obs: :class:`ObserverTerms` (required by ``"observer"``, ignored otherwise).
     """
     if likelihood not in LIKELIHOODS:
         raise ValueError(f"likelihood must be one of {LIKELIHOODS}, got {likelihood!r}")
+    if likelihood == "observer":
+        if obs is None:
+            raise ValueError("the observer likelihood needs ObserverTerms (observer_terms(...))")
+        if obs.torque_term.shape != data.adhesion.shape:
+            raise ValueError(f"observer terms for {obs.torque_term.shape[0]} samples, dataset has "
+                             f"{data.adhesion.shape[0]}")
+    else:
+        obs = None
     lower, upper = (np.zeros(5), np.ones(5)) if bounds is None else bounds
-    lower, upper = jnp.asarray(lower, jnp.float64), jnp.asarray(upper, jnp.float64)
-    data = jax.tree_util.tree_map(lambda x: jnp.asarray(x, jnp.float64), data)
-    fixed = jnp.asarray(0.0 if fixed_scale is None else math.log(fixed_scale), jnp.float64)
+    f64 = lambda x: jnp.asarray(x, jnp.float64)  # noqa: E731
+    lower, upper = f64(lower), f64(upper)
+    data = jax.tree_util.tree_map(f64, data)
+    obs = None if obs is None else jax.tree_util.tree_map(f64, obs)
+    fixed = f64(0.0 if fixed_scale is None else math.log(fixed_scale))
 
     def log_prob(phis: np.ndarray) -> np.ndarray:
-        return np.asarray(batch_log_posterior(jnp.asarray(phis, jnp.float64), data, lower, upper,
-                                              fixed, likelihood))
+        return np.asarray(batch_log_posterior(np.asarray(phis, np.float64), data, lower, upper,
+                                              fixed, likelihood, obs))
 
     return log_prob

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from typing import Callable, NamedTuple, Optional
 
+import time
 import warnings
 
 import jax
@@ -24,8 +25,9 @@ import numpy as np
 from ..data.dataset import PolachDataset
 from ..models.polach import PARAM_NAMES, adhesion_peak, polach_adhesion
 from .ensemble import MIN_TAU_MULTIPLE, ChainTooShortWarning, Diagnostics, run_ensemble  # noqa: F401
-from .likelihood import LOG_SCALE_BOUNDS, ensemble_log_prob
-from .polach_fit import polach_mae, polach_residual
+from .likelihood import (AUTOREGRESSIVE, LOG_SCALE_BOUNDS, RHO_MAX, ObserverTerms,
+                         ensemble_log_prob, noise_names, prediction)
+from .polach_fit import polach_mae
 
 QUANTILES = (0.05, 0.5, 0.95)
 
@@ -35,7 +37,8 @@ class PosteriorResult(NamedTuple):
 
     ``params`` and ``derived`` map a name to ``{"median", "q05", "q95"}``. ``names`` lists the
     sampled coordinates: the five Polach parameters, then ``"sigma"``/``"b"`` (the noise scale,
-    sampled as its logarithm; ``samples`` holds the scale itself) unless the scale was fixed.
+    sampled as its logarithm; ``samples`` holds the scale itself) unless the scale was fixed, then
+    ``"rho"`` (AR(1) coefficient) for the ``"ar1"`` and ``"observer"`` likelihoods.
     """
 
     samples: np.ndarray      # (n_samples, d) after burn-in and thinning
@@ -70,25 +73,37 @@ def summarise(samples: np.ndarray) -> dict:
 
 
 def initial_ball(theta0, log_scale0: Optional[float], walkers: int, rng: np.random.Generator,
-                 bounds, spread=1e-3) -> np.ndarray:
+                 bounds, spread=1e-3, rho0: Optional[float] = None) -> np.ndarray:
     """Walker positions: ``theta0`` (clipped into the box) plus Gaussian jitter of ``spread`` × box
     width (a scalar or one value per parameter), reflected back into the box, so walkers at a box
-    face stay distinct and the ensemble keeps full rank. ``log_scale0``: the 6th coordinate."""
+    face stay distinct and the ensemble keeps full rank. ``log_scale0``: the 6th coordinate;
+    ``rho0``: the AR(1) coefficient, last."""
     lower, upper = (np.asarray(b, float) for b in bounds)
     jitter = np.asarray(spread, float) * (upper - lower) * rng.standard_normal((walkers, 5))
     theta = np.clip(np.asarray(theta0, float), lower, upper) + jitter
     theta = upper - np.abs(upper - (lower + np.abs(theta - lower)))
-    if log_scale0 is None:
-        return theta
-    lo, hi = LOG_SCALE_BOUNDS
-    ls = np.clip(log_scale0, lo + 0.1, hi - 0.1) + 0.01 * rng.standard_normal((walkers, 1))
-    return np.concatenate([theta, ls], axis=1)
+    columns = [theta]
+    if log_scale0 is not None:
+        lo, hi = LOG_SCALE_BOUNDS
+        columns.append(np.clip(log_scale0, lo + 0.1, hi - 0.1) + 0.01 * rng.standard_normal((walkers, 1)))
+    if rho0 is not None:
+        rho = np.clip(rho0, -RHO_MAX + 0.02, RHO_MAX - 0.02) + 0.005 * rng.standard_normal((walkers, 1))
+        columns.append(np.clip(rho, -RHO_MAX, RHO_MAX))
+    return np.concatenate(columns, axis=1)
 
 
-def _initial_log_scale(data: PolachDataset, theta0, likelihood: str) -> float:
-    r = np.asarray(polach_residual(jnp.asarray(theta0), data))
-    scale = np.sqrt(np.mean(r**2)) if likelihood == "gauss" else np.mean(np.abs(r))
-    return float(np.log(max(scale, 1e-4)))
+def initial_noise(data: PolachDataset, theta0, likelihood: str,
+                  obs: Optional[ObserverTerms] = None) -> tuple:
+    """``(log_scale, rho or None)`` of the residuals at ``theta0``: RMS (``"gauss"``), mean
+    absolute value (``"laplace"``), or lag-1 autocorrelation and innovation RMS (AR(1))."""
+    r = np.asarray(data.adhesion) - np.asarray(prediction(jnp.asarray(theta0), data, likelihood, obs))
+    rho = None
+    if likelihood in AUTOREGRESSIVE:
+        rho = float(np.sum(r[1:] * r[:-1]) / max(np.sum(r[:-1] ** 2), 1e-300))
+        rho = float(np.clip(rho, -0.95, 0.95))
+        r = r[1:] - rho * r[:-1]
+    scale = np.mean(np.abs(r)) if likelihood == "laplace" else np.sqrt(np.mean(r**2))
+    return float(np.log(max(scale, 1e-4))), rho
 
 
 def sample_posterior(data: PolachDataset, theta0, *, walkers: int = 32, steps: int = 5000,
@@ -96,14 +111,17 @@ def sample_posterior(data: PolachDataset, theta0, *, walkers: int = 32, steps: i
                      thin: int = 1, bounds=None, fixed_scale: Optional[float] = None,
                      spread=1e-3, max_derived: int = 4000,
                      callback: Optional[Callable[[int], None]] = None,
-                     callback_every: int = 100) -> PosteriorResult:
+                     callback_every: int = 100, obs: Optional[ObserverTerms] = None) -> PosteriorResult:
     """Sample the posterior of ``[kA, kS, mu0, A, B]`` (and the noise scale) with emcee.
 
     Args:
         data: the fitting dataset.
         theta0: a point near the mode (e.g. the LM optimum), shape (5,).
         walkers, steps: ensemble size and chain length (burn-in included).
-        likelihood: ``"gauss"`` (scale sigma) or ``"laplace"`` (scale b).
+        likelihood: ``"gauss"`` (scale sigma), ``"laplace"`` (scale b), ``"ar1"`` (AR(1) residuals
+            in time order: innovation scale sigma, coefficient rho) or ``"observer"`` (the
+            observer's lag and torque leak modelled, AR(1) noise; needs ``obs``) — see
+            :mod:`jadhesion.identify.likelihood`.
         seed: seeds the initial ball and emcee's random state.
         burn: steps discarded as burn-in (default ``steps // 4``); ``thin``: keep every thin-th.
         bounds: prior box ``(lower, upper)`` of the Polach parameters, default ``[0, 1]^5``.
@@ -112,21 +130,27 @@ def sample_posterior(data: PolachDataset, theta0, *, walkers: int = 32, steps: i
             :func:`jadhesion.identify.laplace.initial_spread` to start near the posterior's width.
         max_derived: at most this many (evenly spaced) samples feed ``mu_max`` / ``creep_opt``.
         callback: called with the number of steps done every ``callback_every`` steps (progress).
+        obs: :class:`ObserverTerms` of the recording (``"observer"`` only).
 
     Emits :class:`ChainTooShortWarning` when ``steps − burn < 50 τ_max``.
     """
     bounds = (np.zeros(5), np.ones(5)) if bounds is None else tuple(np.asarray(b, float) for b in bounds)
     burn = steps // 4 if burn is None else burn
     rng = np.random.default_rng(seed)
-    log_scale0 = None if fixed_scale is not None else _initial_log_scale(data, theta0, likelihood)
-    p0 = initial_ball(theta0, log_scale0, walkers, rng, bounds, spread)
-    log_prob = ensemble_log_prob(data, likelihood, bounds, fixed_scale)
+    names = PARAM_NAMES + noise_names(likelihood, fixed_scale is not None)
+    log_prob = ensemble_log_prob(data, likelihood, bounds, fixed_scale, obs)
+    log_scale0, rho0 = initial_noise(data, theta0, likelihood, obs)
+    p0 = initial_ball(theta0, None if fixed_scale is not None else log_scale0, walkers, rng,
+                      bounds, spread, rho0)
+    t0 = time.perf_counter()
+    log_prob(p0)                     # emcee calls it on the whole ensemble, then on halves:
+    log_prob(p0[: walkers // 2])     # compile both shapes here, outside the timed loop
+    compile_seconds = time.perf_counter() - t0
     chain, diagnostics = run_ensemble(log_prob, p0, steps, rng, burn=burn, thin=thin,
                                       callback=callback, callback_every=callback_every)
-    names = PARAM_NAMES if fixed_scale is not None else PARAM_NAMES + (
-        "sigma" if likelihood == "gauss" else "b",)
+    diagnostics = diagnostics._replace(compile_seconds=compile_seconds)
     if fixed_scale is None:
-        chain = np.concatenate([chain[..., :5], np.exp(chain[..., 5:])], axis=-1)
+        chain = np.concatenate([chain[..., :5], np.exp(chain[..., 5:6]), chain[..., 6:]], axis=-1)
     samples = chain.reshape(-1, chain.shape[-1])
 
     speed = float(np.median(np.asarray(data.vehicle_speed)))
@@ -148,23 +172,109 @@ def posterior_curves(theta_samples, creep, vehicle_speed, k_eps):
 
 
 def table2_row(data: PolachDataset, theta0, *, walkers: int = 32, steps: int = 5000, seed: int = 0,
-               likelihood: str = "gauss") -> dict:
+               likelihood: str = "gauss", obs: Optional[ObserverTerms] = None, spread=1e-3,
+               burn: Optional[int] = None, truth=None) -> dict:
     """The ``mcmc`` row of a Table-2-style comparison for one dataset.
 
-    ``error``: MAE (the paper's fitness, eq 15) of the posterior-median parameters; ``steps`` /
-    ``evaluations`` / ``seconds``: what a converged chain costs — burn-in plus ``50 τ_max`` steps,
-    seconds scaled from this run (the chain must be long enough for τ to be trusted: check
-    ``converged``); ``width90``: 90 % interval widths of the parameters and derived quantities.
+    ``error``: MAE (the paper's fitness, eq 15, against ``mu_hat``) of the posterior-median
+    parameters; ``steps`` / ``evaluations`` / ``seconds``: what a converged chain costs — burn-in
+    plus ``50 τ_max`` steps, seconds scaled from this run's warm wall time (``converged``: this run
+    was already that long; otherwise τ comes from a shorter chain and the cost is an estimate);
+    ``width90``: 90 % interval widths of the parameters and derived quantities; with ``truth``,
+    ``param_abs_error`` |median − truth|.
     """
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ChainTooShortWarning)
         result = sample_posterior(data, theta0, walkers=walkers, steps=steps, seed=seed,
-                                  likelihood=likelihood)
+                                  likelihood=likelihood, obs=obs, spread=spread, burn=burn)
     d = result.diagnostics
     median = np.array([result.params[n]["median"] for n in PARAM_NAMES])
     needed = int(np.ceil(d.burn + MIN_TAU_MULTIPLE * np.max(d.tau) * d.thin))
-    return {"method": "mcmc", "error": float(polach_mae(jnp.asarray(median), data)),
-            "params": dict(zip(PARAM_NAMES, median.tolist())), "steps": needed,
-            "evaluations": needed * walkers, "seconds": d.seconds * needed / d.steps,
-            "converged": not d.warnings,
-            "width90": {n: q["q95"] - q["q05"] for n, q in {**result.params, **result.derived}.items()}}
+    row = {"method": "mcmc", "likelihood": likelihood,
+           "error": float(polach_mae(jnp.asarray(median), data)),
+           "params": dict(zip(PARAM_NAMES, median.tolist())), "steps": needed,
+           "evaluations": needed * walkers, "seconds": d.seconds * needed / d.steps,
+           "converged": not d.warnings, "steps_run": d.steps, "seconds_run": d.seconds,
+           "log_prob_compile_seconds": d.compile_seconds,
+           "walkers": walkers, "tau_max": float(np.max(d.tau)), "acceptance": d.acceptance,
+           "width90": {n: q["q95"] - q["q05"] for n, q in {**result.params, **result.derived}.items()},
+           "interval90": {n: [q["q05"], q["q95"]] for n, q in {**result.params, **result.derived}.items()}}
+    if truth is not None:
+        truth = np.asarray(truth, float)
+        row["param_abs_error"] = dict(zip(PARAM_NAMES, np.abs(median - truth).tolist()))
+    return row
+
+
+class NutsResult(NamedTuple):
+    """Draws of :func:`sample_nuts` (constrained; the scale itself, not its log) and costs."""
+
+    samples: np.ndarray      # (samples, d)
+    names: tuple
+    tau: np.ndarray          # integrated autocorrelation time per coordinate [draws]
+    ess: np.ndarray          # samples / tau
+    seconds: float           # warm wall time of warm-up + sampling [s]
+    compile_seconds: float
+    integration_steps: int   # leapfrog steps (gradient evaluations) after warm-up
+    step_size: float
+
+
+def sample_nuts(data: PolachDataset, theta0, *, likelihood: str = "gauss",
+                obs: Optional[ObserverTerms] = None, warmup: int = 500, samples: int = 1000,
+                seed: int = 0, bounds=None) -> NutsResult:
+    """The same posterior as :func:`sample_posterior` with NUTS (blackjax, an optional extra:
+    ``pip install 'jadhesion[nuts]'``), for comparison.
+
+    Every sampled coordinate has a box prior (the Polach box, the log-scale range, ``|rho| ≤
+    RHO_MAX``), so NUTS runs on ``z = logit((phi − lo)/(hi − lo))`` with the log-Jacobian added;
+    Stan's window adaptation tunes the step size and a diagonal mass matrix during ``warmup``.
+    One chain; warm-up and sampling are one jitted program (compiled ahead, timed apart).
+    """
+    try:
+        import blackjax
+    except ImportError:  # pragma: no cover - depends on the environment
+        raise ImportError("sample_nuts needs the optional dependency blackjax "
+                          "(pip install 'jadhesion[nuts]' or pip install blackjax)") from None
+    from .ensemble import integrated_time
+    from .likelihood import log_posterior
+
+    names = PARAM_NAMES + noise_names(likelihood)
+    lower, upper = (np.zeros(5), np.ones(5)) if bounds is None else tuple(np.asarray(b, float) for b in bounds)
+    lo = np.concatenate([lower, [LOG_SCALE_BOUNDS[0]], [-RHO_MAX] if likelihood in AUTOREGRESSIVE else []])
+    hi = np.concatenate([upper, [LOG_SCALE_BOUNDS[1]], [RHO_MAX] if likelihood in AUTOREGRESSIVE else []])
+    log_scale0, rho0 = initial_noise(data, theta0, likelihood, obs)
+    phi0 = np.concatenate([np.asarray(theta0, float), [log_scale0], [] if rho0 is None else [rho0]])
+    u0 = np.clip((phi0 - lo) / (hi - lo), 1e-3, 1 - 1e-3)
+    lo_j, width = jnp.asarray(lo), jnp.asarray(hi - lo)
+    data = jax.tree_util.tree_map(lambda x: jnp.asarray(x, jnp.float64), data)
+    lower_j, upper_j = jnp.asarray(lower), jnp.asarray(upper)
+
+    def logdensity(z):
+        phi = lo_j + width * jax.nn.sigmoid(z)
+        jac = jnp.sum(jnp.log(width) + jax.nn.log_sigmoid(z) + jax.nn.log_sigmoid(-z))
+        return log_posterior(phi, data, lower_j, upper_j, 0.0, likelihood, obs) + jac
+
+    def run(key, z0):
+        k_warm, k_draw = jax.random.split(key)
+        warm = blackjax.window_adaptation(blackjax.nuts, logdensity)
+        (state, params), _ = warm.run(k_warm, z0, num_steps=warmup)
+        kernel = blackjax.nuts(logdensity, **params)
+
+        def one(st, k):
+            st, info = kernel.step(k, st)
+            return st, (st.position, info.num_integration_steps)
+
+        _, (zs, n_steps) = jax.lax.scan(one, state, jax.random.split(k_draw, samples))
+        return lo_j + width * jax.nn.sigmoid(zs), jnp.sum(n_steps), params["step_size"]
+
+    key, z0 = jax.random.key(seed), jnp.asarray(np.log(u0) - np.log1p(-u0))
+    t0 = time.perf_counter()
+    compiled = jax.jit(run).lower(key, z0).compile()
+    compile_seconds = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    draws, n_steps, step_size = jax.block_until_ready(compiled(key, z0))
+    seconds = time.perf_counter() - t0
+    draws = np.array(draws)
+    draws[:, 5] = np.exp(draws[:, 5])
+    tau = integrated_time(draws[:, None, :])
+    return NutsResult(draws, names, tau, samples / tau, seconds, compile_seconds, int(n_steps),
+                      float(step_size))

@@ -11,7 +11,7 @@ from ..data.dataset import PolachDataset
 from ..identify.mcmc import PosteriorResult, posterior_curves
 
 _LABELS = {"kA": r"$k_A$", "kS": r"$k_S$", "mu0": r"$\mu_0$", "A": r"$A$", "B": r"$B$ [s/m]",
-           "sigma": r"$\sigma$", "b": r"$b$"}
+           "sigma": r"$\sigma$", "b": r"$b$", "rho": r"$\rho$"}
 
 
 def corner_plot(result: PosteriorResult, truths=None) -> Figure:
@@ -34,7 +34,10 @@ def corner_plot(result: PosteriorResult, truths=None) -> Figure:
 def predictive_plot(result: PosteriorResult, data: PolachDataset, n_draws: int = 1000, seed: int = 0,
                     truth=None) -> Figure:
     """Data, posterior-median curve, 90 % credible band of the curve and 90 % posterior-predictive
-    band (curve plus the likelihood's noise), all at the dataset's median vehicle speed."""
+    band (curve plus the likelihood's noise), all at the dataset's median vehicle speed. For the
+    AR(1) likelihoods (``"ar1"``, ``"observer"``) the noise is the stationary marginal,
+    ``sigma / sqrt(1 − rho²)``; for ``"observer"`` the band is of the true curve, not of the
+    observer's lagged view of it (the samples off the band in transients are that lag)."""
     rng = np.random.default_rng(seed)
     idx = rng.choice(result.samples.shape[0], size=min(n_draws, result.samples.shape[0]), replace=False)
     draws = result.samples[idx]
@@ -43,9 +46,13 @@ def predictive_plot(result: PosteriorResult, data: PolachDataset, n_draws: int =
     k_eps = jnp.asarray(data.k_eps, float)
     curves = np.asarray(posterior_curves(jnp.asarray(draws[:, :5]), jnp.asarray(creep),
                                          result.vehicle_speed, k_eps))
-    if draws.shape[1] == 6:
-        noise = (rng.standard_normal(curves.shape) if result.likelihood == "gauss"
-                 else rng.laplace(size=curves.shape)) * draws[:, 5:]
+    names = list(result.names)
+    if "sigma" in names or "b" in names:
+        scale = draws[:, names.index("sigma" if "sigma" in names else "b")][:, None]
+        if "rho" in names:
+            scale = scale / np.sqrt(1.0 - draws[:, names.index("rho")][:, None] ** 2)
+        noise = (rng.laplace(size=curves.shape) if result.likelihood == "laplace"
+                 else rng.standard_normal(curves.shape)) * scale
     else:
         noise = 0.0
     band = np.quantile(curves, (0.05, 0.5, 0.95), axis=0)
