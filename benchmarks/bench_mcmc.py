@@ -39,15 +39,14 @@ jax.config.update("jax_enable_x64", True)
 
 from jadhesion.cli.common import emit_json, table  # noqa: E402
 from jadhesion.data.scenarios import SCENARIOS  # noqa: E402
-from jadhesion.data.simulator import simulate_batch, simulate_dataset  # noqa: E402
 from jadhesion.identify.calibration import (QUANTITIES, binomial_band, coverage_study,  # noqa: E402
                                             synthetic_dataset)
 from jadhesion.identify.ensemble import ChainTooShortWarning, run_ensemble  # noqa: E402
 from jadhesion.identify.laplace import initial_spread, lm_optimum  # noqa: E402
 from jadhesion.identify.likelihood import (LOG_SCALE_BOUNDS, ensemble_log_prob,  # noqa: E402
-                                           observer_terms)
-from jadhesion.data.dataset import PolachDataset  # noqa: E402
-from jadhesion.data.simulator import simulate_many  # noqa: E402
+                                           recording_observer_terms)
+from jadhesion.data.simulator import (result_dataset, simulate_batch, simulate_dataset,  # noqa: E402
+                                      simulate_many)
 from jadhesion.identify.mcmc import initial_ball  # noqa: E402
 
 TRUTH_LO, TRUTH_HI = np.array([0.3, 0.2, 0.25, 0.2, 0.4]), np.array([0.9, 0.8, 0.45, 0.6, 1.0])
@@ -166,16 +165,8 @@ def bench_coverage(n, steps, walkers, seed=0, progress=True):
 def recording_datasets(name, seeds, n_points):
     """Simulated recordings of a scenario: (datasets, observer terms), the dataset as the recording's
     columns give it (recorded creep, slip, speed, observer output)."""
-    out = []
-    for r in simulate_many(name, seeds, n_samples=n_points):
-        c, v = r.columns, r.vehicle
-        data = PolachDataset(*(jax.numpy.asarray(c[k]) for k in ("creepage", "slip_velocity", "adhesion",
-                                                                  "vehicle_speed")),
-                             jax.numpy.asarray(r.truth["k_eps"]))
-        obs = observer_terms(c["time"], c["traction_torque"], v.axle_load_kg, v.wheel_radius_m,
-                             v.observer_time_constant_s)
-        out.append((data, obs))
-    return out
+    return [(result_dataset(r), recording_observer_terms(r))
+            for r in simulate_many(name, seeds, n_samples=n_points)]
 
 
 def bench_recordings(m, likelihoods, steps, walkers, n_points, seed=0, save=None, progress=True):

@@ -113,15 +113,11 @@ def test_lowpass_matches_the_observer_filter():
 def test_observer_prediction_is_exact_on_a_noise_free_recording():
     """The observer's lag and torque leak, modelled, leave ~nothing at the true parameters; the
     plain curve leaves the lag (large in the sand test's fast slip excursion)."""
-    from jadhesion.data.dataset import PolachDataset
-    from jadhesion.data.simulator import simulate
+    from jadhesion.data.simulator import result_dataset, simulate
+    from jadhesion.identify.likelihood import recording_observer_terms
 
     sim = simulate("sand", 1, n_samples=400, noise=False)
-    c, v = sim.columns, sim.vehicle
-    data = PolachDataset(*(jnp.asarray(c[k]) for k in ("creepage", "slip_velocity", "adhesion",
-                                                       "vehicle_speed")), jnp.asarray(sim.truth["k_eps"]))
-    obs = observer_terms(c["time"], c["traction_torque"], v.axle_load_kg, v.wheel_radius_m,
-                         v.observer_time_constant_s)
+    data, obs = result_dataset(sim), recording_observer_terms(sim)
     theta = jnp.asarray([sim.truth["params"][k] for k in ("kA", "kS", "mu0", "A", "B")])
     plain = np.asarray(data.adhesion - prediction(theta, data, "gauss"))
     observed = np.asarray(data.adhesion - prediction(theta, data, "observer", obs))

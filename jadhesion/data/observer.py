@@ -35,7 +35,7 @@ from .vehicle import GRAVITY, LOCO_22E, Vehicle
 VARIANTS = ("paper", "filtered_torque")
 
 
-def _foh_coefficients(dt, t0):
+def foh_coefficients(dt, t0):
     """``α = exp(−Δt/T0)`` and ``β = 1 − (T0/Δt)(1 − α)`` (series for ``Δt ≪ T0``, no 0/0)."""
     x = dt / t0
     one_minus_alpha = -jnp.expm1(-x)
@@ -55,7 +55,7 @@ def lowpass_foh(time, signal, t0):
     Returns:
         The filter state at each sample, shape (n,), starting at rest (``x_0 = signal[0]``).
     """
-    alpha, one_minus_alpha, beta = _foh_coefficients(jnp.diff(time), t0)
+    alpha, one_minus_alpha, beta = foh_coefficients(jnp.diff(time), t0)
 
     def step(x, inputs):
         a, oma, b, u0, u1 = inputs

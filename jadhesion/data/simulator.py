@@ -358,6 +358,17 @@ def _dataset(columns, k_eps) -> PolachDataset:
                          k_eps=k_eps)
 
 
+def result_dataset(result: SimulationResult) -> PolachDataset:
+    """The fitting dataset of a simulated recording (recorded creep, slip, speed, observer output)."""
+    return _dataset({k: jnp.asarray(v) for k, v in result.columns.items()},
+                    jnp.asarray(result.truth["k_eps"]))
+
+
+def stack_datasets(results: Sequence[SimulationResult]) -> PolachDataset:
+    """:func:`result_dataset` of several recordings of one length, stacked on a leading axis."""
+    return jax.tree_util.tree_map(lambda *a: jnp.stack(a), *map(result_dataset, results))
+
+
 def simulate_dataset(scenario, seed: int = 0, effects=(), n_samples=None, *,
                      vehicle: Vehicle = LOCO_22E) -> PolachDataset:
     """The fitting dataset (recorded creep, slip, speed and observer output) of one recording."""

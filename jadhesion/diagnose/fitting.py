@@ -22,6 +22,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..identify.lm import lm_solve
+from ..models.kinematics import creepage
 from ..models.polach import polach_adhesion
 from . import extensions as ext
 from .signals import Signals
@@ -136,7 +137,7 @@ def _pad(p):
 def screen_starts(sig: Signals, n_valid) -> jax.Array:
     """SSE of the plain Polach model at each :data:`BASE_STARTS` point, shape (N_SCREEN,)."""
     slip = sig.wheel_speed - sig.speed
-    creep = slip / jnp.maximum(jnp.abs(sig.speed), 0.01)
+    creep = creepage(slip, sig.speed)
     valid = jnp.arange(sig.time.shape[0]) < n_valid
     sse = jax.vmap(lambda th: jnp.sum(jnp.where(
         valid, (sig.adhesion - polach_adhesion(th, creep, slip, sig.k_eps)) ** 2, 0.0)))(

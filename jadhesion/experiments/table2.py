@@ -31,8 +31,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..data.scenarios import get_scenario
-from ..data.dataset import PolachDataset
-from ..data.simulator import simulate_many
+from ..data.simulator import simulate_many, stack_datasets
 from ..identify.driver import run as run_population
 from ..identify.polach_fit import ALGORITHMS, fit_polach, polach_mae
 from ..models.polach import BOUNDS, PARAM_NAMES
@@ -91,21 +90,13 @@ def _histories(datasets, method, keys, history_iter):
     return np.asarray(out.history.best_f), np.asarray(out.history.best_x), np.asarray(out.best_x)
 
 
-def _stack(sims) -> PolachDataset:
-    """The batched fitting datasets (leading seed axis) of simulated recordings."""
-    cols = [s.columns for s in sims]
-    field = lambda k: jnp.asarray(np.stack([c[k] for c in cols]))  # noqa: E731
-    return PolachDataset(field("creepage"), field("slip_velocity"), field("adhesion"),
-                         field("vehicle_speed"), jnp.full((len(sims),), sims[0].truth["k_eps"]))
-
-
 def mcmc_row(sim, data, theta_lm, *, likelihood=MCMC_LIKELIHOOD, walkers=MCMC_WALKERS,
              steps=MCMC_STEPS, seed=0) -> dict:
     """The ``mcmc`` row of one simulated recording ``sim`` (its dataset ``data``), walkers started
     at the LM fit ``theta_lm`` — for the observer likelihood polished by a projected LM on the
     observer's view of the curve (:func:`jadhesion.identify.lm.box_lm`)."""
     from ..identify.laplace import initial_spread, observer_residual
-    from ..identify.likelihood import observer_terms
+    from ..identify.likelihood import recording_observer_terms
     from ..identify.lm import box_lm
     from ..identify.mcmc import table2_row
 
@@ -113,9 +104,7 @@ def mcmc_row(sim, data, theta_lm, *, likelihood=MCMC_LIKELIHOOD, walkers=MCMC_WA
     obs = None
     theta0 = jnp.asarray(theta_lm)
     if likelihood == "observer":
-        v = sim.vehicle
-        obs = observer_terms(sim.columns["time"], sim.columns["traction_torque"], v.axle_load_kg,
-                             v.wheel_radius_m, v.observer_time_constant_s)
+        obs = recording_observer_terms(sim)
         theta0 = box_lm(observer_residual, theta0, (data, obs), BOUNDS).params
     spread = np.asarray(initial_spread(theta0, data, obs=obs))
     start_seconds = time.perf_counter() - t0
@@ -132,7 +121,7 @@ def run_scenario(scenario, seeds=20, max_iter=1000, history_iter=300, progress=N
     """Table 2 rows and convergence histories for one scenario."""
     truth = np.asarray(get_scenario(scenario).params)
     sims = simulate_many(scenario, list(range(seeds)))
-    datasets = _stack(sims)
+    datasets = stack_datasets(sims)
     floors = np.asarray(jax.vmap(polach_mae, in_axes=(None, 0))(jnp.asarray(truth), datasets))
     targets = 1.01 * floors
     rows, histories = [], {}

@@ -68,7 +68,7 @@ def run_ensemble(log_prob: Callable[[np.ndarray], np.ndarray], p0: np.ndarray, s
 
     chain = sampler.get_chain(discard=burn, thin=thin)
     # tol=0: emcee logs nothing; the chain-length check is ours (ChainTooShortWarning).
-    tau = emcee.autocorr.integrated_time(chain, tol=0)
+    tau = integrated_time(chain)
     messages = []
     if chain.shape[0] < MIN_TAU_MULTIPLE * np.max(tau):
         messages.append(f"chain of {chain.shape[0]} kept steps is shorter than {MIN_TAU_MULTIPLE} "

@@ -59,7 +59,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..data.dataset import PolachDataset
-from ..data.observer import _foh_coefficients, lowpass_foh
+from ..data.observer import foh_coefficients, lowpass_foh
 from ..data.vehicle import GRAVITY
 from ..models.polach import polach_adhesion
 
@@ -101,13 +101,14 @@ def observer_terms(time, torque, axle_load_kg: float, wheel_radius_m: float, t0:
         term = jnp.zeros_like(torque)
     else:
         raise ValueError(f"unknown observer variant {variant!r}")
-    alpha, one_minus_alpha, beta = _foh_coefficients(jnp.diff(time), t0)
+    alpha, one_minus_alpha, beta = foh_coefficients(jnp.diff(time), t0)
     return ObserverTerms(term, alpha, one_minus_alpha - beta, beta)
 
 
 def recording_observer_terms(recording, variant: str = "paper") -> ObserverTerms:
-    """:func:`observer_terms` of a :class:`jadhesion.data.recording.Recording` (its vehicle's
-    constants); ``ValueError`` when it has no ``time`` or ``traction_torque`` column."""
+    """:func:`observer_terms` of a :class:`jadhesion.data.recording.Recording` or a simulation
+    result (anything with ``columns`` and ``vehicle``; the vehicle's constants); ``ValueError``
+    when it has no ``time`` or ``traction_torque`` column."""
     cols = recording.columns
     missing = [c for c in ("time", "traction_torque") if c not in cols]
     if missing:
@@ -177,7 +178,7 @@ def log_likelihood(theta, log_scale, data: PolachDataset, likelihood: str = "gau
     return -n * (log_scale + math.log(2.0)) - jnp.sum(jnp.abs(r)) / scale
 
 
-def _split(phi, likelihood: str, fixed_log_scale):
+def _split(phi, likelihood: str):
     """``(theta, log_scale or None, rho or None)`` from the sampled vector."""
     n_noise = phi.shape[0] - 5
     has_rho = likelihood in AUTOREGRESSIVE
@@ -193,7 +194,7 @@ def _split(phi, likelihood: str, fixed_log_scale):
 
 def log_prior(phi, lower, upper, likelihood: str = "gauss"):
     """Log prior density up to a constant: 0 inside the box (and scale, rho ranges), else ``-inf``."""
-    theta, log_scale, rho = _split(phi, likelihood, None)
+    theta, log_scale, rho = _split(phi, likelihood)
     inside = jnp.all((theta >= lower) & (theta <= upper))
     if log_scale is not None:
         inside &= (log_scale >= LOG_SCALE_BOUNDS[0]) & (log_scale <= LOG_SCALE_BOUNDS[1])
@@ -207,7 +208,7 @@ def log_posterior(phi, data: PolachDataset, lower, upper, fixed_log_scale=0.0,
     """Unnormalised log-posterior of one parameter vector ``phi`` (see the module docstring for its
     layout; the scale fixed at ``exp(fixed_log_scale)`` when left out). ``-inf`` outside the prior
     support or when not finite."""
-    theta, log_scale, rho = _split(phi, likelihood, fixed_log_scale)
+    theta, log_scale, rho = _split(phi, likelihood)
     # The likelihood is evaluated at the point clipped into the support: finite everywhere, so an
     # out-of-box walker gets exactly -inf from the prior and never a NaN.
     log_scale = fixed_log_scale if log_scale is None else jnp.clip(log_scale, *LOG_SCALE_BOUNDS)
