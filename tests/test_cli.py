@@ -82,7 +82,7 @@ def test_reproduce_online_json_keys(env):
 
 
 def test_reproduce_table2_json_rows_include_mcmc(env):
-    proc = jadhesion(env, "reproduce", "table2", "--seeds", "2", "--json")
+    proc = jadhesion(env, "reproduce", "table2", "--seeds", "2", "--mcmc-steps", "300", "--json")
     doc = json.loads(proc.stdout)
     keys = {"scenario", "method", "error", "iterations", "evaluations", "seconds", "params", "paper"}
     methods = {(r["scenario"], r["method"]) for r in doc["rows"]}

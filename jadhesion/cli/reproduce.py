@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import sys
 
-from .common import emit_json
+from .common import UserError, emit_json
 
 
 def register(sub) -> None:
@@ -19,6 +19,8 @@ def register(sub) -> None:
     p.add_argument("--runs", type=int, default=1000, help="online: Monte Carlo runs per algorithm")
     p.add_argument("--no-mcmc", action="store_true",
                    help="table2: leave out the emcee posterior row of each scenario")
+    p.add_argument("--mcmc-steps", type=int, default=None, metavar="S",
+                   help="table2: steps of each posterior chain (default 1500; burn-in a third)")
     p.add_argument("--plot", metavar="DIR", default=None, help="write figures into DIR")
     p.add_argument("--json", action="store_true", help="one JSON document on stdout")
     p.set_defaults(func=run)
@@ -27,11 +29,15 @@ def register(sub) -> None:
 def run(args) -> int:
     from ..experiments import online, table2
 
+    for flag, value, least in (("--seeds", args.seeds, 1), ("--runs", args.runs, 1),
+                               ("--mcmc-steps", args.mcmc_steps, 30)):
+        if value is not None and value < least:
+            raise UserError(f"reproduce: {flag} must be >= {least}, got {value}")
     out = {}
     progress = not args.json or sys.stderr.isatty()
     if args.target in (None, "table2"):
         out["table2"] = table2.run(seeds=args.seeds, plot_dir=args.plot, progress=progress,
-                                   mcmc=not args.no_mcmc)
+                                   mcmc=not args.no_mcmc, mcmc_steps=args.mcmc_steps)
     if args.target in (None, "online"):
         out["online"] = online.run(runs=args.runs, plot_dir=args.plot, progress=progress)
     if args.json:

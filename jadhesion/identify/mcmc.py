@@ -57,7 +57,9 @@ class PosteriorResult(NamedTuple):
 
     def to_inference_data(self):
         """An ``arviz.InferenceData`` (one arviz chain per walker); needs ``arviz`` installed."""
-        import arviz
+        with warnings.catch_warnings():  # arviz 0.23 announces its 1.0 refactor on import
+            warnings.simplefilter("ignore", FutureWarning)
+            import arviz
 
         posterior = {name: np.swapaxes(self.chain[..., i], 0, 1) for i, name in enumerate(self.names)}
         return arviz.from_dict(posterior=posterior)
