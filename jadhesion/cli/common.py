@@ -13,6 +13,14 @@ import numpy as np
 from ..errors import InputError as UserError  # noqa: F401  (re-exported for command modules)
 
 
+def require_at_least(command: str, least: int, **flags) -> None:
+    """Raise :class:`UserError` for the first ``--flag`` (given, not None) whose value is below
+    ``least``, e.g. ``require_at_least("sweep", 1, seeds=args.seeds)``."""
+    for name, value in flags.items():
+        if value is not None and value < least:
+            raise UserError(f"{command}: --{name.replace('_', '-')} must be >= {least}, got {value}")
+
+
 def _plain(obj):
     if isinstance(obj, dict):
         return {str(k): _plain(v) for k, v in obj.items()}

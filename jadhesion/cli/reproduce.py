@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import sys
 
-from .common import UserError, emit_json
+from .common import emit_json, require_at_least
 
 
 def register(sub) -> None:
@@ -29,10 +29,8 @@ def register(sub) -> None:
 def run(args) -> int:
     from ..experiments import online, table2
 
-    for flag, value, least in (("--seeds", args.seeds, 1), ("--runs", args.runs, 1),
-                               ("--mcmc-steps", args.mcmc_steps, 30)):
-        if value is not None and value < least:
-            raise UserError(f"reproduce: {flag} must be >= {least}, got {value}")
+    require_at_least("reproduce", 1, seeds=args.seeds, runs=args.runs)
+    require_at_least("reproduce", table2.MCMC_MIN_STEPS, mcmc_steps=args.mcmc_steps)
     out = {}
     progress = not args.json or sys.stderr.isatty()
     if args.target in (None, "table2"):

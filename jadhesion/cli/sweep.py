@@ -12,7 +12,7 @@ import argparse
 import math
 import sys
 
-from .common import UserError, emit_json
+from .common import UserError, emit_json, require_at_least
 
 
 def _list(kind, name):
@@ -75,12 +75,8 @@ def run(args) -> int:
 
     from ..sweeps import Grid, run_sweep
 
-    if args.seeds < 1:
-        raise UserError(f"sweep: --seeds must be >= 1, got {args.seeds}")
     budget = {"pop_size": args.pop_size, "max_iter": args.max_iter}
-    for name, value in budget.items():
-        if value is not None and value < 1:
-            raise UserError(f"sweep: --{name.replace('_', '-')} must be >= 1, got {value}")
+    require_at_least("sweep", 1, seeds=args.seeds, **budget)
     grid = Grid(scenarios=args.scenarios, seeds=range(args.seeds), methods=args.methods,
                 noise_scale=args.noise, creep_max=args.creep_max, n_samples=args.samples,
                 fit_options={k: v for k, v in budget.items() if v is not None})

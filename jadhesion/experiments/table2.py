@@ -56,6 +56,7 @@ POP_SIZE = 50
 MCMC_LIKELIHOOD = "observer"
 MCMC_WALKERS = 32
 MCMC_STEPS = 1500
+MCMC_MIN_STEPS = 30
 
 
 def _median_iqr(values):
@@ -183,8 +184,8 @@ def run(seeds=20, plot_dir=None, progress=True, max_iter=1000, history_iter=300,
     ``mcmc``: add the :func:`mcmc_row` of each scenario, chains of ``mcmc_steps`` (default
     :data:`MCMC_STEPS`) steps."""
     mcmc_steps = MCMC_STEPS if mcmc_steps is None else int(mcmc_steps)
-    if mcmc and mcmc_steps < 30:
-        raise ValueError(f"mcmc_steps must be at least 30, got {mcmc_steps}")
+    if mcmc and mcmc_steps < MCMC_MIN_STEPS:
+        raise ValueError(f"mcmc_steps must be at least {MCMC_MIN_STEPS}, got {mcmc_steps}")
     from ..cli.common import Progress
 
     bar = Progress(len(SCENARIOS) * (len(METHODS) + bool(mcmc)), "table2", "cells",
