@@ -24,8 +24,9 @@ in ``u = (p − lo)/(hi − lo) ∈ [0, 1]ᵈ``: with ``g = Jᵀr``, ``H = JᵀJ
 Marquardt/MINPACK scaling) and projects, ``u' = clip(u + δ, 0, 1)``. The step is accepted when the
 gain ratio ``ρ = (C − C')/(−gᵀs − ½ sᵀHs) > 10⁻⁴`` (``s = u' − u``, ``C = ½‖r‖²``); ``λ`` follows
 Nielsen's rule. It stops after an accepted step with ``C − C' ≤ ftol·C`` and
-``‖s‖∞ ≤ xtol (xtol + ‖u‖∞)``, when the projected gradient ``‖clip(u − g) − u‖∞ ≤ gtol``, when
-``λ > 10¹⁶`` (no decrease is representable), or at ``max_steps`` (``success`` false).
+``‖s‖∞ ≤ xtol (xtol + ‖u‖∞)``; after any step whose predicted and actual decreases are both at most
+``ftol·C`` (MINPACK's test); when the projected gradient ``‖clip(u − g) − u‖∞ ≤ gtol``; when
+``λ > 10¹⁶`` (no decrease is representable); or at ``max_steps`` (``success`` false).
 :func:`box_lm_queue` runs many such problems as a work queue over a few vmapped lanes, so a batch
 costs its total number of steps rather than (batch size × the slowest member's steps).
 """
@@ -148,14 +149,17 @@ class BoxLMOptions(NamedTuple):
 
 
 class _BoxState(NamedTuple):
-    """Iterate ``u`` (box-scaled), residual, Jacobian, cost ``½‖r‖²``, running ``max diag JᵀJ``,
-    damping ``λ`` and its growth factor ``ν``, steps, done (converged or stalled), and ``fresh``
-    (not yet linearised: the first iteration only evaluates ``r`` and ``J`` at ``u``)."""
+    """Iterate ``u`` (box-scaled); at ``u``: cost ``½‖r‖²``, gradient ``g = Jᵀr``, Gauss–Newton
+    matrix ``H = JᵀJ`` and ``max |r|``; running ``max diag H``, damping ``λ`` and its growth factor
+    ``ν``, steps, done (converged or stalled), and ``fresh`` (not yet linearised: the first
+    iteration only evaluates at ``u``). Only these reductions are carried, never ``r`` or ``J``, so
+    a step's Jacobian is reduced where it is made and a lane's state is a few dozen numbers."""
 
     u: jax.Array
-    r: jax.Array
-    jac: jax.Array
     cost: jax.Array
+    g: jax.Array
+    h: jax.Array
+    rmax: jax.Array
     dmax: jax.Array
     lam: jax.Array
     nu: jax.Array
@@ -164,7 +168,7 @@ class _BoxState(NamedTuple):
     fresh: jax.Array
 
 
-def _box_lm_stepper(residual, bounds, options, n_residuals):
+def _box_lm_stepper(residual, bounds, options):
     """``(init, step)`` of the projected LM: ``init(p0)`` is a fresh state (no evaluation, so
     restarting a lane is free), ``step(state, args)`` one iteration (one residual and Jacobian)."""
     res = safe_residual(residual)
@@ -173,24 +177,22 @@ def _box_lm_stepper(residual, bounds, options, n_residuals):
     d = lo.shape[0]
 
     def linearise(u, args):
+        """``½‖r‖²``, ``Jᵀr``, ``JᵀJ`` and ``max |r|`` at ``u``."""
         def f(v):
             r = res(lo + width * v, args)
             return r, r
         jac, r = jax.jacfwd(f, has_aux=True)(u)
-        return r, jac
+        return 0.5 * jnp.sum(r * r), jac.T @ r, jac.T @ jac, jnp.max(jnp.abs(r))
 
     def init(p0):
         dtype = p0.dtype
         scalar = lambda v: jnp.asarray(v, dtype)  # noqa: E731
-        return _BoxState(jnp.clip((p0 - lo) / width, 0.0, 1.0), jnp.zeros(n_residuals, dtype),
-                         jnp.zeros((n_residuals, d), dtype), scalar(jnp.inf), jnp.zeros(d, dtype),
-                         scalar(1e-3), scalar(2.0), jnp.asarray(0), jnp.asarray(False),
-                         jnp.asarray(True))
+        return _BoxState(jnp.clip((p0 - lo) / width, 0.0, 1.0), scalar(jnp.inf), jnp.zeros(d, dtype),
+                         jnp.zeros((d, d), dtype), scalar(0.0), jnp.zeros(d, dtype), scalar(1e-3),
+                         scalar(2.0), jnp.asarray(0), jnp.asarray(False), jnp.asarray(True))
 
     def step(st, args):
-        u, r, jac, c, fresh = st.u, st.r, st.jac, st.cost, st.fresh
-        g = jac.T @ r
-        h = jac.T @ jac
+        u, g, h, c, fresh = st.u, st.g, st.h, st.cost, st.fresh
         active = ((u <= 0.0) & (g > 0.0)) | ((u >= 1.0) & (g < 0.0))
         free = (~active).astype(u.dtype)
         dmax = jnp.maximum(st.dmax, jnp.diag(h))
@@ -198,26 +200,30 @@ def _box_lm_stepper(residual, bounds, options, n_residuals):
         a = h * free[:, None] * free[None, :] + jnp.diag(jnp.where(active, 1.0, st.lam * damp))
         u_new = jnp.where(fresh, u, jnp.clip(u + jnp.linalg.solve(a, -g * free), 0.0, 1.0))
         s = u_new - u
-        r_new, jac_new = linearise(u_new, args)
-        c_new = 0.5 * jnp.sum(r_new * r_new)
+        c_new, g_new, h_new, rmax_new = linearise(u_new, args)
         predicted = -(g @ s) - 0.5 * (s @ (h @ s))
         rho = (c - c_new) / jnp.where(predicted > 0, predicted, jnp.inf)
         accept = fresh | ((rho > 1e-4) & jnp.isfinite(c_new))
         small = ((c - c_new <= options.ftol * c)
                  & (jnp.max(jnp.abs(s)) <= options.xtol * (options.xtol + jnp.max(jnp.abs(u)))))
         pick = lambda new, old: jnp.where(accept, new, old)  # noqa: E731
-        u, r, jac, c = pick(u_new, u), pick(r_new, r), pick(jac_new, jac), pick(c_new, c)
-        stationary = jnp.max(jnp.abs(jnp.clip(u - jac.T @ r, 0.0, 1.0) - u)) <= options.gtol
+        u, g, h, c, rmax = (pick(u_new, u), pick(g_new, g), pick(h_new, h), pick(c_new, c),
+                            pick(rmax_new, st.rmax))
+        stationary = jnp.max(jnp.abs(jnp.clip(u - g, 0.0, 1.0) - u)) <= options.gtol
         lam = jnp.where(fresh, st.lam, jnp.where(
             accept, st.lam * jnp.maximum(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3), st.lam * st.nu))
         nu = jnp.where(accept, 2.0, 2.0 * st.nu)
-        done = (accept & small & ~fresh) | stationary | (lam > 1e16)
+        # MINPACK's ftol test: neither the model nor the trial can lower the cost by more than
+        # ftol·C, so the iterate is a minimum to that precision even if the trial was rejected
+        # (without it, a converged run spends ~10 steps raising λ until it overflows the test).
+        flat = (predicted <= options.ftol * c) & (jnp.abs(c - c_new) <= options.ftol * c)
+        done = (~fresh & ((accept & small) | flat)) | stationary | (lam > 1e16)
         steps = st.steps + jnp.where(fresh, 0, 1)
-        return _BoxState(u, r, jac, c, dmax, lam, nu, steps, done, jnp.asarray(False))
+        return _BoxState(u, c, g, h, rmax, dmax, lam, nu, steps, done, jnp.asarray(False))
 
     def result(st):
         p = lo + width * st.u
-        finite = jnp.all(jnp.abs(st.r) < jnp.finfo(st.r.dtype).max ** 0.25) & jnp.isfinite(st.cost)
+        finite = (st.rmax < jnp.finfo(st.rmax.dtype).max ** 0.25) & jnp.isfinite(st.cost)
         ok = st.done & finite & jnp.all(jnp.isfinite(p))
         return LMResult(p, jnp.where(finite, 2.0 * st.cost, jnp.inf), st.steps, ok)
 
@@ -235,8 +241,7 @@ def box_lm(residual, p0, args, bounds, options=BoxLMOptions(), *, max_steps=100)
     """Projected LM on the box ``bounds = (lo, hi)`` from ``p0`` (see the module docstring).
     ``steps`` counts iterations; each costs one residual and one forward Jacobian."""
     p0, bounds, options = _prepare(p0, bounds, options)
-    n = jax.eval_shape(residual, p0, args).shape[0]
-    init, step, result = _box_lm_stepper(residual, bounds, options, n)
+    init, step, result = _box_lm_stepper(residual, bounds, options)
     final = jax.lax.while_loop(lambda st: ~st.done & (st.steps < max_steps),
                                lambda st: step(st, args), init(p0))
     return result(final)
@@ -254,8 +259,7 @@ def box_lm_queue(residual, starts, args, bounds, options=BoxLMOptions(), *, max_
     n_problems = starts.shape[0]
     lanes = min(lanes, n_problems)
     take = lambda i: jax.tree.map(lambda a: a[i], args)  # noqa: E731
-    n_res = jax.eval_shape(residual, starts[0], take(0)).shape[0]
-    init, step, result = _box_lm_stepper(residual, bounds, options, n_res)
+    init, step, result = _box_lm_stepper(residual, bounds, options)
     finished = lambda st: st.done | (st.steps >= max_steps)  # noqa: E731
     out0 = jax.vmap(lambda p: result(init(p)))(starts)
 
@@ -282,28 +286,36 @@ def box_lm_queue(residual, starts, args, bounds, options=BoxLMOptions(), *, max_
     return out
 
 
+def seed_starts(residual, bounds, key, args=None, *, n_starts=4, pop_size=20, search_iter=5):
+    """The ``n_starts`` best points (rows, best first) of a search on ``‖r‖²`` — a short
+    improved-TLBO run (``search_iter`` iterations on a class of ``pop_size``) or, with
+    ``search_iter = 0``, a plain uniform random search of ``pop_size`` points — and its number of
+    evaluations. These seed :func:`global_lm`'s LM runs."""
+    objective = sse_objective(residual)
+    if search_iter > 0:
+        run_ = run(ITLBO, objective, bounds, key, pop_size, search_iter, args=args)
+        population, fitness, n_evals = run_.state.population, run_.state.fitness, run_.n_evals
+    else:  # plain random search: one vmapped evaluation, no optimiser to compile
+        population = uniform_population(key, tuple(jnp.asarray(b) for b in bounds), pop_size)
+        fitness = evaluate(lambda p: objective(p, args), population)
+        n_evals = jnp.asarray(pop_size)
+    return population[jnp.argsort(fitness)[:n_starts]], n_evals
+
+
 def global_lm(residual, bounds, key, args=None, *, n_starts=4, pop_size=20, search_iter=5,
               search_args=None, max_steps=100, options=BoxLMOptions()):
-    """"Global LM": a short improved-TLBO search on ``‖r‖²`` (``search_iter`` iterations on a class
-    of ``pop_size``; ``search_iter = 0``: plain uniform random search of ``pop_size`` points) seeds
-    ``n_starts`` :func:`box_lm` runs from its best members; the lowest-SSE answer is returned.
+    """"Global LM": :func:`seed_starts` (a search on ``‖r‖²``) seeds ``n_starts`` :func:`box_lm`
+    runs from its best members; the lowest-SSE answer is returned.
 
     With ``search_args`` (e.g. a subsample of the data) the search *and* the multi-start LM use
     it, and only the best of them is polished by one :func:`box_lm` on ``args``: the expensive
     full-data Jacobians are then paid once, not ``n_starts`` times. Returns ``(LMResult,
     population evaluations)``; ``steps`` sums every LM run's steps."""
     sub = args if search_args is None else search_args
-    objective = sse_objective(residual)
-    if search_iter > 0:
-        run_ = run(ITLBO, objective, bounds, key, pop_size, search_iter, args=sub)
-        population, fitness, n_evals = run_.state.population, run_.state.fitness, run_.n_evals
-    else:  # plain random search: one vmapped evaluation, no optimiser to compile
-        population = uniform_population(key, tuple(jnp.asarray(b) for b in bounds), pop_size)
-        fitness = evaluate(lambda p: objective(p, sub), population)
-        n_evals = jnp.asarray(pop_size)
-    order = jnp.argsort(fitness)[:n_starts]
+    starts, n_evals = seed_starts(residual, bounds, key, sub, n_starts=n_starts,
+                                  pop_size=pop_size, search_iter=search_iter)
     solve = lambda p, a: box_lm(residual, p, a, bounds, options, max_steps=max_steps)  # noqa: E731
-    out = best_of(jax.vmap(solve, in_axes=(0, None))(population[order], sub))
+    out = best_of(jax.vmap(solve, in_axes=(0, None))(starts, sub))
     if search_args is not None:
         polish = solve(out.params, args)
         out = polish._replace(steps=polish.steps + out.steps)
