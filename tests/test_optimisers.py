@@ -195,6 +195,18 @@ def test_box_lm_matches_scipy_trf_on_noisy_polach_in_few_steps():
     assert bool(jnp.all((out.params >= 0) & (out.params <= 1)))
 
 
+def test_box_lm_restarted_at_its_minimum_stops_at_once():
+    """MINPACK's ftol test ends a converged run: restarted at its own answer, box LM stops within
+    a few steps instead of rejecting steps until λ overflows (here 6 steps without the test)."""
+    data = noisy_polach()
+    box = (jnp.zeros(5), jnp.ones(5))
+    first = box_lm(polach_residual, jnp.full(5, 0.5), data, box)
+    again = box_lm(polach_residual, first.params, data, box)
+    assert bool(again.success) and int(again.steps) <= 3
+    np.testing.assert_allclose(again.params, first.params, atol=1e-6)
+    assert float(again.sse) <= float(first.sse) * (1 + 1e-12)
+
+
 def test_fit_polach_batch_equals_separate_fits_and_stops_at_target():
     data = [polach_dataset(THETA), polach_dataset(THETA.at[2].set(0.25))]
     stacked = jax.tree.map(lambda *a: jnp.stack(a), *data)
