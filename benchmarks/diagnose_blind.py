@@ -11,7 +11,9 @@ code path. Reported: confusion matrix (true primary effect × verdict), false al
 recordings (k/n with a 95 % Clopper–Pearson interval), per effect top-1 accuracy in magnitude bins
 and above its documented detection threshold (:data:`jadhesion.diagnose.DETECTION_THRESHOLDS`),
 "truth in the reported set" (verdict or its indistinguishable set), the measured 90 % threshold,
-relative error of the recovered magnitude, base-fit parameter errors, seconds per diagnosis.
+relative error of the recovered magnitude, base-fit parameter errors, seconds per diagnosis, and
+top-1 accuracy above and below each recording's own predicted ``min_detectable`` magnitude
+(:mod:`jadhesion.diagnose.sensitivity`).
 
     python benchmarks/diagnose_blind.py [--n 220] [--null 80] [--seed 0] [--json]
     python benchmarks/diagnose_blind.py --from-cases benchmarks/results/diagnose_blind_cases.json
@@ -132,6 +134,11 @@ def summarise(cases) -> dict:
                 cand = next(x for x in c["diagnosis"]["candidates"] if x["name"] == name)
                 est, true = cand["params"][MAGNITUDE_PARAM[name]], c["effects"][0][1]
                 errors.append(abs(est - true) / abs(true))
+        # The recording's own prediction (diagnosis["sensitivity"]): is |m| above what it can see?
+        seen = [i for i, c in enumerate(single) if "sensitivity" in c["diagnosis"]]
+        limit = {i: single[i]["diagnosis"]["sensitivity"][name]["min_detectable"] for i in seen}
+        visible = [i for i in seen if limit[i] is not None and mags[i] >= limit[i]]
+        hidden = [i for i in seen if i not in visible]
         default = [i for i, c in enumerate(single) if not c.get("profile_varied")]
         varied = [i for i, c in enumerate(single) if c.get("profile_varied")]
         per_effect[name] = {
@@ -144,6 +151,8 @@ def summarise(cases) -> dict:
             "documented_threshold": documented,
             "top1_above_documented": _rate([hits[i] for i in above]),
             "in_set_above_documented": _rate([in_set[i] for i in above]),
+            "top1_above_min_detectable": _rate([hits[i] for i in visible]),
+            "top1_below_min_detectable": _rate([hits[i] for i in hidden]),
             "confused_with": {k: v for k, v in confusion[name].items() if v and k != name},
             "median_rel_error": float(np.median(errors)) if errors else None,
             "cases": [[m, bool(h), bool(s)] for m, h, s in zip(mags, hits, in_set)],
@@ -253,6 +262,9 @@ def report(summary, as_json: bool, out) -> int:
               f"{s['measured_threshold']} (in set {s['measured_threshold_in_set']}); above the "
               f"documented {s['documented_threshold']}: "
               + (f"{above['k']}/{above['n']}" if above["n"] else "-")
+              + f"; above / below the recording's min_detectable: "
+              + " / ".join(f"{r['k']}/{r['n']}" if r["n"] else "-"
+                           for r in (s["top1_above_min_detectable"], s["top1_below_min_detectable"]))
               + f"; median rel. error {'-' if err is None else f'{err:.3f}'}")
     print(f"single effects: {summary['single_effect']}")
     print(f"pairs: {summary['pairs']}")

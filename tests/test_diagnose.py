@@ -89,6 +89,14 @@ def test_clean_is_none_and_base_fit(clean):
     assert result["effects"] == []
     # generic starts still find the dry-rail optimum: the base fit is as good as the truth
     assert result["base"]["mae"] <= 1.02 * clean.truth["envelope"]["true_param_mae"]
+    # what the recording can see: a torque bias is a constant the saturated Polach curve absorbs
+    # (invisible at any catalogue magnitude), a radius error bends the curve (seen from 0.1 %)
+    seen = result["sensitivity"]
+    assert set(seen) == set(EFFECT_NAMES)
+    assert seen["torque_offset"]["absorbed"] > 0.99 and not seen["torque_offset"]["visible"]
+    assert seen["wheel_radius_error"]["visible"]
+    assert seen["wheel_radius_error"]["min_detectable"] < 0.002
+    assert "torque offset — a coasting run" in result["explanation"]
 
 
 def test_one_program_per_padded_length(clean):
@@ -125,7 +133,8 @@ def test_cli_json_and_report(tmp_path, capsys):
     path = save_recording(_raw(sim), sim.vehicle, tmp_path / "rec.csv")
     assert main(["diagnose", str(path), "--json", "--report", str(tmp_path / "rep")]) == 0
     doc = json.loads(capsys.readouterr().out)
-    for key in ("verdict", "effects", "candidates", "base", "extended", "explanation"):
+    for key in ("verdict", "effects", "candidates", "base", "extended", "explanation",
+                "sensitivity"):
         assert key in doc
     assert isinstance(doc["verdict"], str)
     assert {"name", "params", "mae", "heldout_mae", "delta_bic"} <= set(doc["candidates"][0])

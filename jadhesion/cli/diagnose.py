@@ -50,9 +50,11 @@ def run(args) -> int:
     print(f"verdict: {result['verdict']}" + (f"  (effects: {' + '.join(result['effects'])})"
                                              if len(result["effects"]) > 1 else ""))
     rows = [{"candidate": c["name"], "heldout_mae": c["heldout_mae"], "gain": c["gain"],
-             "delta_bic": c["delta_bic"]} for c in result["candidates"]]
+             "delta_bic": c["delta_bic"],
+             "detectable_from": result["sensitivity"][c["name"]]["min_detectable"]}
+            for c in result["candidates"]]
     rows.insert(0, {"candidate": "(base)", "heldout_mae": result["base"]["heldout_mae"]})
-    print(table(rows, ["candidate", "heldout_mae", "gain", "delta_bic"]))
+    print(table(rows, ["candidate", "heldout_mae", "gain", "delta_bic", "detectable_from"]))
     print(result["explanation"])
     if args.report:
         print(f"report: {result['report']}")

@@ -3,9 +3,10 @@ from the catalogue (DESIGN §3), model it, and show the held-out fit improve.
 
 Modules: :mod:`.signals` (the recording split at the observer), :mod:`.extensions` (the extended
 models), :mod:`.fitting` (vmapped LM + blocked CV), :mod:`.features` (residual analysis, starts,
-sparse discrepancy), :mod:`.select` (statistics, calibrated decision), :mod:`.diagnosis` (the
-pipeline), :mod:`.explain`, :mod:`.report`, :mod:`.calibrate`, :mod:`.thresholds` (documented
-detection thresholds).
+sparse discrepancy), :mod:`.select` (statistics, calibrated decision), :mod:`.sensitivity` (the
+smallest magnitude of each effect a recording could show), :mod:`.diagnosis` (the pipeline),
+:mod:`.explain`, :mod:`.report`, :mod:`.calibrate`, :mod:`.thresholds` (documented detection
+thresholds).
 """
 
 from .diagnosis import diagnose

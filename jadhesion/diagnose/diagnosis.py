@@ -7,7 +7,9 @@ Output (JSON-ready dict, DESIGN §3): ``verdict`` (the primary effect's name or 
 (effects this recording cannot separate from the verdict, with the separating experiment),
 ``second_round`` (gains of a second effect given the first, or null), ``base``/``extended``
 (``params``, ``mae``, ``heldout_mae``), ``generic`` (sparse discrepancy on
-the extended model's residual), ``residual_signatures`` (η² of the base residual per signal),
+the extended model's residual), ``sensitivity`` (per effect, the smallest magnitude this recording
+could detect and the run that would expose it: :mod:`.sensitivity`), ``residual_signatures`` (η² of
+the base residual per signal),
 ``explanation``; and ``_series`` (arrays for the report; not JSON, dropped by the CLI).
 """
 
@@ -19,7 +21,7 @@ import numpy as np
 from ..data.vehicle import Vehicle
 from ..models.polach import PARAM_NAMES
 from . import extensions as ext
-from . import features, fitting, select
+from . import features, fitting, select, sensitivity
 from .explain import explain
 from .signals import from_columns, lowpass
 
@@ -148,6 +150,8 @@ def diagnose(columns: dict, vehicle: Vehicle, name: str = "recording") -> dict:
     elif effects:
         final = names1.index(effects[0])
     ext_params = _row(table["params"][final], acts[final], sig, tau_th)
+    seen = sensitivity.detectable_magnitudes(table["params"][final], acts[final], u_change, padded,
+                                             n_valid, effects)
     t_ext, p_ext = (np.asarray(x) for x in _predict(table["params"][final], acts[final], sig))
     generic = _generic(sig, t_ext - p_ext, p_ext)
     generic["used"] = generic["gain"] >= select.GENERIC_THRESHOLD
@@ -164,6 +168,7 @@ def diagnose(columns: dict, vehicle: Vehicle, name: str = "recording") -> dict:
         "extended": {"effects": effects, "params": ext_params, "mae": float(table["mae"][final]),
                      "heldout_mae": float(table["heldout_mae"][final])},
         "generic": generic,
+        "sensitivity": seen,
         "residual_signatures": sigs,
         "strongest_signal": strongest,
         "n_eff": n_eff,

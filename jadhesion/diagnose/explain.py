@@ -38,8 +38,18 @@ def _effect_sentence(name: str, p: dict, vehicle: Vehicle) -> str:
     raise ValueError(name)
 
 
+def _blind_spots(sensitivity: dict) -> str:
+    """The effects this recording cannot see at their typical magnitudes, with the exposing run."""
+    blind = [(n, s) for n, s in sensitivity.items() if not s["visible"]]
+    if not blind:
+        return ""
+    return (" This recording cannot show these effects at their typical size; runs that would: "
+            + "; ".join(f"{n.replace('_', ' ')} — {s['experiment']}" for n, s in blind) + ".")
+
+
 def explain(result: dict, vehicle: Vehicle) -> str:
-    """The diagnosis in words: the verdict, what it means, the fit's improvement, ambiguities."""
+    """The diagnosis in words: the verdict, what it means, the fit's improvement, ambiguities and
+    the effects this recording cannot see."""
     base, extended = result["base"], result["extended"]
     if not result["effects"]:
         best = result["candidates"][0]
@@ -50,7 +60,7 @@ def explain(result: dict, vehicle: Vehicle) -> str:
             text += (" Residual structure remains that no catalogue effect explains; it follows "
                      f"{result['strongest_signal']} most closely, and a sparse discrepancy term "
                      f"lowers the held-out error by {result['generic']['gain']:.1%}.")
-        return text
+        return text + _blind_spots(result["sensitivity"])
     parts = [_effect_sentence(n, extended["params"], vehicle) for n in result["effects"]]
     text = "; and ".join(parts)
     text = text[0].upper() + text[1:] + (
@@ -60,4 +70,4 @@ def explain(result: dict, vehicle: Vehicle) -> str:
         alts = ", ".join(f"{d['name']} (separate with {d['experiment']})"
                          for d in result["indistinguishable"])
         text += f" This recording cannot rule out: {alts}."
-    return text
+    return text + _blind_spots(result["sensitivity"])

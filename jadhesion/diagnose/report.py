@@ -89,6 +89,9 @@ def write_report(result: dict, series: dict, directory) -> Path:
                      f"{c['delta_bic']:+.1f} | {c['evidence']['signal']} |"
                      for c in result["candidates"])
     params = ", ".join(f"{k} = {v:.4g}" for k, v in result["extended"]["params"].items())
+    seen = "\n".join(f"| {n} | {s['min_detectable']:.3g} | {100 * s['absorbed']:.0f} % | "
+                     f"{'yes' if s['visible'] else 'no: ' + s['experiment']} |"
+                     for n, s in result["sensitivity"].items())
     text = f"""# Diagnosis: {result['verdict']}
 
 {result['explanation']}
@@ -115,6 +118,15 @@ Extended parameters: {params}.
 
 Decision: an effect is accepted when it has the best held-out error, its gain exceeds the
 calibrated {100 * GAIN_THRESHOLD:.1f} % and ΔBIC < 0 (n_eff = {result['n_eff']:.0f}).
+
+## What this recording can see
+
+The smallest magnitude of each effect (catalogue units) whose signature, after the fitted model
+absorbs what it can, would reach the decision threshold (linearised at the final fit).
+
+| effect | smallest detectable | absorbed by the model | visible at typical magnitudes |
+|---|---|---|---|
+{seen}
 """
     path = out / "report.md"
     path.write_text(text)
