@@ -55,8 +55,13 @@ def polach_residual(theta, data: PolachDataset):
 
 
 def polach_mae(theta, data: PolachDataset):
-    """The paper's fitness (eq 15): mean absolute error of the adhesion coefficient."""
-    return jnp.mean(jnp.abs(polach_residual(theta, data)))
+    """The paper's fitness (eq 15): mean absolute error of the adhesion coefficient.
+
+    Written as ``|r| · (1/n)``, a matrix–vector product once a population is vmapped: XLA:CPU's
+    fused abs-and-reduce runs a 50 × 1000 population evaluation ~30 % slower (an improved-TLBO
+    iteration: 0.90 → 0.65 ms on 2 cores)."""
+    r = polach_residual(theta, data)
+    return jnp.abs(r) @ jnp.full(r.shape[-1], 1.0 / r.shape[-1], r.dtype)
 
 
 def _box(dtype):
