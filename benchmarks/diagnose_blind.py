@@ -34,17 +34,13 @@ from jadhesion.config import enable_compilation_cache, enable_x64
 from jadhesion.diagnose.calibrate import MAGNITUDE_RANGE, random_effects, run_case
 from jadhesion.diagnose.extensions import NAMES
 from jadhesion.diagnose.select import GAIN_THRESHOLD, effects_from
+from jadhesion.diagnose.sensitivity import MAGNITUDE_PARAM
 from jadhesion.diagnose.thresholds import DETECTION_THRESHOLDS, MIN_CASES, TARGET_ACCURACY
 from jadhesion.models.polach import PARAM_NAMES
 
 RESULTS = Path(__file__).resolve().parent / "results"
 #: Mix of the main cases: clean, one effect, two effects.
 P_CLEAN, P_PAIR = 0.15, 0.1
-#: The parameter of the extended model that estimates each effect's magnitude.
-MAGNITUDE_PARAM = {"rail_change": "drop", "wheel_radius_error": "delta_r",
-                   "signal_delay": "delay_s", "speed_dependence": "slope",
-                   "torque_offset": "offset", "thermal_softening": "softening",
-                   "load_transfer": "load_m"}
 
 
 def draw(rng) -> list:
