@@ -1,10 +1,10 @@
 """emcee posterior of the Polach parameters: speed and calibration.
 
-    python benchmarks/bench_mcmc.py                    # 32 walkers x 5000 steps, 1000-point dry recording
-    python benchmarks/bench_mcmc.py --coverage 100     # calibration study (synthetic + dry/wet/sand)
-    python benchmarks/bench_mcmc.py --no-speed --recordings 102 --likelihoods observer,ar1,gauss \
+    python -m benchmarks.bench_mcmc                    # 32 walkers x 5000 steps, 1000-point dry recording
+    python -m benchmarks.bench_mcmc --coverage 100     # calibration study (synthetic + dry/wet/sand)
+    python -m benchmarks.bench_mcmc --no-speed --recordings 102 --likelihoods observer,ar1,gauss \
         --save benchmarks/results/mcmc_coverage.json       # likelihoods on simulated recordings
-    python benchmarks/bench_mcmc.py --json
+    python -m benchmarks.bench_mcmc --json
 
 **Speed.** The same ``emcee.EnsembleSampler(vectorize=True)`` with the ensemble log-probability as
 one jitted, vmapped JAX call versus a NumPy implementation of the same log-posterior (the peer), both
@@ -39,7 +39,7 @@ jax.config.update("jax_enable_x64", True)
 
 from jadhesion.cli.common import emit_json, table  # noqa: E402
 from jadhesion.data.scenarios import SCENARIOS  # noqa: E402
-from jadhesion.identify.calibration import (QUANTITIES, binomial_band, coverage_study,  # noqa: E402
+from validation.calibration import (QUANTITIES, binomial_band, coverage_study,  # noqa: E402
                                             synthetic_dataset)
 from jadhesion.identify.ensemble import ChainTooShortWarning, run_ensemble  # noqa: E402
 from jadhesion.identify.laplace import initial_spread, lm_optimum  # noqa: E402

@@ -3,7 +3,7 @@
 For each of the 27 problems and both starts: the minimum log relative error (LRE, digits of
 agreement with the certified parameters, pass ≥ 4), LM steps, warm time, and the same for
 ``scipy.optimize.least_squares(method="lm")`` with an analytic (JAX) Jacobian. Compile time per
-problem is reported separately. Usage: ``python benchmarks/bench_nist.py [--json] [--data DIR]``.
+problem is reported separately. Usage: ``python -m benchmarks.bench_nist [--json] [--data DIR]``.
 """
 
 from __future__ import annotations
@@ -20,9 +20,7 @@ import numpy as np
 jax.config.update("jax_enable_x64", True)
 
 from jadhesion.identify.lm import lm_solve  # noqa: E402
-from jadhesion.identify.nist import MODELS, load_problem, log_relative_error  # noqa: E402
-
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "nist_strd"
+from validation.nist import DATA_DIR as DATA, MODELS, load_problem, log_relative_error  # noqa: E402
 
 
 def bench(problem):

@@ -3,7 +3,7 @@
 Compile time (first call) and warm time (best of ``--repeat`` further calls) are reported
 separately. Goal: warm ≤ 1 s for 1000 runs x 1200 steps on a laptop-class CPU.
 
-    python benchmarks/bench_online.py [--runs 1000] [--algorithm 1] [--repeat 3] [--json]
+    python -m benchmarks.bench_online [--runs 1000] [--algorithm 1] [--repeat 3] [--json]
 """
 
 from __future__ import annotations

@@ -4,7 +4,7 @@ Times are taken after a warm-up call; the first call's extra time is reported as
 Rows: improved-TLBO ms/iteration (pop 50, 1000 points) beside mealpy's TLBO and pyswarms' PSO when
 installed; improved-TLBO identification to a target MAE; warm LM (global and single start) beside
 scipy's ``least_squares`` on the same residuals; global-LM vs scipy random-start success rate;
-batched fits per second (64 datasets x 1000 points). Usage: ``python benchmarks/bench_optimisers.py [--json]``.
+batched fits per second (64 datasets x 1000 points). Usage: ``python -m benchmarks.bench_optimisers [--json]``.
 """
 
 from __future__ import annotations

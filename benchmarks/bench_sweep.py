@@ -1,6 +1,6 @@
 """Sweep throughput (fits/s): batch size, device count, and single-fit loops (ours and scipy's).
 
-    python benchmarks/bench_sweep.py [--method lm] [--seeds 16] [--chunks 4,16] [--devices 1,2]
+    python -m benchmarks.bench_sweep [--method lm] [--seeds 16] [--chunks 4,16] [--devices 1,2]
                                      [--samples 400] [--json]
 
 * ``sweep``: :func:`jadhesion.sweeps.run_sweep` end to end (simulate → observe → fit → peaks) on

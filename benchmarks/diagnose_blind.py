@@ -15,8 +15,8 @@ relative error of the recovered magnitude, base-fit parameter errors, seconds pe
 top-1 accuracy above and below each recording's own predicted ``min_detectable`` magnitude
 (:mod:`jadhesion.diagnose.sensitivity`).
 
-    python benchmarks/diagnose_blind.py [--n 220] [--null 80] [--seed 0] [--json]
-    python benchmarks/diagnose_blind.py --from-cases benchmarks/results/diagnose_blind_cases.json
+    python -m benchmarks.diagnose_blind [--n 220] [--null 80] [--seed 0] [--json]
+    python -m benchmarks.diagnose_blind --from-cases benchmarks/results/diagnose_blind_cases.json
 """
 
 from __future__ import annotations

@@ -1,20 +1,14 @@
-"""Strict test settings: float64, no silent rank promotion, fixed keys (see STYLE.md §7)."""
+"""Strict test settings: float64, no silent rank promotion, fixed keys (see STYLE.md §7).
+
+The tests need nothing outside the repository (reference data is vendored in ``validation/data``) and
+write nothing to the user's home: the CLI's compilation cache goes to a temporary folder.
+"""
 
 import os
-from pathlib import Path
+import tempfile
 
 import jax
-import pytest
 
+os.environ.setdefault("JADHESION_CACHE", tempfile.mkdtemp(prefix="jadhesion-test-cache-"))
 jax.config.update("jax_enable_x64", True)
 jax.config.update("jax_numpy_rank_promotion", "raise")
-
-REPO = Path(__file__).resolve().parents[1]
-SHARED = Path(os.environ.get("JADHESION_SHARED", REPO.parent / "shared"))
-
-
-@pytest.fixture
-def shared_dir() -> Path:
-    if not SHARED.exists():
-        pytest.fail(f"reference data not found at {SHARED} (set JADHESION_SHARED)")
-    return SHARED

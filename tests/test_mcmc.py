@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from jadhesion.identify.calibration import (LEVELS, QUANTITIES, binomial_band, coverage_study,
+from validation.calibration import (LEVELS, QUANTITIES, binomial_band, coverage_study,
                                             synthetic_dataset)
 from jadhesion.identify.ensemble import ChainTooShortWarning, Diagnostics, run_ensemble
 from jadhesion.identify.laplace import laplace_covariance, lm_optimum

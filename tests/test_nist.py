@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from jadhesion.identify.lm import lm_solve
-from jadhesion.identify.nist import MODELS, load_problem, log_relative_error
+from validation.nist import DATA_DIR, MODELS, load_problem, log_relative_error
 
 
 @functools.cache
@@ -21,8 +21,8 @@ def residual(model):
 
 
 @pytest.mark.parametrize("name", sorted(MODELS))
-def test_lm_certified_values_from_both_starts(name, shared_dir):
-    problem = load_problem(shared_dir / "data" / "nist_strd" / f"{name}.dat")
+def test_lm_certified_values_from_both_starts(name):
+    problem = load_problem(DATA_DIR / f"{name}.dat")
     data = (jnp.asarray(problem.x), jnp.asarray(problem.y))
     starts = jnp.asarray(np.stack(problem.starts))
     out = jax.vmap(lambda p0: lm_solve(residual(MODELS[name]), p0, data))(starts)
@@ -32,8 +32,8 @@ def test_lm_certified_values_from_both_starts(name, shared_dir):
         assert float(out.sse[k]) <= problem.certified_sse * (1 + 1e-6) + 1e-20
 
 
-def test_parser_reads_a_problem(shared_dir):
-    problem = load_problem(shared_dir / "data" / "nist_strd" / "BoxBOD.dat")
+def test_parser_reads_a_problem():
+    problem = load_problem(DATA_DIR / "BoxBOD.dat")
     assert problem.x.shape == (6,) and problem.y[0] == 109.0
     np.testing.assert_array_equal(problem.starts[0], [1.0, 1.0])
     np.testing.assert_array_equal(problem.starts[1], [100.0, 0.75])

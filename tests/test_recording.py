@@ -2,15 +2,14 @@
 file, the column and the row (DESIGN §3)."""
 
 import json
-import sys
-import types
 
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from jadhesion.data.dataset import PolachDataset
+from jadhesion.data.dataset import PolachDataset, to_dataset
+from jadhesion.data.observer import observe_adhesion
 from jadhesion.data.recording import (MAX_SPEED, Recording, load_recording, save_recording,
                                       vehicle_sidecar)
 from jadhesion.data.vehicle import LOCO_22E, Vehicle
@@ -100,7 +99,7 @@ def test_creepage_only_dataset_needs_no_time(tmp_path):
     mu = np.array([0.1, 0.3, -0.35, 0.33])
     save_recording({"creepage": s, "vehicle_speed": v, "adhesion": mu}, LOCO_22E,
                    tmp_path / "ds.csv")
-    ds = load_recording(tmp_path / "ds.csv").dataset()
+    ds = to_dataset(load_recording(tmp_path / "ds.csv"))
     assert isinstance(ds, PolachDataset)
     np.testing.assert_array_equal(np.asarray(ds.creep), s)
     np.testing.assert_array_equal(np.asarray(ds.adhesion), mu)
@@ -117,26 +116,19 @@ def test_slip_velocity_dataset(tmp_path):
         f"{float(a)!r},{float(b)!r},0.2,run {i}\n" for i, (a, b) in enumerate(zip(w, v))))
     rec = load_recording(tmp_path / "d.csv")
     assert "comment" not in rec.columns and "'comment'" in rec.notes[0]  # text column ignored
-    ds = rec.dataset()
+    ds = to_dataset(rec)
     np.testing.assert_array_equal(np.asarray(ds.slip), w)
     np.testing.assert_allclose(np.asarray(ds.creep), w / np.maximum(v, SPEED_FLOOR), rtol=1e-15)
 
 
-def test_raw_recording_runs_the_observer(tmp_path, monkeypatch):
-    calls = []
-
-    def observe_adhesion(time, wheel_speed, torque, vehicle, variant):
-        calls.append((variant, vehicle))
-        return np.full(len(time), 0.25)
-
-    fake = types.ModuleType("jadhesion.data.observer")
-    fake.observe_adhesion = observe_adhesion
-    monkeypatch.setitem(sys.modules, "jadhesion.data.observer", fake)
+def test_raw_recording_runs_the_observer_with_the_sidecar_vehicle(tmp_path):
     cols = _raw_columns(20)
-    save_recording(cols, LOCO_22E.replace(wheel_radius_m=0.59), tmp_path / "r.csv")
-    ds = load_recording(tmp_path / "r.csv").dataset(observer_variant="filtered")
-    assert calls[0][0] == "filtered" and calls[0][1].wheel_radius_m == 0.59
-    np.testing.assert_array_equal(np.asarray(ds.adhesion), 0.25)
+    vehicle = LOCO_22E.replace(wheel_radius_m=0.59)
+    save_recording(cols, vehicle, tmp_path / "r.csv")
+    ds = to_dataset(load_recording(tmp_path / "r.csv"), observer_variant="filtered_torque")
+    expected = observe_adhesion(cols["time"], cols["wheel_speed"], cols["traction_torque"], vehicle,
+                                "filtered_torque")
+    np.testing.assert_array_equal(np.asarray(ds.adhesion), np.asarray(expected))
     w = cols["wheel_speed"] - cols["vehicle_speed"]
     np.testing.assert_allclose(np.asarray(ds.creep), w / cols["vehicle_speed"], rtol=1e-14)
 

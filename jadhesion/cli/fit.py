@@ -24,11 +24,12 @@ def register(sub) -> None:
 def run(args) -> int:
     import jax
 
+    from ..data.dataset import to_dataset
     from ..data.recording import load_recording
     from ..identify.polach_fit import fit_polach
     from ..models.polach import PARAM_NAMES
 
-    dataset = load_recording(args.file).dataset()
+    dataset = to_dataset(load_recording(args.file))
     start = time.perf_counter()
     fit = jax.block_until_ready(fit_polach(dataset, args.method, jax.random.key(args.seed),
                                            pop_size=args.pop_size, max_iter=args.max_iter))

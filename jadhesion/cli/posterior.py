@@ -92,6 +92,7 @@ def _document(result, theta0, note="") -> dict:
 def run(args) -> int:
     import numpy as np
 
+    from ..data.dataset import to_dataset
     from ..data.recording import load_recording
     from ..identify.ensemble import ChainTooShortWarning
     from ..identify.laplace import initial_spread, lm_optimum
@@ -102,7 +103,7 @@ def run(args) -> int:
     if args.steps < 50:
         raise UserError(f"--steps must be at least 50, got {args.steps}")
     recording = load_recording(args.file)
-    data = recording.dataset()
+    data = to_dataset(recording)
     likelihood, obs, note = _choose_likelihood(recording, args.likelihood)
     theta0 = lm_optimum(data, obs=obs)
     spread = np.asarray(initial_spread(theta0, data, obs=obs))

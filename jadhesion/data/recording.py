@@ -92,45 +92,6 @@ class Recording:
     def has_adhesion(self) -> bool:
         return "adhesion" in self.columns
 
-    def dataset(self, observer_variant: str = "paper"):
-        """The fitting dataset (creep s, slip w, mu_hat, v, k_eps) as a :class:`PolachDataset`.
-
-        With an ``adhesion`` column it is used directly: creepage from ``creepage``, else from
-        ``slip_velocity`` (or ``wheel_speed − vehicle_speed``) through
-        :func:`jadhesion.models.kinematics.creepage`; the slip velocity from ``slip_velocity``, else
-        ``creepage · max(|v|, floor)`` (the inverse of that creepage). Without it, the adhesion observer
-        (:func:`jadhesion.data.observer.observe_adhesion`, ``observer_variant``) runs on the raw
-        signals and creep comes from the wheel and vehicle speeds.
-        """
-        import jax.numpy as jnp
-
-        from ..models import kinematics
-        from .dataset import PolachDataset
-
-        cols = self.columns
-        v = np.asarray(cols["vehicle_speed"])
-        if self.has_adhesion:
-            mu = np.asarray(cols["adhesion"])
-            if "slip_velocity" in cols:
-                w = np.asarray(cols["slip_velocity"])
-            elif "creepage" not in cols:
-                w = np.asarray(kinematics.slip_velocity(cols["wheel_speed"], v))
-            if "creepage" in cols:
-                s = np.asarray(cols["creepage"])
-                if "slip_velocity" not in cols:
-                    w = s * np.maximum(np.abs(v), kinematics.SPEED_FLOOR)
-            else:
-                s = np.asarray(kinematics.creepage(w, v))
-        else:
-            from .observer import observe_adhesion  # written alongside; imported lazily
-
-            mu = observe_adhesion(cols["time"], cols["wheel_speed"], cols["traction_torque"],
-                                  self.vehicle, observer_variant)
-            w = np.asarray(kinematics.slip_velocity(cols["wheel_speed"], v))
-            s = np.asarray(kinematics.creepage(w, v))
-        return PolachDataset(creep=jnp.asarray(s), slip=jnp.asarray(w), adhesion=jnp.asarray(mu),
-                             vehicle_speed=jnp.asarray(v), k_eps=jnp.asarray(self.vehicle.k_eps()))
-
 
 # ----------------------------------------------------------------------------------------- loading
 

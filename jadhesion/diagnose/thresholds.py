@@ -1,7 +1,7 @@
 """Documented detection thresholds: the concealed magnitude above which ``jadhesion diagnose``
 names each effect correctly (top-1) in at least :data:`TARGET_ACCURACY` of blind simulated cases.
 
-How it was measured: ``python benchmarks/diagnose_blind.py`` (saved in
+How it was measured: ``python -m benchmarks.diagnose_blind`` (saved in
 ``benchmarks/results/diagnose_blind.json``) simulates single-effect recordings with log-uniform
 magnitudes over :data:`jadhesion.diagnose.calibrate.MAGNITUDE_RANGE`, random scenario, seed, vehicle
 and (30 % of them) driving profile, and diagnoses each blind. For every effect the cases are sorted

@@ -9,6 +9,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.gridspec import GridSpec
 
+from ..data.dataset import to_dataset
 from ..data.vehicle import LOCO_22E
 
 _KMH = 3.6
@@ -58,7 +59,7 @@ def recording_overview(recording_or_columns, mu_hat=None, truth_params=None,
         mu_hat = cols["adhesion"]
     elif mu_hat is None and not isinstance(recording_or_columns, Mapping):
         try:
-            mu_hat = np.asarray(recording_or_columns.dataset().adhesion)
+            mu_hat = np.asarray(to_dataset(recording_or_columns).adhesion)
         except ImportError:  # the observer is not available
             mu_hat = None
     mu_hat = None if mu_hat is None else np.asarray(mu_hat, dtype=np.float64)

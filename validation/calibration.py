@@ -16,10 +16,10 @@ from typing import Callable, NamedTuple, Optional
 import jax.numpy as jnp
 import numpy as np
 
-from ..data.dataset import PolachDataset
-from ..models.polach import PARAM_NAMES, adhesion_peak, polach_adhesion
-from .laplace import initial_spread, lm_optimum
-from .mcmc import ChainTooShortWarning, sample_posterior
+from jadhesion.data.dataset import PolachDataset
+from jadhesion.models.polach import PARAM_NAMES, adhesion_peak, polach_adhesion
+from jadhesion.identify.laplace import initial_spread, lm_optimum
+from jadhesion.identify.mcmc import ChainTooShortWarning, sample_posterior
 
 LEVELS = (0.9, 0.5)
 # Faces of the default prior box for the 5 parameters; the derived quantities have none.

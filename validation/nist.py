@@ -13,6 +13,9 @@ from typing import NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
+#: The vendored StRD files (public domain, NIST/ITL), one ``.dat`` per problem.
+DATA_DIR = Path(__file__).resolve().parent / "data" / "nist_strd"
+
 _PI = jnp.pi
 
 
