@@ -13,7 +13,7 @@ import sys
 
 from .common import UserError
 
-COMMANDS = ("simulate", "fit", "reproduce", "posterior", "diagnose", "sweep")
+COMMANDS = ("simulate", "fit", "reproduce", "posterior", "diagnose", "sweep", "online")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -24,6 +24,10 @@ One step ``k`` does, in this order:
 4. weight ``w_k = 1 − ω η_k / 2`` (``ω = 1``: the paper's ``(2 − η)/2``; ``ω = 0``: ``w = 1``);
 5. update ``H, f`` and solve for ``x(k)``.
 
+A sample flagged as not informative (``valid = False``: standstill, coasting, non-finite) is
+skipped: the state is carried unchanged and the trace repeats the estimate with ``η = 1``.
+:func:`final_status` grades a finished run (:class:`~jadhesion.status.Status`).
+
 Every coefficient lives in :class:`OnlineParams` (arrays, so a sensitivity study vmaps over them).
 """
 
@@ -35,7 +39,10 @@ import jax
 import jax.numpy as jnp
 from jax import lax
 
+from ..data.dataset import PolachDataset
 from ..models.kiencke import DEFAULT_SLOPE, kiencke_adhesion, kiencke_regressors
+from ..status import Status
+from .kiencke_fit import MIN_SAMPLES, fit_kiencke, informative
 
 
 class OnlineParams(NamedTuple):
@@ -116,11 +123,13 @@ class OnlineState(NamedTuple):
 
 
 class OnlineInfo(NamedTuple):
-    """Per-step trace: estimates, peak adhesion ``a_s/(p1 + 2√p2)``, η_k, SNR matrix and hit flag."""
+    """Per-step trace: estimates, peak adhesion ``a_s/(p1 + 2√p2)``, optimum creep ``1/√p2``,
+    η_k, SNR matrix and hit flag."""
 
     p1: jax.Array
     p2: jax.Array
     mu_max: jax.Array
+    creep_opt: jax.Array
     eta: jax.Array
     snr: jax.Array
     snr_hit: jax.Array
@@ -155,9 +164,18 @@ def peak_adhesion(x, a_s):
     return a_s / (x[..., 0] + 2.0 * jnp.sqrt(jnp.maximum(x[..., 1], 0.0)))
 
 
+def optimum_creep(x):
+    """``λ_m = 1/√p2`` [-]; ``+inf`` (no optimum, never NaN) where ``p2 ≤ 0``."""
+    p2 = x[..., 1]
+    return jnp.where(p2 > 0, 1.0 / jnp.sqrt(jnp.where(p2 > 0, p2, 1.0)), jnp.inf)
+
+
 def step(params: OnlineParams, state: OnlineState, obs):
-    """One identifier step on ``obs = (λ(k), μ(k))``; returns ``(state, info)`` (module docstring)."""
-    lam, mu = obs
+    """One identifier step on ``obs = (λ(k), μ(k))`` or ``(λ(k), μ(k), valid(k))``; returns
+    ``(state, info)`` (module docstring)."""
+    lam, mu, valid = obs if len(obs) == 3 else (*obs, True)
+    lam = jnp.where(valid, lam, 0.0)
+    mu = jnp.where(valid, mu, 0.0)
     z, u = kiencke_regressors(lam, mu, params.a_s)
     mu_hat = kiencke_adhesion(lam, state.x[0], state.x[1], params.a_s)
     eta = jnp.maximum(params.eta_min, params.eta_max - params.kp * jnp.abs(mu_hat - mu))
@@ -172,18 +190,82 @@ def step(params: OnlineParams, state: OnlineState, obs):
     x = _solve_spd2(h + params.delta * jnp.eye(2, dtype=h.dtype), params.delta * state.x - f)
     hist = jnp.concatenate([state.h[None], state.h_hist[:-1]])
     new = OnlineState(h, f, x, hist, state.k + 1)
-    return new, OnlineInfo(x[0], x[1], peak_adhesion(x, params.a_s), eta, s, hit)
+    new = jax.tree.map(lambda a, b: jnp.where(valid, a, b), new, state)
+    eta = jnp.where(valid, eta, 1.0)
+    return new, OnlineInfo(new.x[0], new.x[1], peak_adhesion(new.x, params.a_s),
+                           optimum_creep(new.x), eta, s, hit & valid)
+
+
+@jax.jit
+def run(params: OnlineParams, lam, mu, valid) -> tuple[OnlineState, OnlineInfo]:
+    """The identifier over ``λ (K,)``, ``μ (K,)``, ``valid (K,)`` (bool) with one ``lax.scan``;
+    returns the final state and the per-step trace (K, …)."""
+    def body(state, obs):
+        return step(params, state, obs)
+
+    return lax.scan(body, init(params), (lam, mu, valid))
 
 
 @jax.jit
 def identify(params: OnlineParams, lam, mu) -> OnlineInfo:
-    """Run the identifier over a record ``λ (K,)``, ``μ (K,)`` with one ``lax.scan``; trace (K, …).
+    """Run the identifier over a record ``λ (K,)``, ``μ (K,)`` (every sample used); trace (K, …).
 
     Pure and jitted: ``jax.vmap(identify, (None, 0, 0))`` batches noise seeds,
     ``jax.vmap(identify, (0, None, None))`` batches coefficient sets.
     """
-    def body(state, obs):
-        return step(params, state, obs)
+    return run(params, lam, mu, jnp.ones(lam.shape, bool))[1]
 
-    _, trace = lax.scan(body, init(params), (lam, mu))
-    return trace
+
+#: Smallest reciprocal condition number ``λ_min/λ_max`` of the final H graded well-conditioned.
+MIN_RCOND = 1e-10
+
+
+def final_status(state: OnlineState):
+    """``CONVERGED`` when the run ended with finite estimates and a finite information matrix whose
+    reciprocal condition number is at least :data:`MIN_RCOND`; ``NONFINITE`` when anything is
+    non-finite; ``SINGULAR`` otherwise (too little excitation: e.g. constant creep, or no
+    informative sample at all). An int32 code (jit/vmap friendly)."""
+    finite = jnp.all(jnp.isfinite(state.h)) & jnp.all(jnp.isfinite(state.x))
+    ev = jnp.linalg.eigvalsh(jnp.where(finite, state.h, 0.0))
+    well = (ev[0] > 0) & (ev[0] >= MIN_RCOND * ev[-1])
+    return jnp.where(~finite, Status.NONFINITE,
+                     jnp.where(well, Status.CONVERGED, Status.SINGULAR)).astype(jnp.int32)
+
+
+#: The identifiers offered on recordings: the paper's two algorithms and a classic RLS (λ = 0.98).
+ALGORITHMS = {"1": algorithm1_params, "2": algorithm2_params, "rls": rls_params}
+
+
+class Tracked(NamedTuple):
+    """Online identification of one dataset: ``a_s`` used [-], the trace (K, …), ``used`` (K,)
+    informative-sample flags, the final :class:`Status` code, and the offline fit that gave
+    ``a_s`` (``None`` when ``a_s`` was given)."""
+
+    a_s: jax.Array
+    trace: OnlineInfo
+    used: jax.Array
+    status: jax.Array
+    slope_fit: object
+
+
+def track_dataset(data: PolachDataset, algorithm: str = "1", a_s=None, key=None) -> Tracked:
+    """Paper 000's identification on a dataset (creep λ, observed μ̂), sample by sample.
+
+    ``algorithm``: ``"1"``, ``"2"`` or ``"rls"`` (:data:`ALGORITHMS`, default coefficients).
+    Samples that are not informative (:func:`.kiencke_fit.informative`: standstill ``|v| < 0.1``
+    m/s, coasting ``|μ̂| < 0.02``, non-finite) are skipped. ``a_s`` [-]: when ``None`` it is
+    estimated from the data as the initial slope of Kiencke's curve fitted offline with ``p1, p2``
+    by global LM on the informative samples (:func:`.kiencke_fit.fit_kiencke`, ``key``).
+    Status ``NOT_RUN`` with fewer than :data:`.kiencke_fit.MIN_SAMPLES` informative samples.
+    """
+    if algorithm not in ALGORITHMS:
+        raise ValueError(f"unknown algorithm {algorithm!r}; choose one of {', '.join(ALGORITHMS)}")
+    used = informative(data) > 0
+    slope_fit = None
+    if a_s is None:
+        slope_fit = fit_kiencke(data, "lm", key)
+        a_s = slope_fit.params[2]
+    params = ALGORITHMS[algorithm](a_s=a_s)
+    state, trace = run(params, data.creep, data.adhesion, used)
+    status = jnp.where(jnp.sum(used) < MIN_SAMPLES, Status.NOT_RUN, final_status(state))
+    return Tracked(params.a_s, trace, used, status.astype(jnp.int32), slope_fit)

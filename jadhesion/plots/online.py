@@ -40,3 +40,36 @@ def figure(bands: dict, truth, a_s=DEFAULT_SLOPE):
     axes[-1].set_xlabel("step k")
     axes[0].set_title("Online Kiencke identification: Monte Carlo median and 5–95 % band")
     return fig
+
+
+def recording_figure(time, mu_hat, creep, trace, used, title="", time_label="time [s]"):
+    """The tracked optimum over a recording: top, observed |μ̂| (grey dots; skipped samples lighter)
+    with the tracked peak adhesion μ_m; middle, |creep| (log scale) with the tracked optimum creep λ_m
+    (a gap where ``p2 ≤ 0``: no optimum); bottom,
+    the forgetting factor η. ``trace`` is an :class:`~jadhesion.identify.online.OnlineInfo`."""
+    time, mu_hat, creep, used = map(np.asarray, (time, mu_hat, creep, used))
+    mu_hat, creep = np.abs(mu_hat), np.abs(creep)  # braking: magnitudes (both models are odd)
+    fig, axes = plt.subplots(3, 1, figsize=(9, 8), sharex=True, constrained_layout=True,
+                             height_ratios=(3, 2, 1))
+    for ax, obs, est, name, label in ((axes[0], mu_hat, trace.mu_max, "observed $\\hat\\mu$",
+                                       "tracked peak $\\mu_m$"),
+                                      (axes[1], creep, trace.creep_opt, "creep $\\lambda$",
+                                       "tracked optimum creep $\\lambda_m$ (gap: no optimum)")):
+        ax.plot(time[used], obs[used], ".", ms=2, color="0.45", label=name)
+        ax.plot(time[~used], obs[~used], ".", ms=2, color="0.85", label="skipped (standstill, coasting)")
+        est = np.asarray(est, dtype=float)
+        ax.plot(time, np.where(np.isfinite(est), est, np.nan), color="tab:red", lw=1.4, label=label)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, loc="lower right")
+    top = np.quantile(mu_hat[used], 0.995) if used.any() else 1.0
+    axes[0].set_ylim(0.0, 1.3 * top)
+    axes[0].set_ylabel("|adhesion| [-]")
+    axes[1].set_yscale("log")
+    axes[1].set_ylim(max(np.quantile(creep[used], 0.005), 1e-4) / 2 if used.any() else 1e-4, 1.5)
+    axes[1].set_ylabel("|creep| [-]")
+    axes[2].plot(time, np.asarray(trace.eta), color="tab:blue", lw=0.8)
+    axes[2].set_ylabel("forgetting $\\eta$")
+    axes[2].set_xlabel(time_label)
+    axes[2].grid(alpha=0.3)
+    axes[0].set_title(title)
+    return fig
