@@ -106,7 +106,8 @@ RANGE_QUANTILES = (0.005, 0.995)
 def envelope(result) -> dict:
     """Envelope statistics of a simulated recording, in the paper's units (km/h for speeds).
 
-    Returns ``mean_speed_kmh``, ``max_slip_kmh``, ``max_creep``, ``mu_low``/``mu_high`` (the
+    Returns ``mean_speed_kmh``, ``max_slip_kmh``, ``max_creep`` (magnitudes: braking tests
+    have negative slip), ``mu_low``/``mu_high`` (the
     :data:`RANGE_QUANTILES` of ``mu_hat``), ``mu_min``/``mu_max`` (raw), ``mu_mean``, and
     ``true_param_mae``: mean |Polach(true params; recorded s, w) − mu_hat|, the error a perfect
     identification would reach on this recording.
@@ -121,8 +122,8 @@ def envelope(result) -> dict:
     low, high = np.quantile(mu_hat, RANGE_QUANTILES)
     return {
         "mean_speed_kmh": float(np.mean(cols["vehicle_speed"]) / KMH),
-        "max_slip_kmh": float(np.max(cols["slip_velocity"]) / KMH),
-        "max_creep": float(np.max(cols["creepage"])),
+        "max_slip_kmh": float(np.max(np.abs(cols["slip_velocity"])) / KMH),
+        "max_creep": float(np.max(np.abs(cols["creepage"]))),
         "mu_low": float(low), "mu_high": float(high),
         "mu_min": float(mu_hat.min()), "mu_max": float(mu_hat.max()),
         "mu_mean": float(np.mean(mu_hat)),

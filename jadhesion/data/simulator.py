@@ -13,7 +13,8 @@ integral [N·m], thermal state [W]). With true rolling radius ``r``, slip ``w = 
 choice, the paper does not describe it; it keeps the speed at walking pace like the paper's tests):
 a speed-regulated load (dynamometer car / load locomotive in dynamic brake) whose drawbar force is
 the planned pull with a proportional speed droop ``δ`` = :data:`LOAD_DROOP`:
-``F_load = F_plan(t) (1 + (v − v_ref)/(δ v_ref))``,
+``F_load = F_plan(t) (1 + sgn(F_plan) (v − v_ref)/(δ v_ref))`` (in a braking test the load pushes,
+``F_plan < 0``, and must still pull back when the speed rises),
 ``F_plan = n N mu_plan − F_res(v_ref) − M a_ref``,
 ``mu_plan`` the effect-free curve along the creep reference. Without effects ``v = v_ref``; an
 effect that changes the tractive effort by a fraction f shifts the speed by about ``δ f v_ref``.
@@ -54,6 +55,7 @@ from ..models.kinematics import creepage
 from ..models.polach import PARAM_NAMES, polach_adhesion
 from .dataset import PolachDataset
 from .observer import observer_core
+from .recording import vehicle_sidecar
 from .scenarios import envelope, get_scenario
 from .vehicle import GRAVITY, LOCO_22E, Vehicle
 
@@ -95,8 +97,9 @@ class SimulationResult:
     latent: dict
 
 
-def _constants(scenario, vehicle: Vehicle, mags, n_samples: int, noise: bool) -> dict:
-    duration = (n_samples - 1) * SAMPLE_PERIOD
+def _constants(scenario, vehicle: Vehicle, mags, n_samples: int, noise: bool,
+               period: float = SAMPLE_PERIOD, braking: bool = False) -> dict:
+    duration = (n_samples - 1) * period
     v_exc = scenario.max_slip / scenario.max_creep
     at = 0.5 + (v_exc / scenario.mean_speed - 1.0) / scenario.speed_ramp
     t_main = duration * float(np.clip(at, 0.1, 0.9))
@@ -112,7 +115,7 @@ def _constants(scenario, vehicle: Vehicle, mags, n_samples: int, noise: bool) ->
              minor_peak=scenario.minor_peak,
              minor_mask=(np.arange(MAX_MINOR) < scenario.minor_excursions).astype(float),
              torque_noise=scenario.torque_noise * noise, speed_noise=scenario.speed_noise * noise,
-             mags=mags)
+             mags=mags, period=period, sign=-1.0 if braking else 1.0)
     return jax.tree_util.tree_map(jnp.asarray, c)
 
 
@@ -131,7 +134,8 @@ def _profile(key, c):
 
 
 def _creep_ref(t, c, prof):
-    """Creep reference ``s_ref(t)`` [-]: smoothstep ramp-in, log-normal wander, cos² excursions."""
+    """Creep reference ``s_ref(t)`` [-]: smoothstep ramp-in, log-normal wander, cos² excursions;
+    negated for a braking test (``c["sign"] = −1``: negative creep, adhesion and torque)."""
     x = jnp.clip(t / c["ramp_time"], 0.0, 1.0)
     ramp = x * x * (3.0 - 2.0 * x)
     base = c["creep_start"] + (c["creep_base"] - c["creep_start"]) * ramp
@@ -140,7 +144,7 @@ def _creep_ref(t, c, prof):
     u = (t - prof["exc_times"]) / c["exc_width"]
     bumps = jnp.where(jnp.abs(u) < 1.0, jnp.cos(0.5 * jnp.pi * u) ** 2, 0.0)
     heights = jnp.maximum(prof["exc_peaks"] - c["creep_base"], 0.0)
-    return base * jnp.exp(c["wander"] * ramp * wander) + jnp.sum(heights * bumps)
+    return c["sign"] * (base * jnp.exp(c["wander"] * ramp * wander) + jnp.sum(heights * bumps))
 
 
 def _speed_ref(t, c):
@@ -193,7 +197,8 @@ def _contact(y, ref, torque, c):
 def _rhs(y, ref, c):
     torque, error = _controller(y, ref, c)
     slip, _, mu, n1, radius = _contact(y, ref, torque, c)
-    f_load = ref["f_plan"] * (1.0 + (y[1] - ref["v_ref"]) / (LOAD_DROOP * ref["v_ref"]))
+    droop = jnp.sign(ref["f_plan"]) * (y[1] - ref["v_ref"]) / (LOAD_DROOP * ref["v_ref"])
+    f_load = ref["f_plan"] * (1.0 + droop)  # a pushing load (braking, F_plan < 0) droops too
     return jnp.stack([
         (torque - mu * n1 * radius) / c["inertia"],
         (c["n_axles"] * mu * c["weight"] - _resistance(y[1], c) - f_load) / c["mass"],
@@ -239,7 +244,7 @@ def _simulate_core(key, c, n_samples: int, substeps: int = SUBSTEPS):
     """Pure simulation: key and constants → recorded columns and latent signals (jnp arrays)."""
     k_prof, k_noise = jax.random.split(key)
     prof = _profile(k_prof, c)
-    h = SAMPLE_PERIOD / substeps
+    h = c["period"] / substeps
     t_fine = h * jnp.arange((n_samples - 1) * substeps + 1, dtype=c["duration"].dtype)
     ref = jax.vmap(lambda t: _reference(t, c, prof))(t_fine)
     v0, _ = _speed_ref(t_fine[0], c)
@@ -283,19 +288,24 @@ _simulate_jit = jax.jit(jax.vmap(_simulate_core, in_axes=(0, None, None, None)),
                         static_argnums=(2, 3))
 
 
-def _run(scenario, seeds, effects, n_samples, vehicle, noise):
+def _run(scenario, seeds, effects, n_samples, vehicle, noise, period=SAMPLE_PERIOD, braking=False):
     scenario = get_scenario(scenario)
     n = DEFAULT_SAMPLES if n_samples is None else int(n_samples)
     if n < 100:
         raise ValueError(f"n_samples must be at least 100, got {n}")
     mags = fx.magnitudes(effects)
-    c = _constants(scenario, vehicle, mags, n, noise)
+    c = _constants(scenario, vehicle, mags, n, noise, period, braking)
     keys = jax.vmap(jax.random.PRNGKey)(jnp.asarray(seeds))
-    columns, latent = _simulate_jit(keys, c, n, SUBSTEPS)
+    columns, latent = _simulate_jit(keys, c, n, substeps_for(period))
     return scenario, mags, c, columns, latent
 
 
-def _truth(scenario, seed, mags, vehicle, duration) -> dict:
+def substeps_for(period: float) -> int:
+    """Integrator steps per sample: the sample period [s] over :data:`INTERNAL_STEP`, at least 1."""
+    return max(1, round(period / INTERNAL_STEP))
+
+
+def _truth(scenario, seed, mags, vehicle, duration, period=SAMPLE_PERIOD, braking=False) -> dict:
     active = {}
     for name, mag in zip(fx.EFFECT_NAMES, mags):
         if mag != 0.0:
@@ -314,19 +324,24 @@ def _truth(scenario, seed, mags, vehicle, duration) -> dict:
         "k_eps": vehicle.k_eps(), "effects": active,
         "noise": {"torque_nm": scenario.torque_noise, "speed_mps": scenario.speed_noise},
         "controller": {"kp": KP, "ki": KI, "load_droop": LOAD_DROOP},
-        "sample_period_s": SAMPLE_PERIOD, "internal_step_s": INTERNAL_STEP,
+        "sample_period_s": period, "internal_step_s": period / substeps_for(period),
+        "rate_hz": 1.0 / period, "duration_s": duration, "test": "braking" if braking else "traction",
+        "vehicle": vehicle_sidecar(vehicle),
     }
 
 
 def simulate_many(scenario, seeds: Sequence[int], effects=(), n_samples=None, *,
-                  vehicle: Vehicle = LOCO_22E, noise: bool = True) -> list:
+                  vehicle: Vehicle = LOCO_22E, noise: bool = True,
+                  sample_period: float = SAMPLE_PERIOD, braking: bool = False) -> list:
     """:func:`simulate` for several seeds in one vmapped call; a list of results."""
-    scenario, mags, c, columns, latent = _run(scenario, seeds, effects, n_samples, vehicle, noise)
+    scenario, mags, c, columns, latent = _run(scenario, seeds, effects, n_samples, vehicle, noise,
+                                              sample_period, braking)
     results = []
     for i, seed in enumerate(seeds):
         result = SimulationResult(
             columns={k: np.asarray(v[i]) for k, v in columns.items()}, vehicle=vehicle,
-            truth=_truth(scenario, seed, mags, vehicle, float(c["duration"])),
+            truth=_truth(scenario, seed, mags, vehicle, float(c["duration"]), sample_period,
+                         braking),
             latent={k: np.asarray(v[i]) for k, v in latent.items()})
         result.truth["envelope"] = envelope(result)
         results.append(result)
@@ -334,7 +349,8 @@ def simulate_many(scenario, seeds: Sequence[int], effects=(), n_samples=None, *,
 
 
 def simulate(scenario, seed: int = 0, effects=(), n_samples=None, *, vehicle: Vehicle = LOCO_22E,
-             noise: bool = True) -> SimulationResult:
+             noise: bool = True, sample_period: float = SAMPLE_PERIOD,
+             braking: bool = False) -> SimulationResult:
     """Simulate one traction test recording.
 
     Args:
@@ -342,14 +358,19 @@ def simulate(scenario, seed: int = 0, effects=(), n_samples=None, *, vehicle: Ve
         seed: PRNG seed (profile wander, minor excursions, sensor noise).
         effects: ``[(name, magnitude) | name | "name=magnitude"]``, names from
             :data:`~..models.effects.EFFECTS`.
-        n_samples: samples at :data:`SAMPLE_PERIOD` (default :data:`DEFAULT_SAMPLES`, 40 s).
+        n_samples: samples (default :data:`DEFAULT_SAMPLES`, 40 s at the default rate).
         vehicle: the locomotive (its nominal radius is the recorded one).
         noise: ``False`` gives noise-free sensors.
+        sample_period: recording sample period [s] (default :data:`SAMPLE_PERIOD`, 50 Hz); the
+            integrator keeps an internal step near :data:`INTERNAL_STEP` (:func:`substeps_for`).
+        braking: a braking test: the creep reference is negated (negative creep, adhesion and
+            torque; the test load pushes), everything else as in traction.
 
     Raises:
         InputError: unknown scenario or effect, bad magnitude.
     """
-    return simulate_many(scenario, [seed], effects, n_samples, vehicle=vehicle, noise=noise)[0]
+    return simulate_many(scenario, [seed], effects, n_samples, vehicle=vehicle, noise=noise,
+                         sample_period=sample_period, braking=braking)[0]
 
 
 def _dataset(columns, k_eps) -> PolachDataset:
