@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import sys
 
-from .common import emit_json, require_at_least
+from ..experiments import online, table2
+from .common import Progress, emit_json, require_at_least
 
 
 def register(sub) -> None:
@@ -26,9 +27,18 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
-def run(args) -> int:
-    from ..experiments import online, table2
+def _bar(label: str, enabled: bool):
+    """A ``progress(done, total)`` callback drawing a :class:`Progress` line on stderr."""
+    bars = []
 
+    def update(done: int, total: int) -> None:
+        if not bars:
+            bars.append(Progress(total, label, "configs", enabled=enabled))
+        bars[0].update(done - bars[0].done)
+    return update
+
+
+def run(args) -> int:
     require_at_least("reproduce", 1, seeds=args.seeds, runs=args.runs)
     require_at_least("reproduce", table2.MCMC_MIN_STEPS, mcmc_steps=args.mcmc_steps)
     out = {}
@@ -37,7 +47,8 @@ def run(args) -> int:
         out["table2"] = table2.run(seeds=args.seeds, plot_dir=args.plot, progress=progress,
                                    mcmc=not args.no_mcmc, mcmc_steps=args.mcmc_steps)
     if args.target in (None, "online"):
-        out["online"] = online.run(runs=args.runs, plot_dir=args.plot, progress=progress)
+        out["online"] = online.run(runs=args.runs, plot_dir=args.plot,
+                                   progress=_bar("online Monte Carlo", progress))
     if args.json:
         emit_json(out[args.target] if args.target else out)
     else:
