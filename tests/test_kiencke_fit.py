@@ -87,3 +87,10 @@ def test_vmap_over_datasets_matches_single_fits():
 def test_unknown_method():
     with pytest.raises(ValueError, match="unknown method"):
         kf.fit_kiencke(_dataset(), "nelder")
+
+
+def test_fit_document_contract():
+    doc = kf.fit_document(kf.fit_kiencke(_dataset(), "lm"))
+    assert set(doc["params"]) == {"p1", "p2", "a_s"} and doc["status"] == "converged"
+    assert {"mae", "mu_max", "creep_opt", "iterations", "evaluations", "converged"} <= set(doc)
+    assert doc["creep_opt"] == pytest.approx(doc["params"]["p2"] ** -0.5)

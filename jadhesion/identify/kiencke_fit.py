@@ -29,6 +29,7 @@ LM ``converged`` when its MINPACK-style test passed, ``nonfinite`` for a non-fin
 from __future__ import annotations
 
 import functools
+import math
 from typing import NamedTuple
 
 import jax
@@ -154,3 +155,19 @@ def fit_kiencke(dataset: PolachDataset, method: str = "lm", key=None, *, pop_siz
         raise ValueError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
     key = jax.random.key(0) if key is None else key
     return _fit(method, pop_size, max_iter, dataset, key)
+
+
+def fit_document(fit: KienckeFit) -> dict:
+    """The JSON keys of ``fit --model kiencke`` for one fit: ``model``, ``params`` {p1, p2, a_s},
+    ``mae``, ``mu_max``, ``creep_opt``, ``iterations``, ``evaluations``, ``n_used``, ``status``,
+    ``converged`` (plain Python values; non-finite numbers become ``None``)."""
+    status = Status(int(fit.status))
+
+    def num(v):
+        v = float(v)
+        return v if math.isfinite(v) else None
+
+    return {"model": "kiencke", "params": dict(zip(PARAM_NAMES, map(num, fit.params))),
+            "mae": num(fit.mae), "mu_max": num(fit.mu_max), "creep_opt": num(fit.creep_opt),
+            "iterations": int(fit.iterations), "evaluations": int(fit.evaluations),
+            "n_used": int(fit.n_used), "status": status.label, "converged": status.converged}
