@@ -13,7 +13,6 @@ from jadhesion.data.recording import save_recording
 from jadhesion.data.simulator import simulate
 from jadhesion.experiments import online as ex
 from jadhesion.identify import online as ol
-from jadhesion.models.kiencke import kiencke_adhesion
 
 TRUE = (80.0, 100.0, 35.0)   # p1, p2, a_s
 KEYS = {"algorithm", "a_s", "final", "track", "status"}

@@ -21,6 +21,7 @@ from ..data.recording import _load_sidecar, save_recording
 from ..errors import RecordingError
 from ..data.scenarios import SCENARIOS, get_scenario
 from ..data.simulator import DEFAULT_SAMPLES, SAMPLE_PERIOD, simulate
+from ..data.vehicle import LOCO_22E
 from ..models.effects import EFFECT_NAMES, magnitudes
 from ..models.polach import PARAM_NAMES
 from .common import UserError, emit_json
@@ -97,7 +98,7 @@ def _samples(duration, rate) -> int:
 
 def _vehicle(path):
     if path is None:
-        return _load_sidecar(Path("no-vehicle-given.csv"))[2]
+        return LOCO_22E
     p = Path(path)
     if p.suffix.lower() != ".json" or not p.is_file():
         raise UserError(f"--vehicle {path}: expected an existing sidecar .json file")
