@@ -56,9 +56,10 @@ def test_shares_the_reproduce_code_path_exactly(capsys, sweep_csv):
 def test_estimates_a_s_and_tracks_the_optimum(capsys, sweep_csv, alg):
     code, doc, _ = _run(capsys, "online", sweep_csv[0], "--algorithm", alg)
     assert code == 0 and doc["a_s_source"] == "estimated" and doc["algorithm"] == alg
-    # σ = 0.001 on 140 samples: the offline a_s is good to ~0.3 %; the optimum follows from it
-    assert doc["a_s"] == pytest.approx(TRUE[2], rel=0.01)
-    assert doc["final"]["creep_opt"] == pytest.approx(0.1, rel=0.01)
+    # σ = 0.001 on these 140 samples: Gauss–Newton standard errors a_s 0.47 %, p2 0.37 %
+    # (λ_m = 1/√p2: 0.19 %); tolerances 4 standard errors, μ_m (a ratio of both) 1 %
+    assert doc["a_s"] == pytest.approx(TRUE[2], rel=0.02)
+    assert doc["final"]["creep_opt"] == pytest.approx(0.1, rel=0.008)
     assert doc["final"]["mu_max"] == pytest.approx(0.35, rel=0.01)
     for field in ("time", "p1", "p2", "mu_max", "creep_opt", "eta"):
         assert len(doc["track"][field]) == 200 and None not in doc["track"][field][80:]
