@@ -26,9 +26,19 @@ from jadhesion.data.dataset import PolachDataset
 from jadhesion.data.scenarios import SCENARIOS
 from jadhesion.errors import InputError
 from jadhesion.models.polach import PARAM_NAMES, polach_adhesion
-from jadhesion.sweeps import (COLUMNS, Grid, code_hash, observe, parts_dir, plan, read_table, run_sweep,
-                              source_digest, write_table)
-from jadhesion.sweeps import runner
+from jadhesion.sweeps import (
+    COLUMNS,
+    Grid,
+    code_hash,
+    observe,
+    parts_dir,
+    plan,
+    read_table,
+    run_sweep,
+    runner,
+    source_digest,
+    write_table,
+)
 
 REPO = Path(__file__).resolve().parents[1]
 WORKER = REPO / "tests" / "_sweep_worker.py"

@@ -27,7 +27,7 @@ interval, so the step can lock ``η = η_max`` and stop tracking (see ``never_tr
 from __future__ import annotations
 
 import os
-from typing import NamedTuple
+from typing import Callable, NamedTuple, Optional
 
 import jax
 import jax.numpy as jnp
@@ -35,6 +35,7 @@ import numpy as np
 
 from ..identify import online as ol
 from ..models.kiencke import DEFAULT_SLOPE, RAIL_SETS, kiencke_adhesion, kiencke_regressors
+from ..report.text import table
 
 N_STEPS = 1200
 CHANGES = (400, 800)
@@ -169,24 +170,26 @@ def ablation_params() -> dict:
             "A1-weight": ol.make_params(*lo, 0.0, 1.0), "A1-snr": ol.make_params(*lo, 1.0, 0.0)}
 
 
-def run(runs=1000, plot_dir=None, progress=True, seed=0) -> dict:
-    """Monte Carlo over ``runs`` noise seeds per configuration; JSON-ready dict (module docstring)."""
-    from ..cli.common import Progress
-
+def run(runs=1000, plot_dir=None, progress: Optional[Callable[[int, int], None]] = None,
+        seed=0) -> dict:
+    """Monte Carlo over ``runs`` noise seeds per configuration; JSON-ready dict (module docstring).
+    ``progress(done, total)``: called with the configurations finished so far and in all."""
     sc = scenario(jax.random.key(seed), runs)
     configs = {"1": ol.algorithm1_params(), "2": ol.algorithm2_params(), **ablation_params(),
                "rls_0.98": ol.rls_params(0.98)}
-    bar = Progress(len(configs) + 1, "online Monte Carlo", "configs", enabled=progress)
+    total = len(configs) + 1
     summaries, bands = {}, {}
-    for name, params in configs.items():
+    for done, (name, params) in enumerate(configs.items(), 1):
         trace = run_batch(params, sc)
         summaries[name] = summarise(run_metrics(trace, sc.truth))
         if name in ("1", "2"):
             bands[name] = {f: np.quantile(np.asarray(getattr(trace, f)), [0.05, 0.5, 0.95], axis=0)
                            for f in ("p1", "p2", "mu_max", "eta")}
-        bar.update()
+        if progress:
+            progress(done, total)
     batch = batch_ls(sc)
-    bar.update()
+    if progress:
+        progress(total, total)
     result = {"algorithms": {"1": summaries["1"], "2": summaries["2"]}, "paper": PAPER,
               "ablation": {k: summaries[k] for k in ablation_params()},
               "baselines": {"rls_0.98": summaries["rls_0.98"], "batch_ls": batch},
@@ -222,8 +225,6 @@ def _verdict(claim, key, a1, a2):
 
 def format_text(result: dict) -> str:
     """Human-readable report: ours vs the paper, verdicts on its claims, ablation and baselines."""
-    from ..cli.common import table
-
     keys = ("k_p1_1pct", "k_p2_1pct", "k_mumax_01pct", "k_track_change1", "k_track_change2",
             "fluctuation", "fluctuation_dry")
     rows = []

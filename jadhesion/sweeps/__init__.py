@@ -1,4 +1,4 @@
-"""Vectorised parameter sweeps: a declarative grid → simulate → observe → fit, as batches of whole chunks per device.
+"""Vectorised parameter sweeps: a declarative grid → simulate → observe → fit, one chunk per device.
 
     from jadhesion.sweeps import Grid, run_sweep
     table, summary = run_sweep(Grid(scenarios=["dry"], seeds=range(8), methods=["lm"],

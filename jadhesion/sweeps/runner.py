@@ -101,7 +101,7 @@ def _start(grid: Grid, chunk, chunk_size: int, simulate, device) -> _Started:
     m = len(seed_ix)
     coordinates = dict(scenario=np.full(m, chunk.scenario), method=np.full(m, chunk.method),
                        seed=seeds[seed_ix], noise_scale=noise, creep_max=creep)
-    coordinates.update({f"true_{p}": np.full(m, t) for p, t in zip(PARAM_NAMES, theta)})
+    coordinates.update({f"true_{p}": np.full(m, t) for p, t in zip(PARAM_NAMES, theta, strict=True)})
     return _Started(chunk, coordinates, outputs)
 
 
@@ -118,7 +118,7 @@ def _finish(started: _Started) -> dict:
 
 
 def run_sweep(grid: Grid, out, *, chunk_size: int = 64, resume: bool = True,
-              progress: Optional[Callable[[int], None]] = None, simulate=None, devices=None) -> tuple:
+              progress: Optional[Callable[[int, int], None]] = None, simulate=None, devices=None) -> tuple:
     """Run every fit of ``grid``; write the merged table to ``out`` (``.csv`` or ``.parquet``).
 
     Each chunk is one jitted, vmapped program of ``chunk_size`` points on one device; this
@@ -131,8 +131,8 @@ def run_sweep(grid: Grid, out, *, chunk_size: int = 64, resume: bool = True,
     ``simulate(grid, scenario, seeds) -> PolachDataset`` (stacked over ``seeds``) replaces the
     default source :func:`simulate_grid`; it must be a module-level function (its name and its
     module's source enter the part files' hash) and return the same shapes for every call of a
-    sweep. ``progress(n)``, if given, is called with the number of fits each time a chunk's part
-    is written.
+    sweep. ``progress(done, total)``, if given, is called each time a chunk's part is written,
+    with the fits this process has computed so far and the fits it has to compute.
 
     Returns:
         ``(table, summary)``: the table as a dict of columns (``None`` on processes other than 0)
@@ -151,17 +151,19 @@ def run_sweep(grid: Grid, out, *, chunk_size: int = 64, resume: bool = True,
         manifest = dict(grid=grid.to_dict(), chunk_size=chunk_size, chunks=len(chunks), columns=COLUMNS,
                         code=code_hash(simulate, devices))
         (parts / "grid.json").write_text(json.dumps(manifest, indent=1))
+    computed, total = 0, sum(len(c.points) for c in todo)
     for first in range(0, len(todo), len(devices)):
         t0 = time.perf_counter()
-        started = [_start(grid, c, chunk_size, simulate, d) for c, d in zip(todo[first:], devices)]
+        round_ = zip(todo[first:], devices, strict=False)  # the last round may leave devices idle
+        started = [_start(grid, c, chunk_size, simulate, d) for c, d in round_]
         tables = [_finish(s) for s in started]
         share = (time.perf_counter() - t0) / sum(len(s.chunk.points) for s in started)
-        for s, table in zip(started, tables):
+        for s, table in zip(started, tables, strict=True):
             table["seconds"] = np.full(len(s.chunk.points), share)
             write_table(table, _part(parts, s.chunk.index))
-            if progress is not None:
-                progress(len(s.chunk.points))
-    computed = sum(len(c.points) for c in todo)
+            computed += len(s.chunk.points)
+            if progress:
+                progress(computed, total)
     if size > 1:
         sync_global_devices(f"jadhesion.sweep.{parts.name}")
     table = merge(grid, out, chunk_size, simulate, devices) if rank == 0 else None
