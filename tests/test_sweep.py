@@ -52,13 +52,20 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
-def _spawn(out, *extra, devices=None, cache):
+#: A real sweep (simulated 22E tests, improved TLBO) whose table, when a chunk of 16 was sharded as
+#: 4 points per device, differed from the one-device table in the last bits of 4 of its 16 MAEs.
+CLI_SWEEP = ("sweep", "--scenarios", "dry", "--seeds", "8", "--methods", "itlbo", "--pop-size", "20",
+             "--max-iter", "60", "--samples", "500", "--noise", "1,2", "--chunk-size", "16", "--json")
+
+
+def _spawn(out, *extra, devices=None, cache, command=(str(WORKER),)):
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")]),
                JADHESION_CACHE=str(cache), JAX_NUMPY_RANK_PROMOTION="raise", JAX_PLATFORMS="cpu")
     env.pop("XLA_FLAGS", None)
     if devices:
         env["XLA_FLAGS"] = f"--xla_force_host_platform_device_count={devices}"
-    return subprocess.Popen([sys.executable, str(WORKER), str(out), "--chunk-size", str(CHUNK), *extra],
+    args = [str(out), "--chunk-size", str(CHUNK), *extra] if command[0] == str(WORKER) else [*extra, "--out", str(out)]
+    return subprocess.Popen([sys.executable, *command, *args],
                             env=env, cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
@@ -69,8 +76,10 @@ def _finish(proc) -> dict:
         proc.kill()
         pytest.fail(f"sweep worker timed out after {TIMEOUT} s")
     assert proc.returncode == 0, stderr[-3000:]
-    # the last JSON line: Gloo (the CPU collectives of multi-device processes) prints on stdout too
-    return json.loads([line for line in stdout.splitlines() if line.startswith("{")][-1])
+    try:
+        return json.loads(stdout)  # the CLI's one document
+    except json.JSONDecodeError:  # the worker's last line: Gloo (CPU collectives) prints on stdout too
+        return json.loads([line for line in stdout.splitlines() if line.startswith("{")][-1])
 
 
 @pytest.fixture(scope="module")
@@ -80,6 +89,9 @@ def workers(tmp_path_factory):
     cache = root / "xla-cache"
     address = f"127.0.0.1:{_free_port()}"
     procs = {f"devices{n}": _spawn(root / f"devices{n}.csv", devices=n, cache=cache) for n in (4, 2)}
+    for n in (1, 4):
+        procs[f"cli{n}"] = _spawn(root / f"cli{n}.csv", *CLI_SWEEP, devices=n, cache=cache,
+                                  command=("-m", "jadhesion"))
     for i in range(2):
         procs[f"rank{i}"] = _spawn(root / "dist.csv", "--coordinator", address, "--num-processes", "2",
                                    "--process-id", str(i), devices=2, cache=cache)
@@ -214,6 +226,13 @@ def test_devices_give_the_single_device_table_bit_for_bit(workers, reference, de
     summary = _finish(procs[f"devices{devices}"])
     assert summary["devices"] == devices and summary["computed"] == toy_grid().size
     _assert_same(read_table(root / f"devices{devices}.csv"), reference[1])
+
+
+def test_real_sweep_on_four_devices_gives_the_one_device_table_bit_for_bit(workers):
+    root, procs = workers
+    summaries = [_finish(procs[f"cli{n}"]) for n in (1, 4)]
+    assert [s["devices"] for s in summaries] == [1, 4] and summaries[1]["fits"] == 16
+    _assert_same(read_table(root / "cli4.csv"), read_table(root / "cli1.csv"))
 
 
 def test_two_processes_give_the_single_process_table_bit_for_bit(workers, reference):
