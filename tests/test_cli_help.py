@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from jadhesion.cli import COMMANDS, main
+from jadhesion.cli import COMMANDS, main, sweep
 
 REPO = Path(__file__).resolve().parents[1]
 #: Commands whose argument definitions still import JAX (their ``register`` reads the scenario and
@@ -63,8 +63,6 @@ def test_a_command_module_that_fails_to_import_is_an_error(monkeypatch):
 
 
 def test_a_handler_that_fails_to_import_is_an_error(monkeypatch):
-    from jadhesion.cli import sweep
-
     def register(sub):
         sub.add_parser("sweep").set_defaults(handler="jadhesion.cli.no_such_module:run")
 

@@ -58,14 +58,19 @@ CLI_SWEEP = ("sweep", "--scenarios", "dry", "--seeds", "8", "--methods", "itlbo"
              "--max-iter", "60", "--samples", "500", "--noise", "1,2", "--chunk-size", "16", "--json")
 
 
-def _spawn(out, *extra, devices=None, cache, command=(str(WORKER),)):
+def _worker(out, *extra):
+    """Arguments of a ``_sweep_worker.py`` run of the toy grid into ``out``."""
+    return [str(WORKER), str(out), "--chunk-size", str(CHUNK), *extra]
+
+
+def _spawn(argv, devices=None, *, cache):
+    """Start ``python argv…`` with ``devices`` forced CPU devices and the test's compilation cache."""
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")]),
                JADHESION_CACHE=str(cache), JAX_NUMPY_RANK_PROMOTION="raise", JAX_PLATFORMS="cpu")
     env.pop("XLA_FLAGS", None)
     if devices:
         env["XLA_FLAGS"] = f"--xla_force_host_platform_device_count={devices}"
-    args = [str(out), "--chunk-size", str(CHUNK), *extra] if command[0] == str(WORKER) else [*extra, "--out", str(out)]
-    return subprocess.Popen([sys.executable, *command, *args],
+    return subprocess.Popen([sys.executable, *argv],
                             env=env, cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
@@ -88,13 +93,13 @@ def workers(tmp_path_factory):
     root = tmp_path_factory.mktemp("workers")
     cache = root / "xla-cache"
     address = f"127.0.0.1:{_free_port()}"
-    procs = {f"devices{n}": _spawn(root / f"devices{n}.csv", devices=n, cache=cache) for n in (4, 2)}
+    procs = {f"devices{n}": _spawn(_worker(root / f"devices{n}.csv"), n, cache=cache) for n in (4, 2)}
     for n in (1, 4):
-        procs[f"cli{n}"] = _spawn(root / f"cli{n}.csv", *CLI_SWEEP, devices=n, cache=cache,
-                                  command=("-m", "jadhesion"))
+        procs[f"cli{n}"] = _spawn(["-m", "jadhesion", *CLI_SWEEP, "--out", str(root / f"cli{n}.csv")], n,
+                                  cache=cache)
     for i in range(2):
-        procs[f"rank{i}"] = _spawn(root / "dist.csv", "--coordinator", address, "--num-processes", "2",
-                                   "--process-id", str(i), devices=2, cache=cache)
+        dist = ("--coordinator", address, "--num-processes", "2", "--process-id", str(i))
+        procs[f"rank{i}"] = _spawn(_worker(root / "dist.csv", *dist), 2, cache=cache)
     yield root, procs
     for proc in procs.values():
         if proc.poll() is None:

@@ -117,10 +117,3 @@ def finish_chunk(outputs: dict, m: int) -> dict:
     """Wait for a chunk started by :func:`start_chunk`; host NumPy arrays of its ``m`` points."""
     return {k: np.asarray(v)[:m] for k, v in outputs.items()}
 
-
-def run_chunk(method: str, data, theta_true, index, seed, noise_scale, creep_max, *, size=None,
-              options=(), device=None) -> dict:
-    """:func:`start_chunk` then :func:`finish_chunk`: one chunk's results as host arrays."""
-    outputs = start_chunk(method, data, theta_true, index, seed, noise_scale, creep_max, size=size,
-                          options=options, device=device)
-    return finish_chunk(outputs, len(index))
