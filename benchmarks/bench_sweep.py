@@ -72,7 +72,7 @@ def loop_rates(args) -> dict:
     keys = [fit_key(i, args.method) for i in range(args.seeds)]
     fit_polach(data[0], args.method, keys[0]).params.block_until_ready()
     t0 = time.perf_counter()
-    for d, k in zip(data, keys):
+    for d, k in zip(data, keys, strict=True):
         fit_polach(d, args.method, k).params.block_until_ready()
     rates = {"loop": args.seeds / (time.perf_counter() - t0)}
     try:
@@ -85,8 +85,8 @@ def loop_rates(args) -> dict:
     jac(np.full(5, 0.5), data[0]).block_until_ready()
     t0 = time.perf_counter()
     for d in data:
-        least_squares(lambda th: np.asarray(residual(th, d)), np.full(5, 0.5),
-                      jac=lambda th: np.asarray(jac(th, d)), bounds=(0.0, 1.0), method="trf")
+        least_squares(lambda th, d=d: np.asarray(residual(th, d)), np.full(5, 0.5),
+                      jac=lambda th, d=d: np.asarray(jac(th, d)), bounds=(0.0, 1.0), method="trf")
     rates["scipy"] = args.seeds / (time.perf_counter() - t0)
     return rates
 

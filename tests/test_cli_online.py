@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from jadhesion.cli import main
+from jadhesion.cli.online import ALGORITHM_NAMES
 from jadhesion.data.recording import save_recording
 from jadhesion.data.simulator import simulate
 from jadhesion.experiments import online as ex
@@ -96,3 +97,7 @@ def test_no_informative_sample_is_a_clear_error(capsys, tmp_path):
                            "adhesion": np.full(50, 0.3)}, path=tmp_path / "still.csv")
     code, _, err = _run(capsys, "online", path)
     assert code == 2 and "informative samples" in err
+
+
+def test_argument_choices_match_the_algorithm_registry():
+    assert ALGORITHM_NAMES == tuple(ol.ALGORITHMS)

@@ -1,8 +1,9 @@
-"""Sweeps: grid expansion, observation, table, chunking + resume, sharding and multi-process runs.
+"""Sweeps: grid expansion, observation, table, chunking + resume, stale parts, devices and processes.
 
-The subprocess runs (4 forced CPU devices; two ``jax.distributed`` processes on localhost) start
-first and overlap the in-process reference run; all use the cheap analytic source of
-``_sweep_worker.py`` and must reproduce the reference table exactly (the ``seconds`` column aside).
+The subprocess runs (2 and 4 forced CPU devices; two ``jax.distributed`` processes of 2 devices each
+on localhost) start first and overlap the in-process reference run (1 device); all use the cheap
+analytic source of ``_sweep_worker.py`` and must reproduce the reference table bit for bit (the
+``seconds`` column aside).
 """
 
 import importlib.util
@@ -25,7 +26,19 @@ from jadhesion.data.dataset import PolachDataset
 from jadhesion.data.scenarios import SCENARIOS
 from jadhesion.errors import InputError
 from jadhesion.models.polach import PARAM_NAMES, polach_adhesion
-from jadhesion.sweeps import COLUMNS, Grid, observe, parts_dir, plan, read_table, run_sweep, write_table
+from jadhesion.sweeps import (
+    COLUMNS,
+    Grid,
+    code_hash,
+    observe,
+    parts_dir,
+    plan,
+    read_table,
+    run_sweep,
+    runner,
+    source_digest,
+    write_table,
+)
 
 REPO = Path(__file__).resolve().parents[1]
 WORKER = REPO / "tests" / "_sweep_worker.py"
@@ -39,13 +52,25 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
-def _spawn(out, *extra, devices=None, cache):
+#: A real sweep (simulated 22E tests, improved TLBO) whose table, when a chunk of 16 was sharded as
+#: 4 points per device, differed from the one-device table in the last bits of 4 of its 16 MAEs.
+CLI_SWEEP = ("sweep", "--scenarios", "dry", "--seeds", "8", "--methods", "itlbo", "--pop-size", "20",
+             "--max-iter", "60", "--samples", "500", "--noise", "1,2", "--chunk-size", "16", "--json")
+
+
+def _worker(out, *extra):
+    """Arguments of a ``_sweep_worker.py`` run of the toy grid into ``out``."""
+    return [str(WORKER), str(out), "--chunk-size", str(CHUNK), *extra]
+
+
+def _spawn(argv, devices=None, *, cache):
+    """Start ``python argv…`` with ``devices`` forced CPU devices and the test's compilation cache."""
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")]),
                JADHESION_CACHE=str(cache), JAX_NUMPY_RANK_PROMOTION="raise", JAX_PLATFORMS="cpu")
     env.pop("XLA_FLAGS", None)
     if devices:
         env["XLA_FLAGS"] = f"--xla_force_host_platform_device_count={devices}"
-    return subprocess.Popen([sys.executable, str(WORKER), str(out), "--chunk-size", str(CHUNK), *extra],
+    return subprocess.Popen([sys.executable, *argv],
                             env=env, cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
@@ -56,19 +81,25 @@ def _finish(proc) -> dict:
         proc.kill()
         pytest.fail(f"sweep worker timed out after {TIMEOUT} s")
     assert proc.returncode == 0, stderr[-3000:]
-    return json.loads(stdout.strip().splitlines()[-1])
+    try:
+        return json.loads(stdout)  # the CLI's one document
+    except json.JSONDecodeError:  # the worker's last line: Gloo (CPU collectives) prints on stdout too
+        return json.loads([line for line in stdout.splitlines() if line.startswith("{")][-1])
 
 
 @pytest.fixture(scope="module")
 def workers(tmp_path_factory):
-    """Subprocess sweeps of the toy grid: 4 forced devices, and 2 processes × 1 device."""
+    """Subprocess sweeps of the toy grid: 4 and 2 forced devices, and 2 processes × 2 devices."""
     root = tmp_path_factory.mktemp("workers")
     cache = root / "xla-cache"
     address = f"127.0.0.1:{_free_port()}"
-    procs = {"sharded": _spawn(root / "sharded.csv", devices=4, cache=cache)}
+    procs = {f"devices{n}": _spawn(_worker(root / f"devices{n}.csv"), n, cache=cache) for n in (4, 2)}
+    for n in (1, 4):
+        procs[f"cli{n}"] = _spawn(["-m", "jadhesion", *CLI_SWEEP, "--out", str(root / f"cli{n}.csv")], n,
+                                  cache=cache)
     for i in range(2):
-        procs[f"rank{i}"] = _spawn(root / "dist.csv", "--coordinator", address, "--num-processes", "2",
-                                   "--process-id", str(i), cache=cache)
+        dist = ("--coordinator", address, "--num-processes", "2", "--process-id", str(i))
+        procs[f"rank{i}"] = _spawn(_worker(root / "dist.csv", *dist), 2, cache=cache)
     yield root, procs
     for proc in procs.values():
         if proc.poll() is None:
@@ -85,9 +116,14 @@ def reference(workers, tmp_path_factory):
 
 
 def _assert_same(a, b):
+    """Equal bit for bit (floats compared as their 64-bit patterns), ``seconds`` aside."""
     for c in COLUMNS:
-        if c != "seconds":
-            np.testing.assert_array_equal(a[c], b[c], err_msg=c)
+        if c == "seconds":
+            continue
+        x, y = np.asarray(a[c]), np.asarray(b[c])
+        if x.dtype == np.float64:
+            x, y = x.view(np.int64), y.view(np.int64)
+        np.testing.assert_array_equal(x, y, err_msg=c)
 
 
 def test_grid_expansion_and_chunks():
@@ -142,6 +178,7 @@ def test_table_columns_and_csv_round_trip(reference):
     assert np.all((table["samples"] > 0) & (table["samples"] <= 120))
     assert np.all(table["samples"][1::2] == 120)
     assert np.all(np.isfinite(table["mae"])) and np.all(table["seconds"] > 0)
+    assert set(table["status"]) <= {"unknown", "converged", "max_steps", "stalled", "nonfinite"}
     assert np.all(np.abs(table["mu_max"] / table["true_mu_max"] - 1) < 0.2)
     _assert_same(read_table(out), table)
     assert np.array_equal(read_table(out)["seconds"], table["seconds"])
@@ -161,17 +198,52 @@ def test_resume_recomputes_only_missing_chunk(reference, tmp_path):
     _assert_same(again, table)
 
 
-def test_sharded_over_four_devices_matches_single_device(workers, reference):
+def test_stale_parts_after_a_code_change_are_recomputed(reference, monkeypatch):
+    out, table, _ = reference
+    old = parts_dir(out, toy_grid(), CHUNK, toy_simulate)
+    stamps = {f: f.stat().st_mtime_ns for f in old.glob("chunk-*.csv")}
+    monkeypatch.setattr(runner, "code_hash", lambda simulate=None, devices=None: "changed-code")
+    new = parts_dir(out, toy_grid(), CHUNK, toy_simulate)
+    assert new != old and new.parent == old.parent
+    again, summary = run_sweep(toy_grid(), out, chunk_size=CHUNK, simulate=toy_simulate)
+    assert (summary.chunks_computed, summary.computed) == (len(stamps), toy_grid().size)
+    assert summary.parts == str(new) and len(list(new.glob("chunk-*.csv"))) == len(stamps)
+    assert {f: f.stat().st_mtime_ns for f in old.glob("chunk-*.csv")} == stamps
+    _assert_same(again, table)
+
+
+def test_code_hash_follows_the_source(tmp_path):
+    pkg = tmp_path / "pkg"
+    pkg.mkdir()
+    (pkg / "a.py").write_text("x = 1\n")
+    (pkg / "b.txt").write_text("not code")
+    before = source_digest(["pkg"], tmp_path)
+    (pkg / "b.txt").write_text("still not code")
+    assert source_digest(["pkg"], tmp_path) == before
+    (pkg / "a.py").write_text("x = 2\n")
+    assert source_digest(["pkg"], tmp_path) != before
+    assert code_hash() == code_hash() != code_hash(toy_simulate)
+
+
+@pytest.mark.parametrize("devices", [4, 2])
+def test_devices_give_the_single_device_table_bit_for_bit(workers, reference, devices):
     root, procs = workers
-    summary = _finish(procs["sharded"])
-    assert summary["devices"] == 4 and summary["computed"] == toy_grid().size
-    _assert_same(read_table(root / "sharded.csv"), reference[1])
+    summary = _finish(procs[f"devices{devices}"])
+    assert summary["devices"] == devices and summary["computed"] == toy_grid().size
+    _assert_same(read_table(root / f"devices{devices}.csv"), reference[1])
 
 
-def test_two_processes_match_single_process(workers, reference):
+def test_real_sweep_on_four_devices_gives_the_one_device_table_bit_for_bit(workers):
+    root, procs = workers
+    summaries = [_finish(procs[f"cli{n}"]) for n in (1, 4)]
+    assert [s["devices"] for s in summaries] == [1, 4] and summaries[1]["fits"] == 16
+    _assert_same(read_table(root / "cli4.csv"), read_table(root / "cli1.csv"))
+
+
+def test_two_processes_give_the_single_process_table_bit_for_bit(workers, reference):
     root, procs = workers
     summaries = [_finish(procs[f"rank{i}"]) for i in range(2)]
-    assert [s["processes"] for s in summaries] == [2, 2]
+    assert [s["processes"] for s in summaries] == [2, 2] and summaries[0]["devices"] == 4
     assert sum(s["chunks_computed"] for s in summaries) == len(plan(toy_grid(), CHUNK))
     assert summaries[0]["out"] and summaries[1]["out"] is None
     _assert_same(read_table(root / "dist.csv"), reference[1])

@@ -1,8 +1,16 @@
 """The ``jadhesion`` command line.
 
-Each subcommand lives in its own module with ``register(subparsers)``, which adds the parser and sets
-``func(args) -> int``. Every command takes ``--json``. Bad input raises :class:`UserError` (or a
-:class:`ValueError` subclass from the data layer): one line on stderr, exit code 2, nothing written.
+:data:`COMMANDS` names every subcommand, its module and its one-line help. A command's module
+``jadhesion.cli.<name>`` holds only its argument definitions, ``register(subparsers)``, and imports
+nothing heavier than argparse and :mod:`.common` (no JAX), so ``jadhesion --help`` imports no
+command module and ``jadhesion <name> --help`` imports just that one. ``register`` names the code
+that does the work with ``set_defaults(handler="module:function")``; :func:`main` imports that
+module (heavy imports at its top) only after parsing, and calls ``function(args) -> int``. (A
+``set_defaults(func=callable)`` is called as is.) A module that fails to import is an error, never
+a missing command.
+
+Every command takes ``--json``. Bad input raises :class:`UserError` (or a :class:`ValueError`
+subclass from the data layer): one line on stderr, exit code 2, nothing written.
 """
 
 from __future__ import annotations
@@ -11,34 +19,53 @@ import argparse
 import importlib
 import sys
 
+from ..config import enable_compilation_cache, enable_x64
 from .common import UserError
 
-COMMANDS = ("simulate", "fit", "reproduce", "posterior", "diagnose", "sweep", "online")
+#: Subcommand → one-line help (the module is ``jadhesion.cli.<subcommand>``).
+COMMANDS = {
+    "simulate": "simulate a 22E traction-test recording",
+    "fit": "identify Polach's parameters [kA, kS, mu0, A, B]",
+    "reproduce": "reproduce the papers' tables (default: both)",
+    "posterior": "Bayesian posterior of the Polach parameters (emcee)",
+    "diagnose": "name the missing physics behind a Polach misfit",
+    "sweep": "vectorised parameter sweep (scenarios × seeds × methods × …)",
+    "online": "track Kiencke's optimum sample by sample (paper 000) on a recording",
+}
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The parser; with ``command``, only that subcommand's arguments are defined (its module
+    imported), else every subcommand is listed with its one-line help and no module is imported."""
     parser = argparse.ArgumentParser(prog="jadhesion", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
-    for name in COMMANDS:
-        try:
-            module = importlib.import_module(f"jadhesion.cli.{name}")
-        except ModuleNotFoundError as exc:  # a command whose module is not written yet
-            if exc.name != f"jadhesion.cli.{name}":
-                raise
-            continue
-        module.register(sub)
+    for name, help_ in COMMANDS.items():
+        if name == command:
+            importlib.import_module(f"jadhesion.cli.{name}").register(sub)
+        else:
+            sub.add_parser(name, help=help_)
     return parser
 
 
-def main(argv=None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    from ..config import enable_compilation_cache, enable_x64
+def _handler(args):
+    """The function that runs the parsed command: ``args.handler`` (``"module:function"``,
+    imported now) or ``args.func``."""
+    target = getattr(args, "handler", None)
+    if target is None:
+        return args.func
+    module, _, name = target.partition(":")
+    return getattr(importlib.import_module(module), name)
 
+
+def main(argv=None) -> int:
+    """Parse ``argv`` (default ``sys.argv[1:]``), run the command; returns the exit code."""
+    argv = sys.argv[1:] if argv is None else list(argv)
+    command = argv[0] if argv and argv[0] in COMMANDS else None
+    args = build_parser(command).parse_args(argv)
     enable_x64()
     enable_compilation_cache()
     try:
-        return int(args.func(args) or 0)
+        return int(_handler(args)(args) or 0)
     except (UserError, OSError) as exc:
         sys.stderr.write(f"jadhesion: error: {exc}\n")
         return 2

@@ -1,16 +1,19 @@
-"""Shared pieces of the command line: user errors, JSON output, progress on stderr."""
+"""Shared pieces of the command line: user errors, JSON output, progress bars on stderr.
+
+JAX-free (argparse definitions import it, and ``--help`` must not start JAX): it imports only the
+standard library, tqdm and jadhesion's foundations.
+"""
 
 from __future__ import annotations
 
 import json
 import math
 import sys
-import time
 
-import numpy as np
-
+from tqdm import tqdm
 
 from ..errors import InputError as UserError  # noqa: F401  (re-exported for command modules)
+from ..report.text import table  # noqa: F401  (re-exported for command modules)
 
 
 def require_at_least(command: str, least: int, **flags) -> None:
@@ -41,40 +44,34 @@ def emit_json(document) -> None:
 
 
 class Progress:
-    """A one-line progress counter on stderr with rate and ETA; silent when ``enabled`` is false."""
+    """A progress bar on stderr (tqdm), drawn only when stderr is a terminal (and ``enabled``), so
+    long work shows a live bar at a terminal and nothing in a log or a pipe.
 
-    def __init__(self, total: int, label: str, unit: str = "it", enabled: bool = True):
-        self.total, self.label, self.unit, self.enabled = total, label, unit, enabled
+    Pass it to the library as its progress callback, ``progress(done, total)`` — units finished so
+    far and units in all — or count by hand with :meth:`update`. Use it as a context manager (or
+    call :meth:`close`) to end the bar's line.
+    """
+
+    def __init__(self, total=None, label: str = "", unit: str = "it", enabled: bool = True):
         self.done = 0
-        self.start = time.perf_counter()
+        self.bar = tqdm(total=total, desc=label, unit=unit, file=sys.stderr, dynamic_ncols=True,
+                        disable=None if enabled else True)
+
+    def __call__(self, done: int, total: int) -> None:
+        self.bar.total = total
+        self.update(done - self.done)
 
     def update(self, n: int = 1) -> None:
+        """Count ``n`` more units."""
         self.done += n
-        if not self.enabled:
-            return
-        elapsed = time.perf_counter() - self.start
-        rate = self.done / elapsed if elapsed > 0 else float("nan")
-        eta = (self.total - self.done) / rate if rate > 0 else float("nan")
-        sys.stderr.write(f"\r{self.label}: {self.done}/{self.total} {self.unit} "
-                         f"[{elapsed:6.1f} s, {rate:.3g} {self.unit}/s, ETA {eta:5.0f} s]")
-        if self.done >= self.total:
-            sys.stderr.write("\n")
-        sys.stderr.flush()
+        self.bar.update(n)
 
+    def close(self) -> None:
+        """End the bar (its last state stays on the terminal)."""
+        self.bar.close()
 
-def table(rows, columns) -> str:
-    """Format a list of dicts as a fixed-width text table."""
-    def fmt(v):
-        if isinstance(v, float):
-            return f"{v:.4g}"
-        if isinstance(v, (np.floating,)):
-            return f"{float(v):.4g}"
-        return str(v)
+    def __enter__(self):
+        return self
 
-    cells = [[fmt(r.get(c, "")) for c in columns] for r in rows]
-    widths = [max(len(c), *(len(row[i]) for row in cells)) if cells else len(c)
-              for i, c in enumerate(columns)]
-    lines = ["  ".join(c.rjust(w) for c, w in zip(columns, widths)),
-             "  ".join("-" * w for w in widths)]
-    lines += ["  ".join(v.rjust(w) for v, w in zip(row, widths)) for row in cells]
-    return "\n".join(lines)
+    def __exit__(self, *exc):
+        self.close()

@@ -4,15 +4,16 @@ Several machines: start one process per node with ``--distributed`` (SLURM/Open 
 ``jax.distributed.initialize()``) or with ``--coordinator HOST:PORT --num-processes P --process-id
 I``; every process takes its share of the chunks and process 0 merges the table. ``out`` must be on
 a file system all processes share.
+
+This module defines the arguments only; :mod:`.sweep_run` does the work.
 """
 
 from __future__ import annotations
 
 import argparse
 import math
-import sys
 
-from .common import UserError, emit_json, require_at_least
+from . import COMMANDS
 
 
 def _list(kind, name):
@@ -28,8 +29,8 @@ def _list(kind, name):
 
 
 def register(sub) -> None:
-    p = sub.add_parser("sweep", help="vectorised parameter sweep (scenarios × seeds × methods × …)",
-                       description=__doc__.splitlines()[0])
+    """Add the ``sweep`` subcommand to ``sub`` (argparse subparsers)."""
+    p = sub.add_parser("sweep", help=COMMANDS["sweep"], description=__doc__.splitlines()[0])
     p.add_argument("--scenarios", type=_list(str, "--scenarios"), default=["dry", "wet", "sand"],
                    help="comma-separated scenarios (default dry,wet,sand)")
     p.add_argument("--seeds", type=int, default=10, help="data seeds 0..N-1 (default 10)")
@@ -52,44 +53,4 @@ def register(sub) -> None:
     p.add_argument("--num-processes", type=int, help="multi-process run: number of processes")
     p.add_argument("--process-id", type=int, help="multi-process run: this process's index")
     p.add_argument("--json", action="store_true", help="one JSON document on stdout")
-    p.set_defaults(func=run)
-
-
-def _initialize(args) -> None:
-    import jax
-
-    explicit = (args.coordinator, args.num_processes, args.process_id)
-    if not (args.distributed or any(v is not None for v in explicit)) or jax.distributed.is_initialized():
-        return
-    if any(v is None for v in explicit) and not args.distributed:
-        raise UserError("sweep: --coordinator, --num-processes and --process-id go together")
-    try:
-        jax.distributed.initialize(*explicit)
-    except (RuntimeError, ValueError) as exc:
-        raise UserError(f"sweep: cannot join the multi-process run: {exc}") from None
-
-
-def run(args) -> int:
-    _initialize(args)
-    import jax
-
-    from ..sweeps import Grid, run_sweep
-
-    budget = {"pop_size": args.pop_size, "max_iter": args.max_iter}
-    require_at_least("sweep", 1, seeds=args.seeds, **budget)
-    grid = Grid(scenarios=args.scenarios, seeds=range(args.seeds), methods=args.methods,
-                noise_scale=args.noise, creep_max=args.creep_max, n_samples=args.samples,
-                fit_options={k: v for k, v in budget.items() if v is not None})
-    progress = not args.json or sys.stderr.isatty()
-    _, summary = run_sweep(grid, args.out, chunk_size=args.chunk_size, resume=args.resume,
-                           progress=progress)
-    if jax.process_index() != 0:
-        return 0
-    doc = summary._asdict()
-    if args.json:
-        emit_json(doc)
-    else:
-        print(f"{doc['fits']} fits ({doc['computed']} computed, {doc['chunks_computed']}/{doc['chunks']} "
-              f"chunks) in {doc['seconds']:.1f} s = {doc['fits_per_second']:.1f} fits/s on "
-              f"{doc['devices']} device(s), {doc['processes']} process(es) -> {doc['out']}")
-    return 0
+    p.set_defaults(handler="jadhesion.cli.sweep_run:run")

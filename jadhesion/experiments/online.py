@@ -33,10 +33,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..cli.common import table
 from ..identify import online as ol
 from ..models.kiencke import DEFAULT_SLOPE, RAIL_SETS, kiencke_adhesion, kiencke_regressors
 from ..plots.online import figure
+from ..report.text import table
 
 N_STEPS = 1200
 CHANGES = (400, 800)

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import functools
 import time
+from typing import Callable, Optional
 
 import jax
 import jax.numpy as jnp
@@ -36,6 +37,7 @@ from ..data.simulator import simulate_many, stack_datasets
 from ..identify.driver import run as run_population
 from ..identify.polach_fit import ALGORITHMS, fit_polach, polach_mae
 from ..models.polach import BOUNDS, PARAM_NAMES
+from ..report.text import table
 
 SCENARIOS = ("dry", "wet", "sand")
 METHODS = ("itlbo", "tlbo", "pso", "lm")
@@ -124,9 +126,9 @@ def mcmc_row(sim, data, theta_lm, *, likelihood=MCMC_LIKELIHOOD, walkers=MCMC_WA
     return row
 
 
-def run_scenario(scenario, seeds=20, max_iter=1000, history_iter=300, progress=None, mcmc=True,
-                 mcmc_steps=MCMC_STEPS):
-    """Table 2 rows and convergence histories for one scenario."""
+def run_scenario(scenario, seeds=20, max_iter=1000, history_iter=300,
+                 progress: Optional[Callable[[], None]] = None, mcmc=True, mcmc_steps=MCMC_STEPS):
+    """Table 2 rows and convergence histories for one scenario; ``progress()`` after each cell."""
     truth = np.asarray(get_scenario(scenario).params)
     sims = simulate_many(scenario, list(range(seeds)))
     datasets = stack_datasets(sims)
@@ -162,8 +164,8 @@ def run_scenario(scenario, seeds=20, max_iter=1000, history_iter=300, progress=N
         rows.append(row)
         if method == "lm":
             theta_lm = np.asarray(fits[0].params)
-        if progress is not None:
-            progress.update()
+        if progress:
+            progress()
     if mcmc:
         data0 = jax.tree_util.tree_map(lambda a: a[0], datasets)
         t0 = time.perf_counter()
@@ -173,27 +175,31 @@ def run_scenario(scenario, seeds=20, max_iter=1000, history_iter=300, progress=N
         row["reached"] = float(row["error"] <= targets[0])
         row["paper"] = None
         rows.append(row)
-        if progress is not None:
-            progress.update()
+        if progress:
+            progress()
     return rows, {"histories": histories, "truth": truth, "floor": floors}
 
 
-def run(seeds=20, plot_dir=None, progress=True, max_iter=1000, history_iter=300,
-        mcmc=True, mcmc_steps=None) -> dict:
+def run(seeds=20, plot_dir=None, progress: Optional[Callable[[int, int], None]] = None,
+        max_iter=1000, history_iter=300, mcmc=True, mcmc_steps=None) -> dict:
     """The whole Table 2: ``{"rows": [...], "seeds": N, ...}``; figures into ``plot_dir``.
     ``mcmc``: add the :func:`mcmc_row` of each scenario, chains of ``mcmc_steps`` (default
-    :data:`MCMC_STEPS`) steps."""
+    :data:`MCMC_STEPS`) steps. ``progress(done, total)``: called with the cells finished so far
+    and the cells in all."""
     mcmc_steps = MCMC_STEPS if mcmc_steps is None else int(mcmc_steps)
     if mcmc and mcmc_steps < MCMC_MIN_STEPS:
         raise ValueError(f"mcmc_steps must be at least {MCMC_MIN_STEPS}, got {mcmc_steps}")
-    from ..cli.common import Progress
+    total, done = len(SCENARIOS) * (len(METHODS) + bool(mcmc)), []
 
-    bar = Progress(len(SCENARIOS) * (len(METHODS) + bool(mcmc)), "table2", "cells",
-                   enabled=progress)
+    def cell_done():
+        done.append(1)
+        if progress:
+            progress(len(done), total)
+
     rows, traces = [], {}
     t0 = time.perf_counter()
     for scenario in SCENARIOS:
-        r, traces[scenario] = run_scenario(scenario, seeds, max_iter, history_iter, bar, mcmc,
+        r, traces[scenario] = run_scenario(scenario, seeds, max_iter, history_iter, cell_done, mcmc,
                                            mcmc_steps)
         rows += r
     result = {"rows": rows, "seeds": seeds, "pop_size": POP_SIZE, "max_iter": max_iter,
@@ -220,8 +226,6 @@ def run(seeds=20, plot_dir=None, progress=True, max_iter=1000, history_iter=300,
 
 def format_text(result) -> str:
     """Table 2 as text, our medians beside the paper's numbers."""
-    from ..cli.common import table
-
     lines = [f"Paper 001, Table 2 — medians over {result['seeds']} seeds; target = "
              f"{result['target']}; population size {result['pop_size']}.", ""]
     rows = []

@@ -1,12 +1,14 @@
-"""One chunk of fits as a single jitted program, sharded over the local devices.
+"""One chunk of fits as a single jitted program on one device; chunks run side by side.
 
-The batch axis (grid points) is split over a 1-D ``'batch'`` mesh of ``jax.local_devices()``:
-per-point inputs carry ``NamedSharding(mesh, P('batch'))``, the chunk's datasets (one per distinct
-seed) are replicated, and XLA partitions the vmapped observe → fit → peak program along the batch.
-(``shard_map`` would spare the cross-device "all done?" reduction of a batched while-loop, but
-optimistix's implicit-function machinery does not trace under it.) Fit
-keys come from the grid coordinates only, so the results do not depend on chunking, padding,
-device count or process split.
+The unit of work is a whole chunk on one device: the vmapped observe → fit → peak program of
+``chunk_size`` points (short chunks padded with copies of their last point). With ``D`` local
+devices, ``D`` chunks are dispatched at once, one per device, and run concurrently (JAX's
+asynchronous dispatch); no program is partitioned across devices. Every device therefore runs the
+same compiled program on the same inputs for a given chunk, whatever the device count or process
+split, and the table is the same bit for bit on 1, 2 or 4 devices and across processes. (A batch
+sharded over the devices would change the per-device batch with the device count, and with it the
+rounding of the vectorised program, which a population method amplifies.) Fit keys come from the
+grid coordinates only.
 """
 
 from __future__ import annotations
@@ -17,7 +19,6 @@ import zlib
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jax.sharding import Mesh, NamedSharding, PartitionSpec as P
 
 from ..identify.polach_fit import fit_polach_batch
 from ..models.polach import adhesion_peak, polach_adhesion
@@ -71,22 +72,23 @@ def _local_chunk(method, options, data, theta_true, index, seed, noise_scale, cr
     peak = jax.vmap(adhesion_peak)
     true_mu_max, true_creep_opt = peak(jnp.broadcast_to(theta_true, fit.params.shape), k_eps, speed)
     mu_max, creep_opt = peak(fit.params, k_eps, speed)
-    return dict(samples=covered, params=fit.params, mae=fit.mae, iterations=fit.iterations,
-                evaluations=fit.evaluations, true_mu_max=true_mu_max, true_creep_opt=true_creep_opt,
-                mu_max=mu_max, creep_opt=creep_opt)
+    out = dict(samples=covered, params=fit.params, mae=fit.mae, iterations=fit.iterations,
+               evaluations=fit.evaluations, true_mu_max=true_mu_max, true_creep_opt=true_creep_opt,
+               mu_max=mu_max, creep_opt=creep_opt)
+    status = getattr(fit, "status", None)  # jadhesion.status.Status codes, once fits carry them
+    if status is not None:
+        out["status"] = status
+    return out
 
 
 @functools.lru_cache(maxsize=None)
-def _program(method: str, options: tuple, devices: tuple):
-    mesh = Mesh(np.array(devices), ("batch",))
-    full, batch = NamedSharding(mesh, P()), NamedSharding(mesh, P("batch"))
-    return jax.jit(functools.partial(_local_chunk, method, options),
-                   in_shardings=(full, full) + (batch,) * 4, out_shardings=batch)
+def _program(method: str, options: tuple):
+    return jax.jit(functools.partial(_local_chunk, method, options))
 
 
-def run_chunk(method: str, data, theta_true, index, seed, noise_scale, creep_max, *, size=None,
-              options=(), devices=None) -> dict:
-    """Fit one chunk of grid points; returns host NumPy arrays, one entry per point.
+def start_chunk(method: str, data, theta_true, index, seed, noise_scale, creep_max, *, size=None,
+                options=(), device=None) -> dict:
+    """Dispatch one chunk of grid points to ``device``; returns its (not yet computed) outputs.
 
     Args:
         method: fitting method (static: one compiled program per method and shape).
@@ -95,17 +97,23 @@ def run_chunk(method: str, data, theta_true, index, seed, noise_scale, creep_max
         index: per point, the row of ``data`` to use, shape (m,), int.
         seed, noise_scale, creep_max: per point grid coordinates, shape (m,).
         size: the batch length to compile for (default ``m``): the points are padded with copies of
-            the last one to ``size`` rounded up to a multiple of the device count; the padding is
-            dropped from the results.
+            the last one to ``size``; :func:`finish_chunk` drops the padding.
         options: ``(name, value)`` pairs passed to :func:`fit_polach_batch` (static).
-        devices: devices of the ``'batch'`` mesh (default ``jax.local_devices()``).
+        device: where the chunk runs (default ``jax.local_devices()[0]``).
+
+    Returns:
+        The program's outputs as device arrays of length ``max(m, size)`` (JAX dispatches
+        asynchronously: call this for one chunk per device, then :func:`finish_chunk` on each).
     """
-    devices = tuple(jax.local_devices() if devices is None else devices)
-    program = _program(method, tuple(options), devices)
+    device = jax.local_devices()[0] if device is None else device
     m = len(index)
-    n = max(m, size or 0)
-    n += -n % len(devices)
-    take = np.concatenate([np.arange(m), np.full(n - m, m - 1)])
+    take = np.concatenate([np.arange(m), np.full(max(m, size or 0) - m, m - 1)])
     per_point = [np.asarray(a)[take] for a in (index, seed, noise_scale, creep_max)]
-    out = program(data, jnp.asarray(theta_true), *per_point)
-    return {k: np.asarray(v)[:m] for k, v in out.items()}
+    inputs = jax.device_put((data, jnp.asarray(theta_true), *per_point), device)
+    return _program(method, tuple(options))(*inputs)
+
+
+def finish_chunk(outputs: dict, m: int) -> dict:
+    """Wait for a chunk started by :func:`start_chunk`; host NumPy arrays of its ``m`` points."""
+    return {k: np.asarray(v)[:m] for k, v in outputs.items()}
+

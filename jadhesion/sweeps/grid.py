@@ -17,14 +17,9 @@ from typing import NamedTuple, Optional
 
 import numpy as np
 
+from ..data.scenarios import SCENARIOS
 from ..errors import InputError
 from ..identify.polach_fit import METHODS
-
-
-def _scenario_names() -> tuple:
-    from ..data.scenarios import SCENARIOS
-
-    return tuple(SCENARIOS)
 
 
 def _tuple(name, values, kind):
@@ -80,7 +75,7 @@ class Grid:
         fields = {"scenarios": str, "seeds": int, "methods": str, "noise_scale": float, "creep_max": float}
         for name, kind in fields.items():
             object.__setattr__(self, name, _tuple(name, getattr(self, name), kind))
-        known = _scenario_names()
+        known = tuple(SCENARIOS)
         for bad in (s for s in self.scenarios if s not in known):
             raise InputError(f"sweep grid: unknown scenario '{bad}' (known: {', '.join(known)})")
         for bad in (m for m in self.methods if m not in METHODS):
@@ -104,6 +99,7 @@ class Grid:
         return len(self.noise_scale) * len(self.creep_max)
 
     def to_dict(self) -> dict:
+        """The grid as plain JSON-ready values (its identity in :func:`grid_hash`)."""
         return dataclasses.asdict(self)
 
 
@@ -130,11 +126,10 @@ def plan(grid: Grid, chunk_size: int) -> list:
     return chunks
 
 
-def grid_hash(grid: Grid, chunk_size: int, source: str = "") -> str:
-    """A digest of everything that determines the chunks' contents (names part files); ``source``
-    names a non-default dataset source."""
-    from .. import __version__
-
-    blob = json.dumps({"grid": grid.to_dict(), "chunk_size": chunk_size, "version": __version__,
-                       "source": source}, sort_keys=True)
+def grid_hash(grid: Grid, chunk_size: int, source: str = "", code: str = "") -> str:
+    """A digest of everything that determines the chunks' contents (names part files): the grid,
+    the chunk size, ``source`` (names a non-default dataset source) and ``code`` (the
+    :func:`.provenance.code_hash` of the code and runtime computing them)."""
+    blob = json.dumps({"grid": grid.to_dict(), "chunk_size": chunk_size, "source": source,
+                       "code": code}, sort_keys=True)
     return hashlib.sha256(blob.encode()).hexdigest()[:16]

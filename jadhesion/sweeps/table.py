@@ -17,11 +17,12 @@ from ..errors import InputError
 from ..models.polach import PARAM_NAMES
 
 COORDINATES = ("scenario", "method", "seed", "noise_scale", "creep_max")
-#: Column order of the table.
+#: Column order of the table; ``status`` is the fit's :class:`jadhesion.status.Status` label
+#: (``converged``, ``max_steps``, …), ``unknown`` where the fit result carries no status.
 COLUMNS = (COORDINATES + ("samples",) + tuple(f"true_{p}" for p in PARAM_NAMES) + PARAM_NAMES
-           + ("mae", "iterations", "evaluations", "seconds",
+           + ("mae", "status", "iterations", "evaluations", "seconds",
               "true_mu_max", "mu_max", "true_creep_opt", "creep_opt"))
-_STR = {"scenario", "method"}
+_STR = {"scenario", "method", "status"}
 _INT = {"seed", "samples", "iterations", "evaluations"}
 
 

@@ -1,0 +1,44 @@
+"""``jadhesion sweep``'s work: join a multi-process run if asked, run the grid, report (arguments:
+:mod:`.sweep`)."""
+
+from __future__ import annotations
+
+import jax
+
+from ..sweeps import Grid, run_sweep
+from .common import Progress, UserError, emit_json, require_at_least
+
+
+def _initialize(args) -> None:
+    explicit = (args.coordinator, args.num_processes, args.process_id)
+    if not (args.distributed or any(v is not None for v in explicit)) or jax.distributed.is_initialized():
+        return
+    if any(v is None for v in explicit) and not args.distributed:
+        raise UserError("sweep: --coordinator, --num-processes and --process-id go together")
+    try:
+        jax.distributed.initialize(*explicit)
+    except (RuntimeError, ValueError) as exc:
+        raise UserError(f"sweep: cannot join the multi-process run: {exc}") from None
+
+
+def run(args) -> int:
+    """Run the sweep the arguments describe; print (or ``--json``) its summary on process 0."""
+    _initialize(args)
+    budget = {"pop_size": args.pop_size, "max_iter": args.max_iter}
+    require_at_least("sweep", 1, seeds=args.seeds, **budget)
+    grid = Grid(scenarios=args.scenarios, seeds=range(args.seeds), methods=args.methods,
+                noise_scale=args.noise, creep_max=args.creep_max, n_samples=args.samples,
+                fit_options={k: v for k, v in budget.items() if v is not None})
+    with Progress(label="sweep", unit="fits") as progress:
+        _, summary = run_sweep(grid, args.out, chunk_size=args.chunk_size, resume=args.resume,
+                               progress=progress)
+    if jax.process_index() != 0:
+        return 0
+    doc = summary._asdict()
+    if args.json:
+        emit_json(doc)
+    else:
+        print(f"{doc['fits']} fits ({doc['computed']} computed, {doc['chunks_computed']}/{doc['chunks']} "
+              f"chunks) in {doc['seconds']:.1f} s = {doc['fits_per_second']:.1f} fits/s on "
+              f"{doc['devices']} device(s), {doc['processes']} process(es) -> {doc['out']}")
+    return 0

@@ -1,0 +1,71 @@
+"""The command line's ``--help`` starts no JAX, and a command module that fails to import is an error.
+
+Each check runs in a fresh interpreter (``sys.modules`` of this one already holds JAX).
+"""
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from jadhesion.cli import COMMANDS, main, sweep
+
+REPO = Path(__file__).resolve().parents[1]
+#: Commands whose argument definitions still import JAX (their ``register`` reads the scenario and
+#: effect catalogues); remove a name once its module follows the recipe in jadhesion/cli/__init__.
+HEAVY_REGISTER = {"simulate"}
+
+_PROBE = """
+import runpy, sys
+sys.argv = ["jadhesion", *sys.argv[1:], "--help"]
+try:
+    runpy.run_module("jadhesion", run_name="__main__")
+except SystemExit as exc:
+    code = exc.code
+sys.stdout.flush()
+sys.stderr.write(f"exit={code} jax={'jax' in sys.modules}\\n")
+"""
+
+
+def _help(*argv):
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")]))
+    proc = subprocess.run([sys.executable, "-c", _PROBE, *argv], cwd=REPO, env=env, capture_output=True,
+                          text=True, timeout=120)
+    return proc.stdout, proc.stderr.strip().splitlines()[-1]
+
+
+def test_top_level_help_lists_every_command_without_jax():
+    out, status = _help()
+    assert status == "exit=0 jax=False"
+    words = " ".join(out.split())  # argparse wraps the help lines
+    for name, line in COMMANDS.items():
+        assert f"{name} {line}" in words
+
+
+@pytest.mark.parametrize("command", sorted(set(COMMANDS) - HEAVY_REGISTER))
+def test_command_help_imports_no_jax(command):
+    out, status = _help(command)
+    assert status == "exit=0 jax=False"
+    assert out.startswith(f"usage: jadhesion {command}")
+
+
+def test_the_probe_sees_jax_when_it_is_imported():
+    out, status = _help(*sorted(HEAVY_REGISTER)[:1])
+    assert status == "exit=0 jax=True" and out.startswith("usage: jadhesion")
+
+
+def test_a_command_module_that_fails_to_import_is_an_error(monkeypatch):
+    monkeypatch.setitem(COMMANDS, "missing", "a command whose module does not exist")
+    with pytest.raises(ModuleNotFoundError, match="jadhesion.cli.missing"):
+        main(["missing", "--help"])
+
+
+def test_a_handler_that_fails_to_import_is_an_error(monkeypatch):
+    def register(sub):
+        sub.add_parser("sweep").set_defaults(handler="jadhesion.cli.no_such_module:run")
+
+    monkeypatch.setattr(sweep, "register", register)
+    with pytest.raises(ModuleNotFoundError, match="jadhesion.cli.no_such_module"):
+        main(["sweep"])
