@@ -16,7 +16,8 @@ from jadhesion.identify.polach_fit import polach_mae
 from jadhesion.identify.likelihood import (LOG_SCALE_BOUNDS, ar1_log_likelihood, batch_log_posterior,
                                           log_likelihood, log_posterior, lowpass, observer_terms,
                                           prediction)
-from jadhesion.identify.mcmc import PosteriorResult, sample_posterior, table2_row
+from jadhesion.experiments.mcmc_row import table2_row
+from jadhesion.identify.mcmc import PosteriorResult, sample_posterior
 
 THETA = np.array([0.5, 0.3, 0.35, 0.4, 0.6])
 # Interior truths of the calibration check (the prior is the whole box [0, 1]^5).

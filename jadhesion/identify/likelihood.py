@@ -41,6 +41,21 @@ autoregressive two):
   the low-passed (coloured) sensor noise, modelled as AR(1). For the ``"filtered_torque"`` variant
   the torque term is zero. Creepage-only datasets cannot use it (no time, no torque).
 
+**Errors in variables.** When the dataset carries ``slip_sd`` (the smoother's posterior standard
+deviation of the slip, :mod:`jadhesion.data.creep_state`), the true slip of sample i is
+``N(w_i, sd_i²)`` given the recording, and the curve is predicted by its expectation under that
+law, by Gauss–Hermite quadrature (:data:`GH_NODES` nodes ``z_j``, weights ``ω_j``, creep
+``s = w / max(|v|, floor)`` at each node):
+
+    m_i = Σ_j ω_j mu_adh(w_i + sd_i z_j),    V_i = Σ_j ω_j mu_adh(w_i + sd_i z_j)² − m_i²
+
+``m_i`` replaces the curve in every prediction (low-passed for ``"observer"``), and the residuals
+are heteroscedastic: ``r_i = λ_i e_i`` with ``λ_i = √(1 + V_i / σ_m²)``, ``σ_m`` the noise's
+marginal scale (``sigma`` for ``"gauss"``, ``sigma/√(1 − rho²)`` for AR(1), ``b`` for
+``"laplace"``), ``e`` the likelihood's own noise model; ``log L`` gains ``−Σ log λ_i``. This is
+the linearised ``σ_i² = σ² + (∂mu_adh/∂w · sd_i)²`` to first order, and exact in the mean. Without
+``slip_sd`` (raw creep, creepage-only files) everything is as below with ``V_i = 0``.
+
 Why: on simulated 22E recordings the i.i.d. likelihoods are biased by the observer's lag during the
 slip excursions — the very samples that carry ``mu0`` and ``B`` — so their 90 % intervals miss the
 truth (``benchmarks/bench_mcmc.py --coverage``).
@@ -61,6 +76,7 @@ import numpy as np
 from ..data.dataset import PolachDataset
 from ..data.observer import foh_coefficients, lowpass_foh
 from ..data.vehicle import GRAVITY
+from ..models.kinematics import SPEED_FLOOR
 from ..models.polach import polach_adhesion
 
 LIKELIHOODS = ("gauss", "laplace", "ar1", "observer")
@@ -69,6 +85,10 @@ AUTOREGRESSIVE = ("ar1", "observer")
 SCALE_MIN, SCALE_MAX = 1e-4, 1.0
 LOG_SCALE_BOUNDS = (math.log(SCALE_MIN), math.log(SCALE_MAX))
 RHO_MAX = 0.99
+#: Gauss–Hermite nodes of the errors-in-variables expectation over the slip.
+GH_NODES = 7
+_GH_Z, _GH_W = np.polynomial.hermite_e.hermegauss(GH_NODES)
+_GH_W = _GH_W / _GH_W.sum()
 
 
 class ObserverTerms(NamedTuple):
@@ -141,15 +161,33 @@ def noise_names(likelihood: str, fixed_scale: bool = False) -> tuple:
     return scale + (("rho",) if likelihood in AUTOREGRESSIVE else ())
 
 
-def prediction(theta, data: PolachDataset, likelihood: str = "gauss",
-               obs: Optional[ObserverTerms] = None):
-    """The predicted ``mu_hat`` (n,) of a likelihood (the observer's view for ``"observer"``)."""
-    mu = polach_adhesion(theta, data.creep, data.slip, data.k_eps)
+def curve_moments(theta, data: PolachDataset):
+    """Mean and variance (n,) of ``mu_adh`` over the slip's uncertainty (module docstring);
+    ``(mu_adh(s, w), 0)`` when the dataset has no ``slip_sd``."""
+    if data.slip_sd is None:
+        return polach_adhesion(theta, data.creep, data.slip, data.k_eps), jnp.zeros_like(data.slip)
+    speed = jnp.maximum(jnp.abs(data.vehicle_speed), SPEED_FLOOR)
+    w = data.slip[None, :] + data.slip_sd[None, :] * jnp.asarray(_GH_Z, data.slip.dtype)[:, None]
+    mu = polach_adhesion(theta, w / speed[None, :], w, data.k_eps)
+    weights = jnp.asarray(_GH_W, mu.dtype)[:, None]
+    mean = jnp.sum(weights * mu, axis=0)
+    return mean, jnp.maximum(jnp.sum(weights * (mu - mean[None, :]) ** 2, axis=0), 0.0)
+
+
+def _predict(theta, data, likelihood, obs):
+    mean, var = curve_moments(theta, data)
     if likelihood != "observer":
-        return mu
+        return mean, var
     if obs is None:
         raise ValueError("the observer likelihood needs ObserverTerms (observer_terms(...))")
-    return lowpass(mu, obs) + obs.torque_term
+    return lowpass(mean, obs) + obs.torque_term, var
+
+
+def prediction(theta, data: PolachDataset, likelihood: str = "gauss",
+               obs: Optional[ObserverTerms] = None):
+    """The predicted ``mu_hat`` (n,) of a likelihood (the observer's view for ``"observer"``; the
+    expectation over the slip's uncertainty when the dataset has ``slip_sd``)."""
+    return _predict(theta, data, likelihood, obs)[0]
 
 
 def ar1_log_likelihood(r, log_sigma, rho):
@@ -168,14 +206,18 @@ def log_likelihood(theta, log_scale, data: PolachDataset, likelihood: str = "gau
     for ``"ar1"``/``"observer"``, the AR(1) coefficient ``rho`` and (observer) ``obs``."""
     if likelihood not in LIKELIHOODS:
         raise ValueError(f"likelihood must be one of {LIKELIHOODS}, got {likelihood!r}")
-    r = data.adhesion - prediction(theta, data, likelihood, obs)
+    mean, var = _predict(theta, data, likelihood, obs)
+    marginal = jnp.exp(2.0 * log_scale) / (1.0 - rho * rho)
+    log_lam = 0.5 * jnp.log1p(var / marginal)
+    r = (data.adhesion - mean) * jnp.exp(-log_lam)
     n = r.shape[0]
     if likelihood in AUTOREGRESSIVE:
-        return ar1_log_likelihood(r, log_scale, rho)
+        return ar1_log_likelihood(r, log_scale, rho) - jnp.sum(log_lam)
     scale = jnp.exp(log_scale)
     if likelihood == "gauss":
-        return -n * log_scale - 0.5 * jnp.sum(r * r) / scale**2 - 0.5 * n * math.log(2.0 * math.pi)
-    return -n * (log_scale + math.log(2.0)) - jnp.sum(jnp.abs(r)) / scale
+        return (-n * log_scale - 0.5 * jnp.sum(r * r) / scale**2 - 0.5 * n * math.log(2.0 * math.pi)
+                - jnp.sum(log_lam))
+    return -n * (log_scale + math.log(2.0)) - jnp.sum(jnp.abs(r)) / scale - jnp.sum(log_lam)
 
 
 def _split(phi, likelihood: str):
