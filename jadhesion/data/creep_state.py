@@ -20,8 +20,9 @@ white noise of variances ``R_w``, ``R_v``.
 smooth signal is nearly zero while white noise gives ``Var(Δ³e) = 20 σ²``, so
 ``σ = 1.4826 · MAD(Δ³y) / √20`` (robust to slip excursions). ``q_v``, ``q_w``: maximum of the
 Kalman filter's exact Gaussian log-likelihood (prediction-error decomposition) over a log grid
-(:data:`Q_GRID`, ½-decade steps; first ``q_v`` at a middle ``q_w``, then ``q_w``, then ``q_v``
-again), all grid points in one vmapped scan. Noise correlated over longer than a few samples
+(:data:`Q_GRID`, decade steps; first ``q_w`` at the smallest ``q_v`` — a heavy vehicle — then
+``q_v`` at that ``q_w``),
+each grid in one vmapped scan (2 × 13 filter passes: the cost of the smoother). Noise correlated over longer than a few samples
 (coloured sensor noise) is not separable from motion in one recording; it is partly tracked as
 signal, and the reported standard deviations then understate the error (see the README numbers).
 
@@ -44,7 +45,7 @@ from ..models.kinematics import SPEED_FLOOR
 from .vehicle import GRAVITY
 
 #: log10 of the candidate process-noise densities q [m²/s⁵].
-Q_GRID = np.arange(-8.0, 4.01, 0.5)
+Q_GRID = np.arange(-8.0, 4.01, 1.0)
 #: Smallest measurement sd [m/s] (a noise-free or coarsely quantised channel).
 MIN_MEASUREMENT_SD = 1e-6
 _H = np.array([[1.0, 0.0, 1.0, 0.0], [1.0, 0.0, 0.0, 0.0]])
@@ -153,9 +154,7 @@ def estimate_noise(time, wheel_speed, vehicle_speed):
         ll = ll_many(y, dts, r, qs)
         return qs[jnp.argmax(jnp.where(jnp.isfinite(ll), ll, -jnp.inf))]
 
-    mid = jnp.asarray(10.0 ** Q_GRID[len(Q_GRID) // 2], y.dtype)
-    q_v = best(jnp.stack([grid, jnp.full_like(grid, mid)], axis=1))[0]
-    q_w = best(jnp.stack([jnp.full_like(grid, q_v), grid], axis=1))[1]
+    q_w = best(jnp.stack([jnp.full_like(grid, grid[0]), grid], axis=1))[1]
     q_v = best(jnp.stack([grid, jnp.full_like(grid, q_w)], axis=1))[0]
     return r, jnp.stack([q_v, q_w])
 
