@@ -11,8 +11,8 @@ are turned into datasets with ``creep="raw"`` and ``creep="smoothed"``
 
 * ``fit --method lm`` (:func:`jadhesion.identify.polach_fit.fit_polach`): initial slope
   ``(kA + kS)/2`` within 25 % of the truth, |μ0 error|;
-* the emcee posterior with the ``observer`` likelihood (errors-in-variables when the dataset has
-  ``slip_sd``): whether the 90 % intervals of kS, μ0, μ_max, creep_opt hold the truth.
+* the emcee posterior with the ``--likelihood`` (default ``observer``; errors-in-variables when the
+  dataset has ``slip_sd``): whether the 90 % intervals of kS, μ0, μ_max, creep_opt hold the truth.
 
 The JSON (``benchmarks/results/coverage_noise.json``) records the git commit and every setting; the
 figure (``coverage_noise.png``) plots slope error, μ0 error and 90 % coverage against noise level.
@@ -58,7 +58,7 @@ def _simulate(name, level, seeds, points):
     return simulate_many(name, seeds, n_samples=points, sensor_noise=float(level))
 
 
-def run_level(level, per, points, steps, walkers, seed):
+def run_level(level, per, points, steps, walkers, seed, likelihood="observer"):
     """Records of one noise level: per scenario and creep option, LM and posterior results."""
     out = {}
     for name, sc in SCENARIOS.items():
@@ -70,8 +70,9 @@ def run_level(level, per, points, steps, walkers, seed):
             lm = [np.asarray(fit_polach(d, "lm", jax.random.key(0)).params) for d in datasets]
             slope = np.array([(p[0] + p[1]) / 2 for p in lm])
             true_slope = (truth[0] + truth[1]) / 2
-            report = coverage_study(datasets, [truth] * per, seed=seed, observers=obs,
-                                    likelihood="observer", walkers=walkers, steps=steps,
+            report = coverage_study(datasets, [truth] * per, seed=seed,
+                                    observers=obs if likelihood == "observer" else None,
+                                    likelihood=likelihood, walkers=walkers, steps=steps,
                                     burn=steps // 3, max_derived=1000)
             out[f"{name}/{creep}"] = {
                 "lm_slope": slope.tolist(), "true_slope": true_slope,
@@ -112,8 +113,9 @@ def figure(summary, levels, path):
         rows = [summary[f"{lv}/{creep}"] for lv in levels]
         axes[0].plot(x, [r["lm_slope_rel_error_median"] for r in rows], style, label=f"LM, {creep}")
         axes[1].plot(x, [r["lm_mu0_abs_error_median"] for r in rows], style, label=f"LM, {creep}")
-        for q in COVERED:
-            axes[2].plot(x, [r["coverage90"][q] for r in rows], style, label=f"{q}, {creep}")
+        for i, q in enumerate(COVERED):
+            axes[2].plot(x, [r["coverage90"][q] for r in rows], style, color=f"C{i}",
+                         label=f"{q}, {creep}")
     axes[0].axhline(0.25, color="k", lw=0.6)
     axes[2].axhspan(0.85, 0.95, color="0.85")
     titles = ("LM |slope error| / slope (median)", "LM |μ0 error| (median)",
@@ -135,16 +137,22 @@ def main(argv=None):
     p.add_argument("--steps", type=int, default=1500)
     p.add_argument("--walkers", type=int, default=32)
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--likelihood", default="observer", help="posterior likelihood (default observer)")
     p.add_argument("--save", default="benchmarks/results/coverage_noise.json")
     p.add_argument("--figure", default="benchmarks/results/coverage_noise.png")
+    p.add_argument("--replot", action="store_true", help="only redraw the figure from --save")
     args = p.parse_args(argv)
     levels = args.levels.split(",")
+    if args.replot:
+        with open(args.save) as fh:
+            figure(json.load(fh)["summary"], levels, args.figure)
+        return
     doc = {"commit": _commit(), "settings": vars(args), "realistic_sensors": REALISTIC.as_dict(),
            "band99_90": binomial_band(args.per * len(SCENARIOS), 0.9), "results": {}}
     start = time.perf_counter()
     for level in levels:
         doc["results"][level] = run_level(level, args.per, args.points, args.steps, args.walkers,
-                                          args.seed)
+                                          args.seed, args.likelihood)
         doc["summary"] = summarise(doc["results"])
         doc["wall_seconds"] = time.perf_counter() - start
         with open(args.save, "w") as fh:
