@@ -10,6 +10,11 @@ simulated recordings (``benchmarks/results/mcmc_coverage_recordings.json``) — 
 raw signals (``time``, speeds, ``traction_torque``) and its ``adhesion`` column, if any, is the
 paper observer's output of them; otherwise ``gauss`` (i.i.d. Gaussian). The JSON's ``likelihood``
 says which one ran and ``likelihood_note`` why.
+
+``--creep smoothed`` (the default) estimates creep as a smoothed state when the file has the raw
+signals (:mod:`jadhesion.data.creep_state`) and the likelihood integrates its uncertainty (errors in
+variables, :mod:`jadhesion.identify.likelihood`); ``--creep raw`` uses the speed difference. The
+JSON's ``creep`` says which one ran.
 """
 
 from __future__ import annotations
@@ -132,7 +137,7 @@ def run(args) -> int:
         emit_json(doc)
         return 0
     rows = [{"quantity": k, **v} for k, v in {**result.params, **result.derived}.items()]
-    print(f"likelihood: {likelihood} ({note})")
+    print(f"likelihood: {likelihood} ({note}); creep: {doc['creep']}")
     print(table(rows, ["quantity", "median", "q05", "q95"]))
     d = doc["diagnostics"]
     print(f"acceptance {d['acceptance']:.2f}, tau max {max(d['tau'].values()):.0f} steps, "
