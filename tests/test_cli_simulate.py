@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from jadhesion.cli import main
+from jadhesion.data.dataset import to_dataset
 from jadhesion.data.recording import load_recording
 from jadhesion.models.polach import PARAM_NAMES, polach_adhesion
 
@@ -45,23 +46,25 @@ def test_truth_records_everything(pair, capsys):
 
 
 def test_given_parameters_generate_the_data(pair):
-    """The recorded mu_hat follows the given parameters to the noise floor, not the scenario's."""
+    """The observed mu_hat (smoothed creep, realistic sensors) follows the given parameters to the
+    noise floor, not the scenario's."""
     for path in pair.values():
-        cols = load_recording(path).columns
+        data = to_dataset(load_recording(path))
         truth = json.loads(path.with_suffix(".truth.json").read_text())
         mae = {}
         for label, theta in (("given", [truth["params"][k] for k in PARAM_NAMES]),
                              ("scenario", [1.0, 1.0, 0.2610, 0.6858, 0.2251])):
-            model = polach_adhesion(np.asarray(theta), cols["creepage"], cols["slip_velocity"],
-                                    truth["k_eps"])
-            mae[label] = float(np.mean(np.abs(np.asarray(model) - cols["adhesion"])))
-        assert mae["given"] < 0.02 and mae["scenario"] > 2.0 * mae["given"], mae
+            model = polach_adhesion(np.asarray(theta), data.creep, data.slip, truth["k_eps"])
+            mae[label] = float(np.mean(np.abs(np.asarray(model) - np.asarray(data.adhesion))))
+        # realistic sensors: the true parameters' floor on smoothed creep is ~0.018 (wet scenario)
+        assert mae["given"] < 0.025 and mae["scenario"] > 1.5 * mae["given"], mae
 
 
 def test_braking_mirrors_traction(pair):
     t, b = (load_recording(pair[k]).columns for k in ("traction", "braking"))
     assert np.all(t["traction_torque"] > 0) and np.all(b["traction_torque"] < 0)
-    assert np.all(t["creepage"][100:] > 0) and np.all(b["creepage"][100:] < 0)
+    # recorded (raw) creep: realistic speed noise flips the sign of the smallest values only
+    assert np.mean(t["creepage"][100:] > 0) > 0.95 and np.mean(b["creepage"][100:] < 0) > 0.95
     assert np.all(b["vehicle_speed"] > 0)                       # still running forwards
     # odd model, same profile and noise seed: |mu_hat| agrees up to the (even) running resistance
     np.testing.assert_allclose(np.mean(-b["adhesion"]), np.mean(t["adhesion"]), rtol=0.02)

@@ -32,7 +32,7 @@ CLEAR = {
 
 @pytest.fixture(scope="module")
 def clean():
-    return simulate("dry", 3, (), N)
+    return simulate("dry", 3, (), N, sensors="clean")  # realistic-noise diagnosis: issue 15
 
 
 def _raw(sim):
@@ -104,7 +104,7 @@ def test_one_program_per_padded_length(clean):
     bucket compiles nothing new."""
     diagnose(_raw(clean), clean.vehicle)
     before = fitting.fit_candidates._cache_size()
-    sim = simulate("sand", 4, [("rail_change", 0.3)], 1800)
+    sim = simulate("sand", 4, [("rail_change", 0.3)], 1800, sensors="clean")
     result = diagnose(_raw(sim), sim.vehicle)
     assert result["second_round"] is not None  # round 2 ran
     assert fitting.fit_candidates._cache_size() == before
@@ -120,7 +120,7 @@ def test_thresholds_documented():
 @pytest.mark.parametrize("name", sorted(CLEAR))
 def test_effect_named_and_recovered(name):
     magnitude, param, tol = CLEAR[name]
-    sim = simulate("wet", 7, [(name, magnitude)], N)
+    sim = simulate("wet", 7, [(name, magnitude)], N, sensors="clean")
     result = diagnose(_raw(sim), sim.vehicle)
     assert result["verdict"] == name, [(c["name"], c["gain"]) for c in result["candidates"][:3]]
     est = result["extended"]["params"][param]
@@ -129,7 +129,7 @@ def test_effect_named_and_recovered(name):
 
 
 def test_cli_json_and_report(tmp_path, capsys):
-    sim = simulate("sand", 5, [("torque_offset", 0.03)], N)
+    sim = simulate("sand", 5, [("torque_offset", 0.03)], N, sensors="clean")
     path = save_recording(_raw(sim), sim.vehicle, tmp_path / "rec.csv")
     assert main(["diagnose", str(path), "--json", "--report", str(tmp_path / "rep")]) == 0
     doc = json.loads(capsys.readouterr().out)

@@ -16,7 +16,8 @@ from jadhesion.identify.polach_fit import polach_mae
 from jadhesion.identify.likelihood import (LOG_SCALE_BOUNDS, ar1_log_likelihood, batch_log_posterior,
                                           log_likelihood, log_posterior, lowpass, observer_terms,
                                           prediction)
-from jadhesion.identify.mcmc import PosteriorResult, sample_posterior, table2_row
+from jadhesion.experiments.mcmc_row import table2_row
+from jadhesion.identify.mcmc import PosteriorResult, sample_posterior
 
 THETA = np.array([0.5, 0.3, 0.35, 0.4, 0.6])
 # Interior truths of the calibration check (the prior is the whole box [0, 1]^5).
@@ -123,6 +124,32 @@ def test_observer_prediction_is_exact_on_a_noise_free_recording():
     observed = np.asarray(data.adhesion - prediction(theta, data, "observer", obs))
     assert np.max(np.abs(plain)) > 0.05
     assert np.max(np.abs(observed)) < 0.01 and np.std(observed) < 0.1 * np.std(plain)
+
+
+def test_errors_in_variables_likelihood(data):
+    """Zero slip sd is the plain likelihood; the quadrature moments match Monte Carlo (to 1e-3 in
+    the mean, an order below the noise; the variance to ~10 %, worse where the slip's interval
+    straddles w = 0, the kink of mu(|w|))."""
+    from jadhesion.identify.likelihood import curve_moments
+    from jadhesion.models.polach import polach_adhesion
+
+    theta = jnp.asarray(THETA)
+    zero = data._replace(slip_sd=jnp.zeros_like(data.slip))
+    for lik in ("gauss", "ar1", "laplace"):
+        np.testing.assert_allclose(float(log_likelihood(theta, -4.0, zero, lik, 0.3)),
+                                   float(log_likelihood(theta, -4.0, data, lik, 0.3)), rtol=1e-12)
+    sd = 0.3 * np.abs(np.asarray(data.slip)) + 1e-3
+    noisy = data._replace(slip_sd=jnp.asarray(sd))
+    mean, var = curve_moments(theta, noisy)
+    z = np.random.default_rng(3).standard_normal((20000, 1))
+    w = np.asarray(data.slip)[None, :] + sd[None, :] * z
+    speed = np.maximum(np.abs(np.asarray(data.vehicle_speed)), 0.01)[None, :]
+    mc = np.asarray(polach_adhesion(theta, w / speed, w, data.k_eps))
+    se = mc.std(axis=0) / np.sqrt(z.shape[0])
+    assert np.all(np.abs(np.asarray(mean) - mc.mean(axis=0)) < 5 * se + 1e-3)
+    rel = np.abs(np.asarray(var) / mc.var(axis=0) - 1)
+    assert np.median(rel) < 0.15 and np.max(rel) < 0.5
+    assert bool(jnp.isfinite(log_likelihood(theta, -4.0, noisy, "gauss")))
 
 
 def test_laplace_scale_maximum_is_mae(data):

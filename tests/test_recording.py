@@ -125,7 +125,8 @@ def test_raw_recording_runs_the_observer_with_the_sidecar_vehicle(tmp_path):
     cols = _raw_columns(20)
     vehicle = LOCO_22E.replace(wheel_radius_m=0.59)
     save_recording(cols, vehicle, tmp_path / "r.csv")
-    ds = to_dataset(load_recording(tmp_path / "r.csv"), observer_variant="filtered_torque")
+    ds = to_dataset(load_recording(tmp_path / "r.csv"), observer_variant="filtered_torque",
+                    creep="raw")
     expected = observe_adhesion(cols["time"], cols["wheel_speed"], cols["traction_torque"], vehicle,
                                 "filtered_torque")
     np.testing.assert_array_equal(np.asarray(ds.adhesion), np.asarray(expected))

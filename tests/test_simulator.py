@@ -21,13 +21,18 @@ ENVELOPE_KEYS = ("mean_speed_kmh", "max_slip_kmh", "max_creep", "mu_low", "mu_hi
 
 
 @pytest.mark.parametrize("name", sorted(SCENARIOS))
-def test_envelope_and_true_parameter_error_match_the_paper(name):
+@pytest.mark.parametrize("sensors", ["clean", "realistic"])
+def test_envelope_and_true_parameter_error_match_the_paper(name, sensors):
+    """The envelope holds with either sensor model; the paper's model error is matched on the
+    clean sensors it was calibrated on (realistic speed noise enters the recorded creep, so the
+    true parameters' error against raw creep grows: see the README's noise table)."""
     paper = paper_envelope(name)
-    for result in simulate_many(name, SEEDS):
+    for result in simulate_many(name, SEEDS, sensors=sensors):
         env = result.truth["envelope"]
         for key in ENVELOPE_KEYS:
             assert env[key] == pytest.approx(paper[key], rel=0.15), (result.truth["seed"], key)
-        assert env["true_param_mae"] == pytest.approx(paper["true_param_mae"], rel=0.10)
+        if sensors == "clean":
+            assert env["true_param_mae"] == pytest.approx(paper["true_param_mae"], rel=0.10)
         assert env["mu_min"] <= env["mu_low"] < env["mu_high"] <= env["mu_max"]
         assert all(np.all(np.isfinite(v)) for v in result.columns.values())
 
@@ -123,7 +128,7 @@ def _cli(*args):
 def test_cli_writes_recording_sidecar_and_truth(tmp_path):
     out = tmp_path / "rec.csv"
     proc = _cli("--scenario", "sand", "--effect", "rail_change=0.3", "--seed", "2",
-                "--out", str(out), "--json")
+                "--sensor-noise", "2", "--out", str(out), "--json")
     assert proc.returncode == 0, proc.stderr
     summary = json.loads(proc.stdout)
     assert summary["n_samples"] == 2000 and summary["effects"]["rail_change"]["magnitude"] == 0.3
@@ -133,11 +138,13 @@ def test_cli_writes_recording_sidecar_and_truth(tmp_path):
     assert sidecar["wheel_radius_m"] == 0.61 and sidecar["axle_load_kg"] == 21500.0
     truth = json.loads((tmp_path / "rec.truth.json").read_text())
     assert truth["scenario"] == "sand" and truth["params"]["kS"] == 0.4089
+    assert truth["noise"]["sensors"]["speed_white_mps"] == pytest.approx(2e-3)
     assert truth["envelope"] == summary["envelope"]
 
 
 @pytest.mark.parametrize("args", [["--scenario", "icy"], ["--scenario", "dry", "--effect", "bogus"],
-                                  ["--scenario", "dry", "--effect", "rail_change=abc"]])
+                                  ["--scenario", "dry", "--effect", "rail_change=abc"],
+                                  ["--scenario", "dry", "--sensor-noise", "-1"]])
 def test_cli_bad_input_exits_2_and_writes_nothing(tmp_path, args):
     proc = _cli(*args, "--out", str(tmp_path / "x.csv"))
     assert proc.returncode == 2, proc.stderr

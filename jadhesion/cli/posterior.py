@@ -10,6 +10,11 @@ simulated recordings (``benchmarks/results/mcmc_coverage_recordings.json``) — 
 raw signals (``time``, speeds, ``traction_torque``) and its ``adhesion`` column, if any, is the
 paper observer's output of them; otherwise ``gauss`` (i.i.d. Gaussian). The JSON's ``likelihood``
 says which one ran and ``likelihood_note`` why.
+
+``--creep smoothed`` (the default) estimates creep as a smoothed state when the file has the raw
+signals (:mod:`jadhesion.data.creep_state`) and the likelihood integrates its uncertainty (errors in
+variables, :mod:`jadhesion.identify.likelihood`); ``--creep raw`` uses the speed difference. The
+JSON's ``creep`` says which one ran.
 """
 
 from __future__ import annotations
@@ -31,6 +36,9 @@ def register(sub) -> None:
                    help="auto (default): observer when the file has raw signals, else gauss; ar1: "
                         "AR(1) residuals in time order; observer: the adhesion observer's lag "
                         "modelled, AR(1) noise (needs time and traction_torque)")
+    p.add_argument("--creep", choices=("smoothed", "raw"), default="smoothed",
+                   help="smoothed (default): creep as a smoothed state with its uncertainty in the "
+                        "likelihood (errors in variables); raw: the difference of the speeds")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--json", action="store_true", help="one JSON document on stdout")
     p.add_argument("--plot", metavar="DIR", default=None, help="write corner and predictive figures")
@@ -69,11 +77,12 @@ def _choose_likelihood(recording, requested: str):
         "auto: raw signals present, the observer's lag modelled")
 
 
-def _document(result, theta0, note="") -> dict:
+def _document(result, theta0, note="", creep="raw") -> dict:
     diag = result.diagnostics
     return {
         "likelihood": result.likelihood,
         "likelihood_note": note,
+        "creep": creep,
         "lm_start": dict(zip(result.names, map(float, theta0))),
         "params": result.params,
         "derived": result.derived,
@@ -103,7 +112,7 @@ def run(args) -> int:
     if args.steps < 50:
         raise UserError(f"--steps must be at least 50, got {args.steps}")
     recording = load_recording(args.file)
-    data = to_dataset(recording)
+    data = to_dataset(recording, creep=args.creep)
     likelihood, obs, note = _choose_likelihood(recording, args.likelihood)
     theta0 = lm_optimum(data, obs=obs)
     spread = np.asarray(initial_spread(theta0, data, obs=obs))
@@ -123,12 +132,12 @@ def run(args) -> int:
         out.mkdir(parents=True, exist_ok=True)
         corner_plot(result).savefig(out / "posterior_corner.png", dpi=90)
         predictive_plot(result, data).savefig(out / "posterior_predictive.png", dpi=110)
-    doc = _document(result, theta0, note)
+    doc = _document(result, theta0, note, "smoothed" if data.slip_sd is not None else "raw")
     if args.json:
         emit_json(doc)
         return 0
     rows = [{"quantity": k, **v} for k, v in {**result.params, **result.derived}.items()]
-    print(f"likelihood: {likelihood} ({note})")
+    print(f"likelihood: {likelihood} ({note}); creep: {doc['creep']}")
     print(table(rows, ["quantity", "median", "q05", "q95"]))
     d = doc["diagnostics"]
     print(f"acceptance {d['acceptance']:.2f}, tau max {max(d['tau'].values()):.0f} steps, "

@@ -53,6 +53,8 @@ def register(sub) -> None:
     p.add_argument("--effect", action="append", default=[], metavar="NAME[=MAGNITUDE]",
                    help=f"add an effect (repeatable): {', '.join(EFFECT_NAMES)}")
     p.add_argument("--seed", type=int, default=0, help="PRNG seed (default 0)")
+    p.add_argument("--sensor-noise", type=float, default=1.0, metavar="SCALE",
+                   help="scale of the realistic sensor noise (jadhesion.data.sensors; 0: none)")
     p.add_argument("--out", required=True, metavar="FILE.csv", help="recording to write")
     p.add_argument("--json", action="store_true", help="one JSON document on stdout")
     p.set_defaults(func=run)
@@ -122,9 +124,11 @@ def run(args) -> int:
         raise UserError(f"--out {args.out}: expected a .csv file name")
     if not out.parent.is_dir():
         raise UserError(f"--out {args.out}: directory {str(out.parent)!r} does not exist")
+    if not args.sensor_noise >= 0.0:
+        raise UserError(f"--sensor-noise {args.sensor_noise}: expected a scale >= 0")
     result = simulate(scenario, seed=args.seed, effects=args.effect, n_samples=n_samples,
                       vehicle=vehicle, sample_period=1.0 / args.rate,
-                      braking=args.test == "braking")
+                      braking=args.test == "braking", sensor_noise=args.sensor_noise)
     save_recording({k: result.columns[k] for k in RECORDING_COLUMNS}, result.vehicle, out)
     truth_path = out.with_suffix(".truth.json")
     truth_path.write_text(json.dumps(result.truth, indent=2, allow_nan=False) + "\n",

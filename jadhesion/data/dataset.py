@@ -1,17 +1,26 @@
 """The fitting dataset: what an identification sees (the observer's output, or a creepage file).
 
-:func:`to_dataset` is the observer stage of the data flow: recording → observer → dataset.
+:func:`to_dataset` is the observer stage of the data flow: recording → observer → dataset. With
+the raw signals it estimates creep and slip as states (:mod:`.creep_state`, ``creep="smoothed"``,
+the default) and carries their standard deviations; ``creep="raw"`` keeps the plain difference of
+the recorded speeds.
+
+**Default: smoothed.** On simulated 22E recordings (2 000 samples) with realistic sensors (1e-3
+m/s white + 5e-4 m/s AR(1) + 1 mm/s quantisation per speed) the smoothed creep's RMS error is 2.4×
+(dry) and 1.8× (sand) smaller than the raw difference's; on the historical clean sensors (5e-5
+m/s) 1.7× and 1.3× smaller, with calibrated standard deviations (``tests/test_creep_state.py``).
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, NamedTuple
+from typing import TYPE_CHECKING, NamedTuple, Optional
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
 from ..models import kinematics
+from .creep_state import smooth_recording
 from .observer import observe_adhesion
 
 if TYPE_CHECKING:
@@ -27,6 +36,8 @@ class PolachDataset(NamedTuple):
         adhesion: observed adhesion coefficient mu_hat [-], shape (n,).
         vehicle_speed: v [m/s], shape (n,).
         k_eps: Polach gradient constant [-] of the vehicle's contact, shape ().
+        slip_sd: standard deviation of ``slip`` [m/s], shape (n,), or None (exact / unknown).
+        creep_sd: standard deviation of ``creep`` [-], shape (n,), or None.
     """
 
     creep: jax.Array
@@ -34,10 +45,22 @@ class PolachDataset(NamedTuple):
     adhesion: jax.Array
     vehicle_speed: jax.Array
     k_eps: jax.Array
+    slip_sd: Optional[jax.Array] = None
+    creep_sd: Optional[jax.Array] = None
 
 
-def to_dataset(recording: "Recording", observer_variant: str = "paper") -> PolachDataset:
-    """The fitting dataset (creep s, slip w, mu_hat, v, k_eps) of a recording.
+CREEP_OPTIONS = ("smoothed", "raw")
+
+
+def to_dataset(recording: "Recording", observer_variant: str = "paper",
+               creep: str = "smoothed") -> PolachDataset:
+    """The fitting dataset (creep s, slip w, mu_hat, v, k_eps; with ``creep="smoothed"`` also
+    ``slip_sd``, ``creep_sd``) of a recording (or a simulation result).
+
+    ``creep="smoothed"`` (default): when the recording has the four raw signals (``time``, both
+    speeds, ``traction_torque``), slip, creep and vehicle speed are the RTS-smoothed states of
+    :func:`jadhesion.data.creep_state.smooth_recording`; ``mu_hat`` stays the observer's (or the
+    file's ``adhesion`` column). Without raw signals, or with ``creep="raw"``, as follows.
 
     With an ``adhesion`` column it is used directly: creepage from ``creepage``, else from
     ``slip_velocity`` (or ``wheel_speed − vehicle_speed``) through
@@ -46,9 +69,23 @@ def to_dataset(recording: "Recording", observer_variant: str = "paper") -> Polac
     (:func:`jadhesion.data.observer.observe_adhesion`, ``observer_variant``) runs on the raw
     signals and creep comes from the wheel and vehicle speeds.
     """
+    if creep not in CREEP_OPTIONS:
+        raise ValueError(f"creep must be one of {CREEP_OPTIONS}, got {creep!r}")
+    raw = _raw_dataset(recording, observer_variant)
+    if creep == "raw" or not all(c in recording.columns for c in RAW_SIGNALS):
+        return raw
+    est = smooth_recording(recording)
+    return raw._replace(creep=est.creep, slip=est.slip, vehicle_speed=est.vehicle_speed,
+                        slip_sd=est.slip_sd, creep_sd=est.creep_sd)
+
+
+RAW_SIGNALS = ("time", "vehicle_speed", "wheel_speed", "traction_torque")
+
+
+def _raw_dataset(recording, observer_variant: str) -> PolachDataset:
     cols = recording.columns
     v = np.asarray(cols["vehicle_speed"])
-    if recording.has_adhesion:
+    if "adhesion" in cols:
         mu = np.asarray(cols["adhesion"])
         if "slip_velocity" in cols:
             w = np.asarray(cols["slip_velocity"])

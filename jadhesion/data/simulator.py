@@ -35,8 +35,10 @@ the onset of the fast slip excursions). Not diffrax: a 4-state system at a fixed
 controller's rate needs no adaptivity, and this avoids a dependency and its compile cost. Time
 enters only through the smooth reference (W-method: the ``∂f/∂t`` term is dropped).
 
-**Sensors.** White Gaussian noise on wheel speed, vehicle speed (``speed_noise``) and torque
-(``torque_noise``), per scenario; then the observer (:mod:`.observer`, paper variant) gives
+**Sensors.** :mod:`.sensors`: white + AR(1) noise and quantisation on both speeds, white noise
+(the scenario's ``torque_noise``) and quantisation on torque — ``sensors="realistic"`` (default) or
+``"clean"`` (the historical 5e-5 m/s white speed noise), scaled by ``sensor_noise``; then the
+observer (:mod:`.observer`, paper variant) gives
 ``mu_hat``. Recorded ``creepage``/``slip_velocity`` come from the noisy recorded speeds.
 """
 
@@ -57,6 +59,7 @@ from .dataset import PolachDataset
 from .observer import observer_core
 from .recording import vehicle_sidecar
 from .scenarios import envelope, get_scenario
+from .sensors import measure, sensor_model
 from .vehicle import GRAVITY, LOCO_22E, Vehicle
 
 #: Recording sample period [s] (50 Hz) and ROS2 steps per sample (internal step 2 ms).
@@ -97,7 +100,7 @@ class SimulationResult:
     latent: dict
 
 
-def _constants(scenario, vehicle: Vehicle, mags, n_samples: int, noise: bool,
+def _constants(scenario, vehicle: Vehicle, mags, n_samples: int, sensors,
                period: float = SAMPLE_PERIOD, braking: bool = False) -> dict:
     duration = (n_samples - 1) * period
     v_exc = scenario.max_slip / scenario.max_creep
@@ -114,8 +117,7 @@ def _constants(scenario, vehicle: Vehicle, mags, n_samples: int, noise: bool,
              exc_width=scenario.excursion_width_s, max_creep=scenario.max_creep, t_main=t_main,
              minor_peak=scenario.minor_peak,
              minor_mask=(np.arange(MAX_MINOR) < scenario.minor_excursions).astype(float),
-             torque_noise=scenario.torque_noise * noise, speed_noise=scenario.speed_noise * noise,
-             mags=mags, period=period, sign=-1.0 if braking else 1.0)
+             sensors=sensors, mags=mags, period=period, sign=-1.0 if braking else 1.0)
     return jax.tree_util.tree_map(jnp.asarray, c)
 
 
@@ -267,13 +269,11 @@ def _simulate_core(key, c, n_samples: int, substeps: int = SUBSTEPS):
         return torque, slip, s, mu
 
     torque, slip, s, mu = jax.vmap(latent)(ys, ref)
-    kw, kv, kt = jax.random.split(k_noise, 3)
     m = c["mags"]
-    wheel_speed = ys[:, 0] * c["radius"] + c["speed_noise"] * jax.random.normal(kw, time.shape)
-    vehicle_speed = ys[:, 1] + c["speed_noise"] * jax.random.normal(kv, time.shape)
-    recorded_torque = (fx.delayed(time, torque, m[fx.INDEX["signal_delay"]])
-                       + m[fx.INDEX["torque_offset"]] * c["weight"] * c["radius"]
-                       + c["torque_noise"] * jax.random.normal(kt, time.shape))
+    wheel_speed, vehicle_speed, recorded_torque = measure(
+        k_noise, ys[:, 0] * c["radius"], ys[:, 1],
+        fx.delayed(time, torque, m[fx.INDEX["signal_delay"]])
+        + m[fx.INDEX["torque_offset"]] * c["weight"] * c["radius"], c["sensors"], c["period"])
     mu_hat = observer_core(time, wheel_speed, recorded_torque, c["inertia"], c["radius"],
                            c["axle_load"], c["t0"])
     rec_slip = wheel_speed - vehicle_speed
@@ -288,16 +288,18 @@ _simulate_jit = jax.jit(jax.vmap(_simulate_core, in_axes=(0, None, None, None)),
                         static_argnums=(2, 3))
 
 
-def _run(scenario, seeds, effects, n_samples, vehicle, noise, period=SAMPLE_PERIOD, braking=False):
+def _run(scenario, seeds, effects, n_samples, vehicle, noise, sensors, sensor_noise,
+         period=SAMPLE_PERIOD, braking=False):
     scenario = get_scenario(scenario)
+    model = sensor_model(sensors, scenario.torque_noise, sensor_noise * float(noise))
     n = DEFAULT_SAMPLES if n_samples is None else int(n_samples)
     if n < 100:
         raise ValueError(f"n_samples must be at least 100, got {n}")
     mags = fx.magnitudes(effects)
-    c = _constants(scenario, vehicle, mags, n, noise, period, braking)
+    c = _constants(scenario, vehicle, mags, n, model, period, braking)
     keys = jax.vmap(jax.random.PRNGKey)(jnp.asarray(seeds))
     columns, latent = _simulate_jit(keys, c, n, substeps_for(period))
-    return scenario, mags, c, columns, latent
+    return scenario, mags, c, columns, latent, model
 
 
 def substeps_for(period: float) -> int:
@@ -305,7 +307,8 @@ def substeps_for(period: float) -> int:
     return max(1, round(period / INTERNAL_STEP))
 
 
-def _truth(scenario, seed, mags, vehicle, duration, period=SAMPLE_PERIOD, braking=False) -> dict:
+def _truth(scenario, seed, mags, vehicle, duration, model, period=SAMPLE_PERIOD,
+           braking=False) -> dict:
     active = {}
     for name, mag in zip(fx.EFFECT_NAMES, mags):
         if mag != 0.0:
@@ -322,7 +325,8 @@ def _truth(scenario, seed, mags, vehicle, duration, period=SAMPLE_PERIOD, brakin
         "scenario": scenario.name, "seed": int(seed),
         "params": dict(zip(PARAM_NAMES, map(float, scenario.params))),
         "k_eps": vehicle.k_eps(), "effects": active,
-        "noise": {"torque_nm": scenario.torque_noise, "speed_mps": scenario.speed_noise},
+        "noise": {"torque_nm": model.torque_white_nm, "speed_mps": model.speed_sd(),
+                  "sensors": model.as_dict()},
         "controller": {"kp": KP, "ki": KI, "load_droop": LOAD_DROOP},
         "sample_period_s": period, "internal_step_s": period / substeps_for(period),
         "rate_hz": 1.0 / period, "duration_s": duration, "test": "braking" if braking else "traction",
@@ -331,17 +335,19 @@ def _truth(scenario, seed, mags, vehicle, duration, period=SAMPLE_PERIOD, brakin
 
 
 def simulate_many(scenario, seeds: Sequence[int], effects=(), n_samples=None, *,
-                  vehicle: Vehicle = LOCO_22E, noise: bool = True,
-                  sample_period: float = SAMPLE_PERIOD, braking: bool = False) -> list:
+                  vehicle: Vehicle = LOCO_22E, noise: bool = True, sensors="realistic",
+                  sensor_noise: float = 1.0, sample_period: float = SAMPLE_PERIOD,
+                  braking: bool = False) -> list:
     """:func:`simulate` for several seeds in one vmapped call; a list of results."""
-    scenario, mags, c, columns, latent = _run(scenario, seeds, effects, n_samples, vehicle, noise,
-                                              sample_period, braking)
+    scenario, mags, c, columns, latent, model = _run(scenario, seeds, effects, n_samples, vehicle,
+                                                     noise, sensors, sensor_noise, sample_period,
+                                                     braking)
     results = []
     for i, seed in enumerate(seeds):
         result = SimulationResult(
             columns={k: np.asarray(v[i]) for k, v in columns.items()}, vehicle=vehicle,
-            truth=_truth(scenario, seed, mags, vehicle, float(c["duration"]), sample_period,
-                         braking),
+            truth=_truth(scenario, seed, mags, vehicle, float(c["duration"]), model,
+                         sample_period, braking),
             latent={k: np.asarray(v[i]) for k, v in latent.items()})
         result.truth["envelope"] = envelope(result)
         results.append(result)
@@ -349,8 +355,8 @@ def simulate_many(scenario, seeds: Sequence[int], effects=(), n_samples=None, *,
 
 
 def simulate(scenario, seed: int = 0, effects=(), n_samples=None, *, vehicle: Vehicle = LOCO_22E,
-             noise: bool = True, sample_period: float = SAMPLE_PERIOD,
-             braking: bool = False) -> SimulationResult:
+             noise: bool = True, sensors="realistic", sensor_noise: float = 1.0,
+             sample_period: float = SAMPLE_PERIOD, braking: bool = False) -> SimulationResult:
     """Simulate one traction test recording.
 
     Args:
@@ -360,7 +366,9 @@ def simulate(scenario, seed: int = 0, effects=(), n_samples=None, *, vehicle: Ve
             :data:`~..models.effects.EFFECTS`.
         n_samples: samples (default :data:`DEFAULT_SAMPLES`, 40 s at the default rate).
         vehicle: the locomotive (its nominal radius is the recorded one).
-        noise: ``False`` gives noise-free sensors.
+        noise: ``False`` gives noise-free sensors (same as ``sensor_noise=0``).
+        sensors: ``"realistic"`` (default), ``"clean"`` or a :class:`~.sensors.SensorModel`.
+        sensor_noise: scale of every sensor noise level and resolution (:mod:`.sensors`).
         sample_period: recording sample period [s] (default :data:`SAMPLE_PERIOD`, 50 Hz); the
             integrator keeps an internal step near :data:`INTERNAL_STEP` (:func:`substeps_for`).
         braking: a braking test: the creep reference is negated (negative creep, adhesion and
@@ -370,7 +378,8 @@ def simulate(scenario, seed: int = 0, effects=(), n_samples=None, *, vehicle: Ve
         InputError: unknown scenario or effect, bad magnitude.
     """
     return simulate_many(scenario, [seed], effects, n_samples, vehicle=vehicle, noise=noise,
-                         sample_period=sample_period, braking=braking)[0]
+                         sensors=sensors, sensor_noise=sensor_noise, sample_period=sample_period,
+                         braking=braking)[0]
 
 
 def _dataset(columns, k_eps) -> PolachDataset:
@@ -391,15 +400,20 @@ def stack_datasets(results: Sequence[SimulationResult]) -> PolachDataset:
 
 
 def simulate_dataset(scenario, seed: int = 0, effects=(), n_samples=None, *,
-                     vehicle: Vehicle = LOCO_22E) -> PolachDataset:
+                     vehicle: Vehicle = LOCO_22E, sensors="realistic",
+                     sensor_noise: float = 1.0) -> PolachDataset:
     """The fitting dataset (recorded creep, slip, speed and observer output) of one recording."""
-    data = simulate_batch(scenario, [seed], effects, n_samples, vehicle=vehicle)
+    data = simulate_batch(scenario, [seed], effects, n_samples, vehicle=vehicle, sensors=sensors,
+                          sensor_noise=sensor_noise)
     return jax.tree_util.tree_map(lambda a: a[0], data)
 
 
 def simulate_batch(scenario, seeds: Sequence[int], effects=(), n_samples=None, *,
-                   vehicle: Vehicle = LOCO_22E) -> PolachDataset:
+                   vehicle: Vehicle = LOCO_22E, sensors="realistic",
+                   sensor_noise: float = 1.0) -> PolachDataset:
     """Datasets for many seeds in one vmapped, jitted call: every field gains a leading seed axis
-    (``k_eps`` too, shape (n_seeds,)), so the result vmaps straight into a fit."""
-    _, _, c, columns, _ = _run(scenario, seeds, effects, n_samples, vehicle, True)
+    (``k_eps`` too, shape (n_seeds,)), so the result vmaps straight into a fit. Creep and slip are
+    the raw differences of the recorded speeds (:func:`.dataset.to_dataset` smooths them)."""
+    _, _, c, columns, _, _ = _run(scenario, seeds, effects, n_samples, vehicle, True, sensors,
+                                  sensor_noise)
     return _dataset(columns, jnp.full((len(seeds),), c["k_eps"]))

@@ -107,7 +107,7 @@ def mcmc_row(sim, data, theta_lm, *, likelihood=MCMC_LIKELIHOOD, walkers=MCMC_WA
     from ..identify.laplace import initial_spread, observer_residual
     from ..identify.likelihood import recording_observer_terms
     from ..identify.lm import box_lm
-    from ..identify.mcmc import table2_row
+    from .mcmc_row import table2_row
 
     t0 = time.perf_counter()
     obs = None

@@ -41,6 +41,21 @@ autoregressive two):
   the low-passed (coloured) sensor noise, modelled as AR(1). For the ``"filtered_torque"`` variant
   the torque term is zero. Creepage-only datasets cannot use it (no time, no torque).
 
+**Errors in variables.** When the dataset carries ``slip_sd`` (the smoother's posterior standard
+deviation of the slip, :mod:`jadhesion.data.creep_state`), the true slip of sample i is
+``N(w_i, sd_i²)`` given the recording, and the curve is predicted by its expectation under that
+law, by Gauss–Hermite quadrature (:data:`GH_NODES` nodes ``z_j``, weights ``ω_j``, creep
+``s = w / max(|v|, floor)`` at each node):
+
+    m_i = Σ_j ω_j mu_adh(w_i + sd_i z_j),    V_i = Σ_j ω_j mu_adh(w_i + sd_i z_j)² − m_i²
+
+``m_i`` replaces the curve in every prediction (low-passed for ``"observer"``); residuals are
+heteroscedastic, ``r_i = λ_i e_i``, ``λ_i = √(1 + V_i / σ_m²)`` (``σ_m``: ``sigma``, AR(1)
+``sigma/√(1 − rho²)``, or ``b``), ``e`` the likelihood's noise model, ``log L`` gains
+``−Σ log λ_i`` — to first order the linearised ``σ_i² = σ² + (∂mu_adh/∂w · sd_i)²``. The moments
+are ~10 % rough where the interval straddles w = 0 (the kink of ``mu(|w|)``). Without ``slip_sd``
+(raw creep, creepage-only files) ``V_i = 0`` and ``m_i = mu_adh(s_i, w_i)``.
+
 Why: on simulated 22E recordings the i.i.d. likelihoods are biased by the observer's lag during the
 slip excursions — the very samples that carry ``mu0`` and ``B`` — so their 90 % intervals miss the
 truth (``benchmarks/bench_mcmc.py --coverage``).
@@ -61,6 +76,7 @@ import numpy as np
 from ..data.dataset import PolachDataset
 from ..data.observer import foh_coefficients, lowpass_foh
 from ..data.vehicle import GRAVITY
+from ..models.kinematics import SPEED_FLOOR
 from ..models.polach import polach_adhesion
 
 LIKELIHOODS = ("gauss", "laplace", "ar1", "observer")
@@ -69,12 +85,14 @@ AUTOREGRESSIVE = ("ar1", "observer")
 SCALE_MIN, SCALE_MAX = 1e-4, 1.0
 LOG_SCALE_BOUNDS = (math.log(SCALE_MIN), math.log(SCALE_MAX))
 RHO_MAX = 0.99
+#: Gauss–Hermite nodes of the errors-in-variables expectation over the slip.
+GH_NODES = 7
+_GH_Z, _GH_W = np.polynomial.hermite_e.hermegauss(GH_NODES)
+_GH_W = _GH_W / _GH_W.sum()
 
 
 class ObserverTerms(NamedTuple):
-    """What the ``"observer"`` likelihood needs besides the dataset (a pytree, arrays float64).
-
-    Attributes:
+    """What the ``"observer"`` likelihood needs besides the dataset (a pytree, arrays float64):
         torque_term: ``(T − LP[T]) / (m g r)`` [-], shape (n,) (zeros for ``filtered_torque``).
         alpha, gain0, gain1: first-order-hold low-pass coefficients per step, shape (n − 1,):
             ``x_{k+1} = alpha x_k + gain0 u_k + gain1 u_{k+1}``, ``x_0 = u_0``.
@@ -90,8 +108,7 @@ def observer_terms(time, torque, axle_load_kg: float, wheel_radius_m: float, t0:
                    variant: str = "paper", gravity: float = GRAVITY) -> ObserverTerms:
     """:class:`ObserverTerms` of a recording: ``time`` [s] (n,), recorded ``torque`` [N·m] (n,),
     the observer's axle load [kg], nominal radius [m] and time constant ``T0`` [s]."""
-    time = jnp.asarray(time, jnp.float64)
-    torque = jnp.asarray(torque, jnp.float64)
+    time, torque = jnp.asarray(time, jnp.float64), jnp.asarray(torque, jnp.float64)
     if time.ndim != 1 or time.shape != torque.shape or time.shape[0] < 3:
         raise ValueError(f"time and torque must be 1-D of equal length >= 3, got {time.shape}, "
                          f"{torque.shape}")
@@ -141,15 +158,33 @@ def noise_names(likelihood: str, fixed_scale: bool = False) -> tuple:
     return scale + (("rho",) if likelihood in AUTOREGRESSIVE else ())
 
 
-def prediction(theta, data: PolachDataset, likelihood: str = "gauss",
-               obs: Optional[ObserverTerms] = None):
-    """The predicted ``mu_hat`` (n,) of a likelihood (the observer's view for ``"observer"``)."""
-    mu = polach_adhesion(theta, data.creep, data.slip, data.k_eps)
+def curve_moments(theta, data: PolachDataset):
+    """Mean and variance (n,) of ``mu_adh`` over the slip's uncertainty (module docstring);
+    ``(mu_adh(s, w), 0)`` when the dataset has no ``slip_sd``."""
+    if data.slip_sd is None:
+        return polach_adhesion(theta, data.creep, data.slip, data.k_eps), jnp.zeros_like(data.slip)
+    speed = jnp.maximum(jnp.abs(data.vehicle_speed), SPEED_FLOOR)
+    w = data.slip[None, :] + data.slip_sd[None, :] * jnp.asarray(_GH_Z, data.slip.dtype)[:, None]
+    mu = polach_adhesion(theta, w / speed[None, :], w, data.k_eps)
+    weights = jnp.asarray(_GH_W, mu.dtype)[:, None]
+    mean = jnp.sum(weights * mu, axis=0)
+    return mean, jnp.maximum(jnp.sum(weights * (mu - mean[None, :]) ** 2, axis=0), 0.0)
+
+
+def _predict(theta, data, likelihood, obs):
+    mean, var = curve_moments(theta, data)
     if likelihood != "observer":
-        return mu
+        return mean, var
     if obs is None:
         raise ValueError("the observer likelihood needs ObserverTerms (observer_terms(...))")
-    return lowpass(mu, obs) + obs.torque_term
+    return lowpass(mean, obs) + obs.torque_term, var
+
+
+def prediction(theta, data: PolachDataset, likelihood: str = "gauss",
+               obs: Optional[ObserverTerms] = None):
+    """The predicted ``mu_hat`` (n,) of a likelihood (the observer's view for ``"observer"``; the
+    expectation over the slip's uncertainty when the dataset has ``slip_sd``)."""
+    return _predict(theta, data, likelihood, obs)[0]
 
 
 def ar1_log_likelihood(r, log_sigma, rho):
@@ -168,14 +203,18 @@ def log_likelihood(theta, log_scale, data: PolachDataset, likelihood: str = "gau
     for ``"ar1"``/``"observer"``, the AR(1) coefficient ``rho`` and (observer) ``obs``."""
     if likelihood not in LIKELIHOODS:
         raise ValueError(f"likelihood must be one of {LIKELIHOODS}, got {likelihood!r}")
-    r = data.adhesion - prediction(theta, data, likelihood, obs)
+    mean, var = _predict(theta, data, likelihood, obs)
+    marginal = jnp.exp(2.0 * log_scale) / (1.0 - rho * rho)
+    log_lam = 0.5 * jnp.log1p(var / marginal)
+    r = (data.adhesion - mean) * jnp.exp(-log_lam)
     n = r.shape[0]
     if likelihood in AUTOREGRESSIVE:
-        return ar1_log_likelihood(r, log_scale, rho)
+        return ar1_log_likelihood(r, log_scale, rho) - jnp.sum(log_lam)
     scale = jnp.exp(log_scale)
     if likelihood == "gauss":
-        return -n * log_scale - 0.5 * jnp.sum(r * r) / scale**2 - 0.5 * n * math.log(2.0 * math.pi)
-    return -n * (log_scale + math.log(2.0)) - jnp.sum(jnp.abs(r)) / scale
+        return (-n * log_scale - 0.5 * jnp.sum(r * r) / scale**2 - 0.5 * n * math.log(2.0 * math.pi)
+                - jnp.sum(log_lam))
+    return -n * (log_scale + math.log(2.0)) - jnp.sum(jnp.abs(r)) / scale - jnp.sum(log_lam)
 
 
 def _split(phi, likelihood: str):
@@ -186,10 +225,7 @@ def _split(phi, likelihood: str):
     if n_noise not in expected:
         raise ValueError(f"phi for likelihood {likelihood!r} must have {5 + expected[0]} or "
                          f"{5 + expected[1]} entries, got shape {phi.shape}")
-    has_scale = n_noise == expected[1]
-    log_scale = phi[5] if has_scale else None
-    rho = phi[-1] if has_rho else None
-    return phi[:5], log_scale, rho
+    return phi[:5], phi[5] if n_noise == expected[1] else None, phi[-1] if has_rho else None
 
 
 def log_prior(phi, lower, upper, likelihood: str = "gauss"):
@@ -235,12 +271,10 @@ def ensemble_log_prob(data: PolachDataset, likelihood: str = "gauss", bounds=Non
     walker count and data shape — a new dataset of the same shape does not re-trace) on the NumPy
     walker array, and one device→host copy of W numbers.
 
-    Args:
-        data: the dataset (arrays become float64 device arrays once).
-        likelihood: one of :data:`LIKELIHOODS`.
-        bounds: prior box ``(lower, upper)`` of the five Polach parameters; default ``[0, 1]^5``.
-        fixed_scale: fix the noise scale [-] instead of sampling ``log_scale``.
-        obs: :class:`ObserverTerms` (required by ``"observer"``, ignored otherwise).
+    ``data``: the dataset; ``likelihood``: one of :data:`LIKELIHOODS`; ``bounds``: prior box
+    ``(lower, upper)`` of the Polach parameters (default ``[0, 1]^5``); ``fixed_scale``: a fixed
+    noise scale [-] instead of sampling ``log_scale``; ``obs``: :class:`ObserverTerms` (required by
+    ``"observer"``, ignored otherwise).
     """
     if likelihood not in LIKELIHOODS:
         raise ValueError(f"likelihood must be one of {LIKELIHOODS}, got {likelihood!r}")

@@ -27,7 +27,6 @@ from ..models.polach import PARAM_NAMES, adhesion_peak, polach_adhesion
 from .ensemble import MIN_TAU_MULTIPLE, ChainTooShortWarning, Diagnostics, run_ensemble  # noqa: F401
 from .likelihood import (AUTOREGRESSIVE, LOG_SCALE_BOUNDS, RHO_MAX, ObserverTerms,
                          ensemble_log_prob, noise_names, prediction)
-from .polach_fit import polach_mae
 
 QUANTILES = (0.05, 0.5, 0.95)
 
@@ -171,40 +170,6 @@ def sample_posterior(data: PolachDataset, theta0, *, walkers: int = 32, steps: i
 def posterior_curves(theta_samples, creep, vehicle_speed, k_eps):
     """Adhesion curves ``mu_adh(s, s·v)`` [-] of each sample (m, 5) on a creep grid (g,) → (m, g)."""
     return jax.vmap(lambda th: polach_adhesion(th, creep, creep * vehicle_speed, k_eps))(theta_samples)
-
-
-def table2_row(data: PolachDataset, theta0, *, walkers: int = 32, steps: int = 5000, seed: int = 0,
-               likelihood: str = "gauss", obs: Optional[ObserverTerms] = None, spread=1e-3,
-               burn: Optional[int] = None, truth=None) -> dict:
-    """The ``mcmc`` row of a Table-2-style comparison for one dataset.
-
-    ``error``: MAE (the paper's fitness, eq 15, against ``mu_hat``) of the posterior-median
-    parameters; ``steps`` / ``evaluations`` / ``seconds``: what a converged chain costs — burn-in
-    plus ``50 τ_max`` steps, seconds scaled from this run's warm wall time (``converged``: this run
-    was already that long; otherwise τ comes from a shorter chain and the cost is an estimate);
-    ``width90``: 90 % interval widths of the parameters and derived quantities; with ``truth``,
-    ``param_abs_error`` |median − truth|.
-    """
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", ChainTooShortWarning)
-        result = sample_posterior(data, theta0, walkers=walkers, steps=steps, seed=seed,
-                                  likelihood=likelihood, obs=obs, spread=spread, burn=burn)
-    d = result.diagnostics
-    median = np.array([result.params[n]["median"] for n in PARAM_NAMES])
-    needed = int(np.ceil(d.burn + MIN_TAU_MULTIPLE * np.max(d.tau) * d.thin))
-    row = {"method": "mcmc", "likelihood": likelihood,
-           "error": float(polach_mae(jnp.asarray(median), data)),
-           "params": dict(zip(PARAM_NAMES, median.tolist())), "steps": needed,
-           "evaluations": needed * walkers, "seconds": d.seconds * needed / d.steps,
-           "converged": not d.warnings, "steps_run": d.steps, "seconds_run": d.seconds,
-           "log_prob_compile_seconds": d.compile_seconds,
-           "walkers": walkers, "tau_max": float(np.max(d.tau)), "acceptance": d.acceptance,
-           "width90": {n: q["q95"] - q["q05"] for n, q in {**result.params, **result.derived}.items()},
-           "interval90": {n: [q["q05"], q["q95"]] for n, q in {**result.params, **result.derived}.items()}}
-    if truth is not None:
-        truth = np.asarray(truth, float)
-        row["param_abs_error"] = dict(zip(PARAM_NAMES, np.abs(median - truth).tolist()))
-    return row
 
 
 class NutsResult(NamedTuple):
