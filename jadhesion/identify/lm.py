@@ -25,8 +25,11 @@ Marquardt/MINPACK scaling) and projects, ``u' = clip(u + δ, 0, 1)``. The step i
 gain ratio ``ρ = (C − C')/(−gᵀs − ½ sᵀHs) > 10⁻⁴`` (``s = u' − u``, ``C = ½‖r‖²``); ``λ`` follows
 Nielsen's rule. It stops after an accepted step with ``C − C' ≤ ftol·C`` and
 ``‖s‖∞ ≤ xtol (xtol + ‖u‖∞)``; after any step whose predicted and actual decreases are both at most
-``ftol·C`` (MINPACK's test); when the projected gradient ``‖clip(u − g) − u‖∞ ≤ gtol``; when
-``λ > 10¹⁶`` (no decrease is representable); or at ``max_steps`` (``success`` false).
+``ftol·C`` (MINPACK's test); when the projected gradient ``‖clip(u − g) − u‖∞ ≤ gtol`` (any of these three at a
+point where a variable sits on a face with a vanishing Jacobian column — a plateau, e.g. ``μ0 = 0``
+— is reported ``STALLED``, not converged); when
+``λ > 10¹⁶`` (no decrease is representable: status ``STALLED``); or at ``max_steps`` (status
+``MAX_STEPS``). Only the three tests give ``CONVERGED`` (``success`` true).
 :func:`box_lm_queue` runs many such problems as a work queue over a few vmapped lanes, so a batch
 costs its total number of steps rather than (batch size × the slowest member's steps).
 """
@@ -40,18 +43,30 @@ import jax
 import jax.numpy as jnp
 import optimistix as optx
 
+from ..status import Status
 from .driver import run
 from .population import evaluate, uniform_population
 from .tlbo import ITLBO
 
 
 class LMResult(NamedTuple):
-    """``params`` (d,), ``sse = ‖r‖²``, total ``steps``, ``success`` (converged and finite)."""
+    """``params`` (d,), ``sse = ‖r‖²``, total ``steps``, ``success`` (converged and finite) and
+    ``status`` (int32 :class:`jadhesion.status.Status` code: converged, max_steps, stalled,
+    nonfinite)."""
 
     params: jax.Array
     sse: jax.Array
     steps: jax.Array
     success: jax.Array
+    status: jax.Array
+
+
+def status_code(converged, stalled, finite):
+    """The int32 :class:`Status` code of a solver that stopped: ``NONFINITE`` before
+    ``CONVERGED`` before ``STALLED`` before ``MAX_STEPS``."""
+    return jnp.where(~finite, int(Status.NONFINITE), jnp.where(
+        converged, int(Status.CONVERGED),
+        jnp.where(stalled, int(Status.STALLED), int(Status.MAX_STEPS)))).astype(jnp.int32)
 
 
 def safe_residual(residual):
@@ -79,7 +94,15 @@ def from_box(p, bounds):
 def _solve(fn, y0, args, rtol, atol, max_steps):
     solver = optx.LevenbergMarquardt(rtol=rtol, atol=atol)
     sol = optx.least_squares(fn, solver, y0, args, max_steps=max_steps, throw=False)
-    return sol.value, sol.stats["num_steps"], sol.result == optx.RESULTS.successful
+    return sol.value, sol.stats["num_steps"], _optx_status(sol.result)
+
+
+def _optx_status(result):
+    """optimistix's result as a :class:`Status` code (finiteness is checked by the caller)."""
+    return jnp.where(result == optx.RESULTS.successful, int(Status.CONVERGED), jnp.where(
+        result == optx.RESULTS.max_steps_reached, int(Status.MAX_STEPS),
+        jnp.where(result == optx.RESULTS.nonfinite, int(Status.NONFINITE),
+                  int(Status.STALLED)))).astype(jnp.int32)
 
 
 def _solve_unbounded(res, p0, args, rtol, atol, max_steps):
@@ -123,13 +146,17 @@ def lm_solve(residual, p0, args=None, bounds=None, *, rtol=1e-12, atol=1e-12, ma
         p, steps, ok = _solve_unbounded(res, p0, args, rtol, atol, max_steps)
     r = residual(p, args)
     sse = jnp.sum(r * r)
-    ok = ok & jnp.isfinite(sse) & jnp.all(jnp.isfinite(p))
-    return LMResult(p, jnp.where(jnp.isfinite(sse), sse, jnp.inf), steps, ok)
+    finite = jnp.isfinite(sse) & jnp.all(jnp.isfinite(p))
+    code = jnp.where(finite, ok, int(Status.NONFINITE)).astype(jnp.int32)
+    return LMResult(p, jnp.where(jnp.isfinite(sse), sse, jnp.inf), steps,
+                    code == int(Status.CONVERGED), code)
 
 
 def best_of(results: LMResult) -> LMResult:
-    """The lowest-SSE member of a batch of :class:`LMResult` (leading axis); steps are summed."""
-    i = jnp.argmin(jnp.where(jnp.isnan(results.sse), jnp.inf, results.sse))
+    """The lowest-SSE converged member of a batch of :class:`LMResult` (leading axis), or the
+    lowest-SSE member when none converged; steps are summed."""
+    sse = jnp.where(jnp.isnan(results.sse), jnp.inf, results.sse)
+    i = jnp.argmin(jnp.where(jnp.any(results.success) & ~results.success, jnp.inf, sse))
     pick = jax.tree_util.tree_map(lambda a: a[i], results)
     return pick._replace(steps=jnp.sum(results.steps))
 
@@ -165,6 +192,7 @@ class _BoxState(NamedTuple):
     nu: jax.Array
     steps: jax.Array
     done: jax.Array
+    converged: jax.Array
     fresh: jax.Array
 
 
@@ -189,7 +217,8 @@ def _box_lm_stepper(residual, bounds, options):
         scalar = lambda v: jnp.asarray(v, dtype)  # noqa: E731
         return _BoxState(jnp.clip((p0 - lo) / width, 0.0, 1.0), scalar(jnp.inf), jnp.zeros(d, dtype),
                          jnp.zeros((d, d), dtype), scalar(0.0), jnp.zeros(d, dtype), scalar(1e-3),
-                         scalar(2.0), jnp.asarray(0), jnp.asarray(False), jnp.asarray(True))
+                         scalar(2.0), jnp.asarray(0), jnp.asarray(False), jnp.asarray(False),
+                         jnp.asarray(True))
 
     def step(st, args):
         u, g, h, c, fresh = st.u, st.g, st.h, st.cost, st.fresh
@@ -217,15 +246,24 @@ def _box_lm_stepper(residual, bounds, options):
         # ftol·C, so the iterate is a minimum to that precision even if the trial was rejected
         # (without it, a converged run spends ~10 steps raising λ until it overflows the test).
         flat = (predicted <= options.ftol * c) & (jnp.abs(c - c_new) <= options.ftol * c)
-        done = (~fresh & ((accept & small) | flat)) | stationary | (lam > 1e16)
+        # A variable on a face of the box whose Jacobian column vanishes (μ0 = 0 switches the
+        # whole curve off) makes every test pass on a plateau, not at a minimum: a stall.
+        plateau = jnp.any(((u <= 0.0) | (u >= 1.0))
+                          & (jnp.diag(h) <= jnp.finfo(u.dtype).eps * jnp.max(jnp.diag(h))))
+        converged = ((~fresh & ((accept & small) | flat)) | stationary) & ~plateau
+        stopped = (~fresh & ((accept & small) | flat)) | stationary
+        done = stopped | (lam > 1e16)
         steps = st.steps + jnp.where(fresh, 0, 1)
-        return _BoxState(u, c, g, h, rmax, dmax, lam, nu, steps, done, jnp.asarray(False))
+        return _BoxState(u, c, g, h, rmax, dmax, lam, nu, steps, done, converged,
+                         jnp.asarray(False))
 
     def result(st):
         p = lo + width * st.u
         finite = (st.rmax < jnp.finfo(st.rmax.dtype).max ** 0.25) & jnp.isfinite(st.cost)
-        ok = st.done & finite & jnp.all(jnp.isfinite(p))
-        return LMResult(p, jnp.where(finite, 2.0 * st.cost, jnp.inf), st.steps, ok)
+        code = status_code(st.converged, st.done & ~st.converged,
+                           finite & jnp.all(jnp.isfinite(p)))
+        return LMResult(p, jnp.where(finite, 2.0 * st.cost, jnp.inf), st.steps,
+                        code == int(Status.CONVERGED), code)
 
     return init, step, result
 
