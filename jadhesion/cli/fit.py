@@ -62,12 +62,13 @@ def run(args) -> int:
 
     from ..data.dataset import to_dataset
     from ..data.recording import load_recording
-    from ..identify.polach_fit import fit_polach
+    from ..identify.polach_fit import fit_polach, require_samples
     from ..identify.trust import fit_report
     from ..models.polach import PARAM_NAMES
     from ..status import status_of
 
     dataset = to_dataset(load_recording(args.file))
+    require_samples(dataset, args.file)
     start = time.perf_counter()
     fit = jax.block_until_ready(fit_polach(dataset, args.method, jax.random.key(args.seed),
                                            pop_size=args.pop_size, max_iter=args.max_iter))

@@ -26,8 +26,10 @@ gain ratio ``ρ = (C − C')/(−gᵀs − ½ sᵀHs) > 10⁻⁴`` (``s = u' −
 Nielsen's rule. It stops after an accepted step with ``C − C' ≤ ftol·C`` and
 ``‖s‖∞ ≤ xtol (xtol + ‖u‖∞)``; after any step whose predicted and actual decreases are both at most
 ``ftol·C`` (MINPACK's test); when the projected gradient ``‖clip(u − g) − u‖∞ ≤ gtol`` (any of these three at a
-point where a variable sits on a face with a vanishing Jacobian column — a plateau, e.g. ``μ0 = 0``
-— is reported ``STALLED``, not converged); when
+point where variables sit on a face with vanishing Jacobian columns — a plateau, e.g. ``μ0 = 0`` —
+is not a minimum when moving them :data:`PROBE` inwards lowers the cost: the run continues from
+there); and a stop whose undamped Gauss–Newton step still promises more than :data:`GN_GAIN`·C
+is ``STALLED`` (the damping, not the problem, made the model flat); when
 ``λ > 10¹⁶`` (no decrease is representable: status ``STALLED``); or at ``max_steps`` (status
 ``MAX_STEPS``). Only the three tests give ``CONVERGED`` (``success`` true).
 :func:`box_lm_queue` runs many such problems as a work queue over a few vmapped lanes, so a batch
@@ -167,6 +169,13 @@ def multistart(residual, starts, args=None, bounds=None, **options):
     return best_of(jax.vmap(solve)(starts))
 
 
+#: Inward probe (box-scaled) of variables on a face with a vanishing Jacobian column.
+PROBE = 0.01
+#: A stop counts as converged only if the undamped Gauss–Newton step would lower the cost by less
+#: than this share (a 1-σ parameter change moves the cost by ~1/n of it: far above this).
+GN_GAIN = 1e-8
+
+
 class BoxLMOptions(NamedTuple):
     """Coefficients of :func:`box_lm` (data, so a study may vmap over them)."""
 
@@ -246,12 +255,30 @@ def _box_lm_stepper(residual, bounds, options):
         # ftol·C, so the iterate is a minimum to that precision even if the trial was rejected
         # (without it, a converged run spends ~10 steps raising λ until it overflows the test).
         flat = (predicted <= options.ftol * c) & (jnp.abs(c - c_new) <= options.ftol * c)
-        # A variable on a face of the box whose Jacobian column vanishes (μ0 = 0 switches the
-        # whole curve off) makes every test pass on a plateau, not at a minimum: a stall.
-        plateau = jnp.any(((u <= 0.0) | (u >= 1.0))
-                          & (jnp.diag(h) <= jnp.finfo(u.dtype).eps * jnp.max(jnp.diag(h))))
-        converged = ((~fresh & ((accept & small) | flat)) | stationary) & ~plateau
         stopped = (~fresh & ((accept & small) | flat)) | stationary
+        # Variables on a face of the box whose Jacobian columns vanish (μ0 = 0 switches the whole
+        # curve off; A = 1 with B = 0 makes both invisible) pass every test on a plateau. Probe:
+        # move them jointly PROBE inwards; if that lowers the cost the point is no minimum, and
+        # the run continues from the probe (a descent step the linear model cannot see).
+        flat_face = (((u <= 0.0) | (u >= 1.0))
+                     & (jnp.diag(h) <= jnp.finfo(u.dtype).eps * jnp.max(jnp.diag(h))))
+        u_probe = jnp.where(flat_face, jnp.abs(u - PROBE), u)
+        c_p, g_p, h_p, rmax_p = jax.lax.cond(stopped & jnp.any(flat_face),
+                                             lambda: linearise(u_probe, args),
+                                             lambda: (c, g, h, rmax))
+        escape = stopped & (c_p < c)
+        pick = lambda new, old: jnp.where(escape, new, old)  # noqa: E731
+        u, g, h, c, rmax = (pick(u_probe, u), pick(g_p, g), pick(h_p, h), pick(c_p, c),
+                            pick(rmax_p, rmax))
+        stopped = stopped & ~escape
+        # A test may pass only because heavy damping (λ·D, D a running maximum of diag H) made
+        # the model flat: it is a minimum only if even the undamped Gauss–Newton step promises
+        # less than GN_GAIN·C; otherwise the run stopped stalled.
+        free_g = (~(((u <= 0.0) & (g > 0.0)) | ((u >= 1.0) & (g < 0.0)))).astype(u.dtype)
+        a_gn = h * free_g[:, None] * free_g[None, :] + jnp.diag(
+            jnp.where(free_g > 0, 1e-12 * jnp.max(jnp.diag(h)) + jnp.finfo(u.dtype).tiny, 1.0))
+        gn_gain = 0.5 * (g * free_g) @ jnp.linalg.solve(a_gn, g * free_g)
+        converged = stopped & (stationary | (gn_gain <= GN_GAIN * c))
         done = stopped | (lam > 1e16)
         steps = st.steps + jnp.where(fresh, 0, 1)
         return _BoxState(u, c, g, h, rmax, dmax, lam, nu, steps, done, converged,

@@ -162,14 +162,20 @@ def check_float64(name, *arrays):
                              "(enable JAX's x64 mode: jax.config.update('jax_enable_x64', True))")
 
 
+def require_samples(dataset: PolachDataset, source: str = "dataset") -> None:
+    """Raise :class:`InputError` naming ``source`` when ``dataset`` has fewer than
+    :data:`MIN_SAMPLES` samples."""
+    n = dataset.adhesion.shape[-1]
+    if n < MIN_SAMPLES:
+        raise InputError(f"{source}: {n} samples cannot identify Polach's 5 parameters "
+                         f"(at least {MIN_SAMPLES} needed, {RECOMMENDED_SAMPLES} recommended)")
+
+
 def _check(method, dataset, pop_size, max_iter, target):
     if method not in METHODS:
         raise InputError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
     check_float64("fit_polach", dataset.creep, dataset.slip, dataset.adhesion)
-    n = dataset.adhesion.shape[-1]
-    if n < MIN_SAMPLES:
-        raise InputError(f"fit_polach: {n} samples cannot identify 5 parameters "
-                         f"(at least {MIN_SAMPLES} needed)")
+    require_samples(dataset, "fit_polach")
     if pop_size < 2:
         raise InputError(f"fit_polach: pop_size must be >= 2, got {pop_size}")
     if max_iter < 1:
