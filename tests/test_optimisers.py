@@ -1,5 +1,7 @@
 """Conformance tests for every population optimiser, Polach recovery for every method, curve_fit."""
 
+import importlib
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -367,3 +369,19 @@ def test_fit_polach_refuses_float32_and_too_few_samples():
         fit_polach(few, "lm", jax.random.key(0))
     with pytest.raises(ValueError, match="float64"):
         curve_fit(decay, np.float32([1.0, 2.0]), np.float32([1.0, 2.0]), jnp.zeros(3))
+
+
+def test_one_method_registry_feeds_every_consumer():
+    """The CLI's literal choices (kept JAX-free for --help), fit_polach, curve_fit, Table 2 and the
+    sweep grid all name the registry's methods; each population method is its optimiser."""
+    from jadhesion.cli import fit as cli_fit
+    from jadhesion.experiments import table2
+    from jadhesion.identify import methods, polach_fit
+    from jadhesion.sweeps import grid
+
+    assert cli_fit.METHODS == methods.NAMES == polach_fit.METHODS == table2.METHODS
+    curve_fit_module = importlib.import_module("jadhesion.identify.curve_fit")
+    assert set(curve_fit_module.METHODS) == set(grid.METHODS) == set(methods.NAMES)
+    assert ALGORITHMS == methods.POPULATION and set(ALGORITHMS) == set(methods.NAMES) - {"lm"}
+    with pytest.raises(ValueError, match="unknown method"):
+        methods.check_method("bfgs")

@@ -20,11 +20,8 @@ from .driver import STALL_FTOL, run_until
 from .polach_fit import check_float64
 from .lm import lm_solve, sse_objective
 from .uncertainty import covariance as param_covariance
-from .pso import PSO
-from .tlbo import ITLBO, TLBO
-
-POPULATION = {"itlbo": ITLBO, "tlbo": TLBO, "pso": PSO}
-METHODS = ("lm", *POPULATION)
+from .methods import NAMES as METHODS
+from .methods import POPULATION
 
 
 class CurveFitResult(NamedTuple):

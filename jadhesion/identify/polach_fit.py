@@ -21,11 +21,8 @@ from ..models.polach import polach_adhesion
 from ..errors import InputError
 from .driver import STALL_FTOL, run_until
 from .lm import best_of, box_lm_queue, global_lm, seed_starts
-from .pso import PSO
-from .tlbo import ITLBO, TLBO
-
-ALGORITHMS = {"itlbo": ITLBO, "tlbo": TLBO, "pso": PSO}
-METHODS = (*ALGORITHMS, "lm")
+from .methods import NAMES as METHODS
+from .methods import POPULATION as ALGORITHMS
 #: Global LM for Polach: ``LM_POP`` uniform random points scored on a subsample of at most
 #: :data:`SEED_SAMPLES` rows seed ``LM_STARTS`` projected-LM runs (:func:`.lm.box_lm`, ``ftol =
 #: 1e-10`` on the cost, ``xtol = 1e-8`` on the box-scaled parameters — far below the noise, whose
