@@ -9,14 +9,27 @@ import pytest
 import scipy.optimize
 
 import jadhesion
+from jadhesion.cli import fit as cli_fit
 from jadhesion.data.dataset import PolachDataset
-from jadhesion.identify import (ALGORITHMS, curve_fit, fit_polach, fit_polach_batch, iteration_key,
-                                run, run_until)
+from jadhesion.data.simulator import simulate_dataset
+from jadhesion.experiments import table2
+from jadhesion.identify import (
+    ALGORITHMS,
+    curve_fit,
+    fit_polach,
+    fit_polach_batch,
+    iteration_key,
+    methods,
+    polach_fit,
+    run,
+    run_until,
+)
 from jadhesion.identify.lm import box_lm, box_lm_queue
 from jadhesion.identify.polach_fit import polach_residual
 from jadhesion.identify.tlbo import remedial_size
 from jadhesion.models.polach import atan_ratio, polach_adhesion
 from jadhesion.status import Status, status_of
+from jadhesion.sweeps import grid
 
 BOUNDS = (jnp.full(4, -2.0), jnp.full(4, 3.0))
 CENTRE = jnp.array([0.5, -1.0, 1.5, 2.9])
@@ -330,18 +343,25 @@ def test_curve_fit_lm_bounded_and_nan_safe():
 # --------------------------------------------------------------------------- status
 
 
-def test_box_lm_reports_a_plateau_as_stalled_and_the_cap_as_max_steps():
-    """Started at p = 0 (μ0 = 0 switches the curve off, every derivative w.r.t. μ0 vanishes) box
-    LM stops on a plateau far above the minimum: that is a stall, never a success. A cap below the
-    steps it needs is MAX_STEPS."""
-    data = noisy_polach()
+def test_box_lm_from_a_plateau_escapes_or_says_it_stalled():
+    """Started at p = 0 (μ0 = 0 switches the curve off: every derivative w.r.t. μ0 vanishes) box
+    LM either escapes the plateau by its inward probe and converges to the centre start's minimum,
+    or reports STALLED — never "converged" far above the minimum (the issue's case: a simulated dry
+    test, SSE 247 against 0.365). A cap below the steps needed is MAX_STEPS."""
     box = (jnp.zeros(5), jnp.ones(5))
-    good = box_lm(polach_residual, jnp.full(5, 0.5), data, box)
-    stuck = box_lm(polach_residual, jnp.zeros(5), data, box)
-    assert status_of(good.status) == Status.CONVERGED and bool(good.success)
-    assert float(stuck.sse) > 100 * float(good.sse)
-    assert status_of(stuck.status) == Status.STALLED and not bool(stuck.success)
-    capped = box_lm(polach_residual, jnp.full(5, 0.5), data, box, max_steps=3)
+    outcomes = set()
+    for data in (noisy_polach(), simulate_dataset("dry", 0, n_samples=1000)):
+        good = box_lm(polach_residual, jnp.full(5, 0.5), data, box)
+        start0 = box_lm(polach_residual, jnp.zeros(5), data, box)
+        assert status_of(good.status) == Status.CONVERGED and bool(good.success)
+        if status_of(start0.status) == Status.CONVERGED:
+            assert float(start0.sse) <= float(good.sse) * (1 + 1e-8)
+        else:
+            assert status_of(start0.status) == Status.STALLED and not bool(start0.success)
+            assert float(start0.sse) > 100 * float(good.sse)
+        outcomes.add(status_of(start0.status))
+    assert outcomes == {Status.CONVERGED, Status.STALLED}  # both branches exercised
+    capped = box_lm(polach_residual, jnp.full(5, 0.5), noisy_polach(), box, max_steps=3)
     assert status_of(capped.status) == Status.MAX_STEPS and int(capped.steps) == 3
 
 
@@ -374,11 +394,6 @@ def test_fit_polach_refuses_float32_and_too_few_samples():
 def test_one_method_registry_feeds_every_consumer():
     """The CLI's literal choices (kept JAX-free for --help), fit_polach, curve_fit, Table 2 and the
     sweep grid all name the registry's methods; each population method is its optimiser."""
-    from jadhesion.cli import fit as cli_fit
-    from jadhesion.experiments import table2
-    from jadhesion.identify import methods, polach_fit
-    from jadhesion.sweeps import grid
-
     assert cli_fit.METHODS == methods.NAMES == polach_fit.METHODS == table2.METHODS
     curve_fit_module = importlib.import_module("jadhesion.identify.curve_fit")
     assert set(curve_fit_module.METHODS) == set(grid.METHODS) == set(methods.NAMES)

@@ -5,7 +5,6 @@ recordings."""
 import jax
 import jax.numpy as jnp
 import numpy as np
-import pytest
 from scipy import stats
 
 from jadhesion.data.scenarios import get_scenario

@@ -18,7 +18,8 @@ import numpy as np
 from ..data.dataset import PolachDataset
 from ..models.polach import BOUNDS
 from .likelihood import ObserverTerms, prediction
-from .lm import multistart
+from .box_lm import box_lm
+from .lm_result import best_of
 from .uncertainty import covariance
 from .polach_fit import polach_residual
 
@@ -42,10 +43,13 @@ def _residual(obs):
 
 
 def lm_optimum(data: PolachDataset, starts=STARTS, obs: ObserverTerms | None = None):
-    """Least-squares optimum in the box ``[0, 1]^5`` (LM from each of ``starts``, the best kept);
-    with ``obs`` (:class:`ObserverTerms`), of the observer's view of the curve instead."""
+    """Least-squares optimum in the box ``[0, 1]^5``: the projected box LM (:func:`.box_lm.box_lm`,
+    the one bounded LM of every Polach least-squares problem) from each of ``starts``, the best
+    converged one kept; with ``obs`` (:class:`ObserverTerms`), of the observer's view of the curve."""
     residual, args = _residual(obs)
-    return multistart(residual, starts, args(data), BOUNDS).params
+    bounds = tuple(jnp.asarray(b) for b in BOUNDS)
+    solve = jax.vmap(lambda p0, a: box_lm(residual, p0, a, bounds), in_axes=(0, None))
+    return best_of(solve(jnp.asarray(starts), args(data))).params
 
 
 def laplace_covariance(theta_hat, data: PolachDataset, obs: ObserverTerms | None = None):
