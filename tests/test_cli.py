@@ -120,8 +120,19 @@ def test_reproduce_table2_json_rows_include_mcmc(env):
     keys = {"scenario", "method", "error", "iterations", "evaluations", "seconds", "params", "paper"}
     methods = {(r["scenario"], r["method"]) for r in doc["rows"]}
     assert methods == {(s, m) for s in ("dry", "wet", "sand") for m in ("itlbo", "tlbo", "pso", "lm", "mcmc")}
+    truth = {"dry": 0.3555, "wet": 0.2610, "sand": 0.4205}
     for row in doc["rows"]:
         assert set(row) >= keys, row["method"]
+        if row["method"] == "lm":  # least squares sits at the noise floor (MAE of the truth)
+            assert 0.95 * row["floor"] < row["error"] < 1.02 * row["floor"], row
+        elif row["method"] == "itlbo":  # the paper's method reaches the floor in its budget
+            assert row["error"] < 1.05 * row["floor"] and row["reached"] >= 0.5, row
+        elif row["method"] in ("tlbo", "pso"):
+            assert row["error"] < 1.3 * row["floor"], row
+        if row["method"] in ("lm", "itlbo"):
+            assert row["params"]["mu0"] == pytest.approx(truth[row["scenario"]], abs=0.02), row
+        if row["method"] in ("itlbo", "tlbo"):  # the paper reports both on every rail
+            assert row["paper"] is not None and row["paper"]["iterations"] > 0
     for row in (r for r in doc["rows"] if r["method"] == "mcmc"):
         assert row["likelihood"] == doc["mcmc"]["likelihood"] and row["paper"] is None
         assert set(row["width90"]) >= {"kA", "kS", "mu0", "A", "B", "mu_max", "creep_opt"}
