@@ -5,7 +5,11 @@ import os
 import subprocess
 import sys
 
+import numpy as np
 import pytest
+
+from jadhesion import LOCO_22E, polach_adhesion
+from jadhesion.cli import main
 
 
 @pytest.fixture(scope="module")
@@ -146,3 +150,20 @@ def test_posterior_auto_likelihood_uses_the_observer_on_a_raw_recording(env, rec
     assert doc["likelihood"] == "observer" and doc["likelihood_note"].startswith("auto")
     assert set(doc["params"]) == {"kA", "kS", "mu0", "A", "B", "sigma", "rho"}
     assert doc["diagnostics"]["compile_seconds"] >= 0
+
+
+def test_fit_warns_few_samples_in_process(tmp_path, capsys):
+    """50 samples (≥ MIN_SAMPLES, < RECOMMENDED_SAMPLES): the fit runs and says its errors are rough."""
+    rng = np.random.default_rng(0)
+    creep = np.geomspace(1e-3, 0.3, 50)
+    speed = np.full(50, 0.6)
+    mu = np.asarray(polach_adhesion(np.array([0.43, 0.6, 0.36, 0.36, 0.13]), creep, creep * speed,
+                                    LOCO_22E.k_eps()))
+    mu = mu + 0.005 * rng.standard_normal(50)
+    path = tmp_path / "few.csv"
+    path.write_text("creepage,vehicle_speed,adhesion\n"
+                    + "".join(f"{c},{v},{m}\n" for c, v, m in zip(creep, speed, mu)))
+    assert main(["fit", str(path), "--method", "lm", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert "few_samples" in {w["code"] for w in doc["warnings"]}
+    assert doc["uncertainty"]["mu0"]["ci95"][0] <= 0.36 <= doc["uncertainty"]["mu0"]["ci95"][1]
