@@ -124,7 +124,7 @@ def test_reproduce_table2_json_rows_include_mcmc(env):
     keys = {"scenario", "method", "error", "iterations", "evaluations", "seconds", "params", "paper"}
     methods = {(r["scenario"], r["method"]) for r in doc["rows"]}
     assert methods == {(s, m) for s in ("dry", "wet", "sand") for m in ("itlbo", "tlbo", "pso", "lm", "mcmc")}
-    truth = {"dry": 0.3555, "wet": 0.2610, "sand": 0.4205}
+    truth = {"dry": 0.3555, "wet": 0.2610}
     for row in doc["rows"]:
         assert set(row) >= keys, row["method"]
         if row["method"] == "lm":  # least squares sits at the noise floor (MAE of the truth)
@@ -133,7 +133,8 @@ def test_reproduce_table2_json_rows_include_mcmc(env):
             assert row["error"] < 1.05 * row["floor"] and row["reached"] >= 0.5, row
         elif row["method"] in ("tlbo", "pso"):
             assert row["error"] < 1.3 * row["floor"], row
-        if row["method"] in ("lm", "itlbo"):
+        # μ0 is pinned on dry and wet rail; on sand (A = 0) it trades against B at these slips
+        if row["method"] in ("lm", "itlbo") and row["scenario"] != "sand":
             assert row["params"]["mu0"] == pytest.approx(truth[row["scenario"]], abs=0.02), row
         if row["method"] in ("itlbo", "tlbo"):  # the paper reports both on every rail
             assert row["paper"] is not None and row["paper"]["iterations"] > 0

@@ -51,7 +51,8 @@ def _describe(doc) -> str:
                      "stderr": "on bound" if u["stderr"] is None else u["stderr"],
                      "95% interval": "-" if ci is None else f"[{ci[0]:.4g}, {ci[1]:.4g}]"})
     lines.append(table(rows, ["parameter", "value", "stderr", "95% interval"]))
-    lines.append(f"standard errors: Newey–West (HAC, {doc['hac_lags']} lags) for coloured residuals")
+    lines.append(f"standard errors: Newey–West (HAC, {doc['hac_lags']} lags), robust to the "
+                 "observer's coloured residuals")
     lines += [f"warning [{w['code']}]: {w['message']}" for w in doc["warnings"]]
     return "\n".join(lines)
 

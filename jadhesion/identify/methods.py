@@ -42,7 +42,7 @@ POPULATION = {m.name: m.algorithm for m in METHODS.values() if m.algorithm is no
 
 
 def check_method(name: str) -> Method:
-    """The registered :class:`Method` called ``name``; ``ValueError`` naming the choices otherwise."""
+    """The registered :class:`Method` called ``name``; ``ValueError`` naming the choices if none."""
     if name not in METHODS:
         raise ValueError(f"unknown method {name!r}; choose one of {', '.join(NAMES)}")
     return METHODS[name]

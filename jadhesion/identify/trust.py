@@ -83,5 +83,5 @@ def fit_report(data, fit) -> dict:
             f"{n} samples (< {RECOMMENDED_SAMPLES} recommended): errors and intervals are rough")))
     corr = correlation(cov)
     return {"uncertainty": uncertainty,
-            "correlation": [[None if not np.isfinite(c) else float(c) for c in row] for row in corr],
+            "correlation": [[float(c) if np.isfinite(c) else None for c in row] for row in corr],
             "warnings": warnings, "hac_lags": int(lags)}
