@@ -6,6 +6,9 @@ sensor noise, the observer in the loop) the global LM fit and its trust report
 true ``mu0`` and ``kS`` lie inside ``ci95``. The same count with the i.i.d. covariance shows what
 ignoring the observer's colouring costs. A parameter fitted onto a bound has no interval and counts
 as a miss. Target: 90–98 % (a binomial 95 % band around 95 % at n = 100 is about 90–99 %).
+``z_mean``/``z_sd`` are the mean and spread of ``(estimate − truth)/stderr``: calibrated intervals
+give about 0 and 1; a large mean with a small spread is a systematic bias (model or observer misfit)
+that wide intervals happen to cover.
 
 The default scenario is ``sand`` (true kS = 0.4089 inside the box; dry and wet put kS = 1 on its
 bound). Rerun after the simulator changes with ``python -m benchmarks.coverage_fit``; results go to
@@ -42,6 +45,7 @@ def coverage(scenario="sand", n=100, samples=None, chunk=25):
     truth = np.asarray(get_scenario(scenario).params)
     hits = {p: {"hac": 0, "iid": 0} for p in CHECKED}
     ratios = {p: [] for p in CHECKED}
+    zs = {p: [] for p in CHECKED}  # (estimate − truth) / HAC stderr
     statuses, lags = [], []
     for first in range(0, n, chunk):
         seeds = list(range(first, min(first + chunk, n)))
@@ -66,8 +70,12 @@ def coverage(scenario="sand", n=100, samples=None, chunk=25):
                     hits[p]["iid"] += 1
                 if u["stderr"] is not None and np.isfinite(iid_sd[j]) and iid_sd[j] > 0:
                     ratios[p].append(u["stderr"] / iid_sd[j])
+                if u["stderr"] is not None and np.isfinite(u["stderr"]):
+                    zs[p].append((float(f.params[j]) - truth[j]) / u["stderr"])
     return {p: {"coverage_hac": hits[p]["hac"] / n, "coverage_iid": hits[p]["iid"] / n,
-                "median_stderr_ratio_hac_over_iid": float(np.median(ratios[p])) if ratios[p] else None}
+                "median_stderr_ratio_hac_over_iid": float(np.median(ratios[p])) if ratios[p] else None,
+                "z_mean": float(np.mean(zs[p])) if zs[p] else None,
+                "z_sd": float(np.std(zs[p])) if zs[p] else None}
             for p in CHECKED}, statuses, lags
 
 
