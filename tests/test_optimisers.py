@@ -1,5 +1,7 @@
 """Conformance tests for every population optimiser, Polach recovery for every method, curve_fit."""
 
+import importlib
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -7,13 +9,27 @@ import pytest
 import scipy.optimize
 
 import jadhesion
+from jadhesion.cli import fit as cli_fit
 from jadhesion.data.dataset import PolachDataset
-from jadhesion.identify import (ALGORITHMS, curve_fit, fit_polach, fit_polach_batch, iteration_key,
-                                run, run_until)
+from jadhesion.data.simulator import simulate_dataset
+from jadhesion.experiments import table2
+from jadhesion.identify import (
+    ALGORITHMS,
+    curve_fit,
+    fit_polach,
+    fit_polach_batch,
+    iteration_key,
+    methods,
+    polach_fit,
+    run,
+    run_until,
+)
 from jadhesion.identify.lm import box_lm, box_lm_queue
 from jadhesion.identify.polach_fit import polach_residual
 from jadhesion.identify.tlbo import remedial_size
 from jadhesion.models.polach import atan_ratio, polach_adhesion
+from jadhesion.status import Status, status_of
+from jadhesion.sweeps import grid
 
 BOUNDS = (jnp.full(4, -2.0), jnp.full(4, 3.0))
 CENTRE = jnp.array([0.5, -1.0, 1.5, 2.9])
@@ -113,14 +129,22 @@ def polach_dataset(theta=THETA, n=120):
     return PolachDataset(creep, slip, mu, speed, jnp.asarray(k_eps))
 
 
-@pytest.mark.parametrize("method, mae_tol, param_tol", [
-    ("lm", 1e-10, 1e-6), ("tlbo", 1e-4, 2e-2), ("itlbo", 2e-3, None), ("pso", 2e-3, None)])
-def test_fit_polach_recovers_known_parameters(method, mae_tol, param_tol):
-    fit = fit_polach(polach_dataset(), method, jax.random.key(0), pop_size=30, max_iter=200)
+@pytest.mark.parametrize("method, mae_tol", [
+    ("lm", 1e-10), ("tlbo", 1e-4), ("itlbo", 1e-4), ("pso", 1e-4)])
+def test_fit_polach_recovers_known_parameters(method, mae_tol):
+    """Noise-free data: the only error is the optimiser's. Linearised, a fit with residual
+    r = J Δθ has |Δθ_i| ≤ ‖r‖ · √((JᵀJ)⁻¹)_ii (Cauchy–Schwarz; J at the truth), so each parameter's
+    tolerance is twice that bound (a parameter the curve barely feels gets a wider one)."""
+    data = polach_dataset()
+    fit = fit_polach(data, method, jax.random.key(0), pop_size=30, max_iter=400)
     assert float(fit.mae) < mae_tol
     assert int(fit.evaluations) > int(fit.iterations) > 0
-    if param_tol is not None:
-        np.testing.assert_allclose(fit.params, THETA, atol=param_tol)
+    # noise-free: the MAE falls towards 0 geometrically, so a relative stall test may not pass
+    # before the cap — either status is honest, a non-finite one is not
+    assert status_of(fit.status) in (Status.CONVERGED, Status.MAX_STEPS)
+    jac = np.asarray(jax.jacfwd(polach_residual)(THETA, data))
+    tol = 2 * np.sqrt(float(fit.sse) * np.diag(np.linalg.inv(jac.T @ jac))) + 1e-12
+    assert np.all(np.abs(np.asarray(fit.params - THETA)) <= tol), (fit.params, tol)
 
 
 def test_atan_ratio_matches_arctan2_with_exact_gradient():
@@ -285,8 +309,13 @@ def test_curve_fit_population_methods(method):
     bounds = (jnp.zeros(3), jnp.full(3, 5.0))
     fit = curve_fit(decay, x, y, jnp.zeros(3), bounds=bounds, method=method, pop_size=20,
                     max_iter=150)
+    # The same minimum as LM, to well inside its 1-σ ellipse, found before the cap: the stall
+    # test stopped the run (status converged) and the covariance is LM's at that point.
     assert float(fit.sse) < 1.01 * float(lm.sse)
-    assert fit.covariance.shape == (3, 3) and int(fit.iterations) == 150
+    stderr = np.sqrt(np.diag(lm.covariance))
+    assert np.all(np.abs(np.asarray(fit.params - lm.params)) < 0.3 * stderr)
+    np.testing.assert_allclose(fit.covariance, lm.covariance, rtol=0.1)
+    assert fit.status == Status.CONVERGED and int(fit.iterations) < 150
 
 
 def test_curve_fit_rejects_bad_arguments():
@@ -309,3 +338,65 @@ def test_curve_fit_lm_bounded_and_nan_safe():
     g = lambda x, p: p[0] * jnp.exp(-p[1] * x) + jnp.log(p[2] - 0.3)  # noqa: E731  NaN below 0.3
     fit = curve_fit(g, x, y, jnp.array([1.0, 1.0, 2.0]))
     assert np.all(np.isfinite(fit.params)) and np.isfinite(float(fit.sse))
+
+
+# --------------------------------------------------------------------------- status
+
+
+def test_box_lm_from_a_plateau_escapes_or_says_it_stalled():
+    """Started at p = 0 (μ0 = 0 switches the curve off: every derivative w.r.t. μ0 vanishes) box
+    LM either escapes the plateau by its inward probe and converges to the centre start's minimum,
+    or reports STALLED — never "converged" far above the minimum (the issue's case: a simulated dry
+    test, SSE 247 against 0.365). A cap below the steps needed is MAX_STEPS."""
+    box = (jnp.zeros(5), jnp.ones(5))
+    outcomes = set()
+    for data in (noisy_polach(), simulate_dataset("dry", 0, n_samples=1000)):
+        good = box_lm(polach_residual, jnp.full(5, 0.5), data, box)
+        start0 = box_lm(polach_residual, jnp.zeros(5), data, box)
+        assert status_of(good.status) == Status.CONVERGED and bool(good.success)
+        if status_of(start0.status) == Status.CONVERGED:
+            assert float(start0.sse) <= float(good.sse) * (1 + 1e-8)
+        else:
+            assert status_of(start0.status) == Status.STALLED and not bool(start0.success)
+            assert float(start0.sse) > 100 * float(good.sse)
+        outcomes.add(status_of(start0.status))
+    assert outcomes == {Status.CONVERGED, Status.STALLED}  # both branches exercised
+    capped = box_lm(polach_residual, jnp.full(5, 0.5), noisy_polach(), box, max_steps=3)
+    assert status_of(capped.status) == Status.MAX_STEPS and int(capped.steps) == 3
+
+
+def test_population_run_stops_on_the_stall_test_or_the_cap(algorithm):
+    """Without a target a run stops once the best fitness improved by < ftol relative over the
+    window; with ftol switched off it runs to the cap and says so."""
+    stop = run_until(algorithm, sphere, BOUNDS, jax.random.key(8), POP, 400, None, args=CENTRE,
+                     ftol=1e-3, window=10)
+    assert status_of(stop.status) == Status.CONVERGED and 10 <= int(stop.iterations) < 400
+    full = run(algorithm, sphere, BOUNDS, jax.random.key(8), POP, int(stop.iterations), args=CENTRE)
+    f = np.asarray(full.history.best_f)
+    assert f[-11] - f[-1] <= 1e-3 * abs(f[-11])  # the test the loop applied, checked on the trace
+    assert f[-12] - f[-2] > 1e-3 * abs(f[-12])  # ... and not one iteration earlier
+    capped = run_until(algorithm, sphere, BOUNDS, jax.random.key(8), POP, 5, None, args=CENTRE)
+    assert status_of(capped.status) == Status.MAX_STEPS and int(capped.iterations) == 5
+
+
+def test_fit_polach_refuses_float32_and_too_few_samples():
+    data = polach_dataset()
+    f32 = jax.tree.map(lambda a: a.astype(jnp.float32), data)
+    with pytest.raises(ValueError, match="float64"):
+        fit_polach(f32, "lm", jax.random.key(0))
+    few = jax.tree.map(lambda a: a[:5] if a.ndim else a, data)
+    with pytest.raises(ValueError, match="samples"):
+        fit_polach(few, "lm", jax.random.key(0))
+    with pytest.raises(ValueError, match="float64"):
+        curve_fit(decay, np.float32([1.0, 2.0]), np.float32([1.0, 2.0]), jnp.zeros(3))
+
+
+def test_one_method_registry_feeds_every_consumer():
+    """The CLI's literal choices (kept JAX-free for --help), fit_polach, curve_fit, Table 2 and the
+    sweep grid all name the registry's methods; each population method is its optimiser."""
+    assert cli_fit.METHODS == methods.NAMES == polach_fit.METHODS == table2.METHODS
+    curve_fit_module = importlib.import_module("jadhesion.identify.curve_fit")
+    assert set(curve_fit_module.METHODS) == set(grid.METHODS) == set(methods.NAMES)
+    assert ALGORITHMS == methods.POPULATION and set(ALGORITHMS) == set(methods.NAMES) - {"lm"}
+    with pytest.raises(ValueError, match="unknown method"):
+        methods.check_method("bfgs")

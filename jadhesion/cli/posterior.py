@@ -105,6 +105,7 @@ def run(args) -> int:
     from ..data.recording import load_recording
     from ..identify.ensemble import ChainTooShortWarning
     from ..identify.laplace import initial_spread, lm_optimum
+    from ..identify.polach_fit import require_samples
     from ..identify.mcmc import sample_posterior
 
     if args.walkers < 12 or args.walkers % 2:
@@ -113,6 +114,7 @@ def run(args) -> int:
         raise UserError(f"--steps must be at least 50, got {args.steps}")
     recording = load_recording(args.file)
     data = to_dataset(recording, creep=args.creep)
+    require_samples(data, args.file)
     likelihood, obs, note = _choose_likelihood(recording, args.likelihood)
     theta0 = lm_optimum(data, obs=obs)
     spread = np.asarray(initial_spread(theta0, data, obs=obs))

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import jax
 
+from ..identify.polach_fit import MIN_SAMPLES
 from ..sweeps import Grid, run_sweep
 from .common import Progress, UserError, emit_json, require_at_least
 
@@ -25,7 +26,10 @@ def run(args) -> int:
     """Run the sweep the arguments describe; print (or ``--json``) its summary on process 0."""
     _initialize(args)
     budget = {"pop_size": args.pop_size, "max_iter": args.max_iter}
-    require_at_least("sweep", 1, seeds=args.seeds, **budget)
+    require_at_least("sweep", 1, seeds=args.seeds, max_iter=args.max_iter,
+                     chunk_size=args.chunk_size)
+    require_at_least("sweep", 2, pop_size=args.pop_size)
+    require_at_least("sweep", MIN_SAMPLES, samples=args.samples)
     grid = Grid(scenarios=args.scenarios, seeds=range(args.seeds), methods=args.methods,
                 noise_scale=args.noise, creep_max=args.creep_max, n_samples=args.samples,
                 fit_options={k: v for k, v in budget.items() if v is not None})

@@ -35,12 +35,13 @@ import numpy as np
 from ..data.scenarios import get_scenario
 from ..data.simulator import simulate_many, stack_datasets
 from ..identify.driver import run as run_population
+from ..identify.methods import NAMES
 from ..identify.polach_fit import ALGORITHMS, fit_polach, polach_mae
 from ..models.polach import BOUNDS, PARAM_NAMES
 from ..report.text import table
 
 SCENARIOS = ("dry", "wet", "sand")
-METHODS = ("itlbo", "tlbo", "pso", "lm")
+METHODS = NAMES
 
 #: Paper 001, Table 2 (error, iterations, seconds); wet improved TLBO also reached 0.01188 at 421.
 PAPER = {

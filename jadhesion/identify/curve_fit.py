@@ -2,9 +2,8 @@
 
 Minimises ``SSE = Σ (f(x, p) − y)²`` over a 1-D parameter vector ``p``. The covariance follows
 scipy: with the Jacobian ``J = ∂f/∂p`` at the optimum, ``cov = s² (JᵀJ)⁺``, ``s² = SSE/(n − d)``,
-the pseudo-inverse taken through the SVD of ``J`` with singular values below
-``eps · max(n, d) · σ_max`` dropped (a singular direction gets no variance instead of an inf/NaN);
-``s² = inf`` when ``n ≤ d``.
+computed by the one covariance routine, :func:`.uncertainty.covariance` (i.i.d. form; a parameter in
+an undetermined direction gets an infinite variance, never a finite garbage one).
 """
 
 from __future__ import annotations
@@ -16,20 +15,21 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
-from .driver import run, run_until
+from ..status import Status
+from .driver import STALL_FTOL, run_until
+from .polach_fit import check_float64
 from .lm import lm_solve, sse_objective
-from .pso import PSO
-from .tlbo import ITLBO, TLBO
-
-POPULATION = {"itlbo": ITLBO, "tlbo": TLBO, "pso": PSO}
-METHODS = ("lm", *POPULATION)
+from .uncertainty import covariance as param_covariance
+from .methods import NAMES as METHODS
+from .methods import POPULATION
 
 
 class CurveFitResult(NamedTuple):
     """``params`` (d,), ``covariance`` (d, d), ``sse``, ``mae`` (mean |residual|), ``iterations``
     (LM steps or optimiser iterations), ``evaluations`` (objective/residual evaluations, see
     :mod:`.lm` and the optimisers), ``seconds`` (wall clock of the call, compilation included on a
-    first call), ``success``."""
+    first call), ``success`` (converged) and ``status`` (:class:`jadhesion.status.Status` code:
+    LM's, or the population run's, see :mod:`.driver`)."""
 
     params: jax.Array
     covariance: jax.Array
@@ -39,18 +39,13 @@ class CurveFitResult(NamedTuple):
     evaluations: jax.Array
     seconds: float
     success: jax.Array
+    status: jax.Array
 
 
 def covariance(f, x, y, p):
-    """``s² (JᵀJ)⁺`` at ``p`` (see the module docstring)."""
+    """``s² (JᵀJ)⁺`` at ``p`` through :func:`.uncertainty.covariance` (i.i.d. form, as scipy)."""
     jac = jax.jacfwd(lambda q: f(x, q))(p).reshape(-1, p.shape[0])
-    r = f(x, p) - y
-    n, d = jac.shape
-    _, sv, vt = jnp.linalg.svd(jac, full_matrices=False)
-    keep = sv > jnp.finfo(sv.dtype).eps * max(n, d) * sv[0]
-    inv2 = jnp.where(keep, 1.0 / jnp.where(keep, sv, 1.0) ** 2, 0.0)
-    s2 = jnp.sum(r * r) / (n - d) if n > d else jnp.inf
-    return s2 * (vt.T * inv2[None]) @ vt
+    return param_covariance(jac, (f(x, p) - y).ravel(), hac=False)[0]
 
 
 @functools.cache
@@ -68,16 +63,15 @@ def _fit(f, method, pop_size, max_iter, use_target, max_steps, x, y, p0, bounds,
     residual = _residual(f)
     if method == "lm":
         out = lm_solve(residual, p0, (x, y), bounds, rtol=rtol, atol=atol, max_steps=max_steps)
-        p, iterations, evaluations, ok = out.params, out.steps, out.steps + 1, out.success
+        p, iterations, evaluations = out.params, out.steps, out.steps + 1
     else:
-        driver = run_until if use_target else run
-        out = driver(POPULATION[method], sse_objective(residual), bounds, key, pop_size, max_iter,
-                     target, args=(x, y))
+        out = run_until(POPULATION[method], sse_objective(residual), bounds, key, pop_size,
+                        max_iter, target if use_target else None, args=(x, y),
+                        ftol=None if use_target else STALL_FTOL)
         p, iterations, evaluations = out.best_x, out.iterations, out.n_evals
-        ok = jnp.isfinite(out.best_f) & ((out.hit_iteration >= 0) if use_target else True)
     r = residual(p, (x, y))
     return (p, covariance(f, x, y, p), jnp.sum(r * r), jnp.mean(jnp.abs(r)), iterations,
-            evaluations, ok)
+            evaluations, out.status)
 
 
 def curve_fit(f, x, y, p0, *, bounds=None, method="lm", key=None, pop_size=50, max_iter=500,
@@ -90,12 +84,14 @@ def curve_fit(f, x, y, p0, *, bounds=None, method="lm", key=None, pop_size=50, m
         bounds: ``(lower, upper)`` of shape (d,) each; required by the population methods.
         method: ``"lm"`` (Levenberg–Marquardt, :mod:`.lm`), ``"itlbo"``, ``"tlbo"`` or ``"pso"``.
         key: PRNG key of a population method (default ``jax.random.key(0)``).
-        pop_size, max_iter, target: population size, iteration budget, and an optional SSE
-            target at which a population method stops early.
+        pop_size, max_iter, target: population size, iteration cap, and an optional SSE
+            target at which a population method stops early (without one it stops on the stall
+            test of :mod:`.driver`).
         rtol, atol, max_steps: LM tolerances (optimistix Cauchy criterion) and step budget.
     """
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
+    check_float64("curve_fit", x, y, p0)
     p0 = jnp.asarray(p0)
     if p0.ndim != 1:
         raise ValueError(f"p0 must be a 1-D parameter vector, got shape {p0.shape}")
@@ -111,4 +107,5 @@ def curve_fit(f, x, y, p0, *, bounds=None, method="lm", key=None, pop_size=50, m
     out = _fit(f, method, pop_size, max_iter, not bool(jnp.isnan(target)), max_steps,
                jnp.asarray(x), jnp.asarray(y), p0, bounds, key, target, rtol, atol)
     jax.block_until_ready(out)
-    return CurveFitResult(*out[:6], time.perf_counter() - start, out[6])
+    return CurveFitResult(*out[:6], time.perf_counter() - start, out[6] == int(Status.CONVERGED),
+                          out[6])

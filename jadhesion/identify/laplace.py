@@ -18,7 +18,9 @@ import numpy as np
 from ..data.dataset import PolachDataset
 from ..models.polach import BOUNDS
 from .likelihood import ObserverTerms, prediction
-from .lm import multistart
+from .box_lm import box_lm
+from .lm_result import best_of
+from .uncertainty import covariance
 from .polach_fit import polach_residual
 
 #: Multi-start points of :func:`lm_optimum` (rows of [kA, kS, mu0, A, B]).
@@ -41,14 +43,18 @@ def _residual(obs):
 
 
 def lm_optimum(data: PolachDataset, starts=STARTS, obs: ObserverTerms | None = None):
-    """Least-squares optimum in the box ``[0, 1]^5`` (LM from each of ``starts``, the best kept);
-    with ``obs`` (:class:`ObserverTerms`), of the observer's view of the curve instead."""
+    """Least-squares optimum in the box ``[0, 1]^5``: the projected box LM (:func:`.box_lm.box_lm`,
+    the one bounded LM of every Polach least-squares problem) from each of ``starts``, the best
+    converged one kept; with ``obs`` (:class:`ObserverTerms`), of the observer's view of the curve."""
     residual, args = _residual(obs)
-    return multistart(residual, starts, args(data), BOUNDS).params
+    bounds = tuple(jnp.asarray(b) for b in BOUNDS)
+    solve = jax.vmap(lambda p0, a: box_lm(residual, p0, a, bounds), in_axes=(0, None))
+    return best_of(solve(jnp.asarray(starts), args(data))).params
 
 
 def laplace_covariance(theta_hat, data: PolachDataset, obs: ObserverTerms | None = None):
-    """``sigma_hat² (JᵀJ)⁻¹`` (5, 5) at the optimum; ``inf`` entries when ``JᵀJ`` is singular.
+    """``sigma_hat² (JᵀJ)⁻¹`` (5, 5) at the optimum by :func:`.uncertainty.covariance` (i.i.d.);
+    ``inf`` rows/columns for parameters in a singular direction of ``JᵀJ``.
     With ``obs``, of the observer residual (i.i.d. errors assumed: a starting scale only)."""
     return _laplace_covariance(theta_hat, data, obs)
 
@@ -58,9 +64,7 @@ def _laplace_covariance(theta_hat, data, obs):
     residual, args = _residual(obs)
     r = residual(theta_hat, args(data))
     jac = jax.jacfwd(residual)(theta_hat, args(data))
-    sigma2 = jnp.sum(r * r) / (r.shape[0] - theta_hat.shape[0])
-    cov = sigma2 * jnp.linalg.inv(jac.T @ jac)
-    return jnp.where(jnp.all(jnp.isfinite(cov)), cov, jnp.inf)
+    return covariance(jac, r, hac=False)[0]
 
 
 def initial_spread(theta_hat, data: PolachDataset, floor: float = 1e-4, cap: float = 0.05,

@@ -18,13 +18,11 @@ import numpy as np
 
 from ..data.dataset import PolachDataset
 from ..models.polach import polach_adhesion
-from .driver import run, run_until
+from ..errors import InputError
+from .driver import STALL_FTOL, run_until
 from .lm import best_of, box_lm_queue, global_lm, seed_starts
-from .pso import PSO
-from .tlbo import ITLBO, TLBO
-
-ALGORITHMS = {"itlbo": ITLBO, "tlbo": TLBO, "pso": PSO}
-METHODS = (*ALGORITHMS, "lm")
+from .methods import NAMES as METHODS
+from .methods import POPULATION as ALGORITHMS
 #: Global LM for Polach: ``LM_POP`` uniform random points scored on a subsample of at most
 #: :data:`SEED_SAMPLES` rows seed ``LM_STARTS`` projected-LM runs (:func:`.lm.box_lm`, ``ftol =
 #: 1e-10`` on the cost, ``xtol = 1e-8`` on the box-scaled parameters — far below the noise, whose
@@ -37,8 +35,8 @@ LM_POP, LM_SEARCH_ITER, LM_STARTS, LM_MAX_STEPS = 64, 0, 4, 100
 class PolachFit(NamedTuple):
     """A fit: ``params`` (5,) ``[kA, kS, mu0, A, B]``; ``mae`` (eq 15) and ``sse`` at them;
     ``iterations`` (optimiser iterations; LM: steps), ``evaluations`` (objective evaluations, the
-    LM's seeding search included); ``reached`` (MAE ≤ target; without a target: finite result);
-    ``history`` best MAE per iteration for a fixed-budget population fit, else ``None``."""
+    LM's seeding search included); ``reached`` (MAE ≤ target; false without a target);
+    ``status`` (int32 :class:`jadhesion.status.Status` code: why the solver stopped)."""
 
     params: jax.Array
     mae: jax.Array
@@ -46,7 +44,7 @@ class PolachFit(NamedTuple):
     iterations: jax.Array
     evaluations: jax.Array
     reached: jax.Array
-    history: Optional[jax.Array]
+    status: jax.Array
 
 
 def polach_residual(theta, data: PolachDataset):
@@ -95,17 +93,16 @@ def _fit(method, pop_size, max_iter, use_target, data, key, target):
                                pop_size=LM_POP, search_iter=LM_SEARCH_ITER,
                                search_args=None if seed_data is data else seed_data,
                                max_steps=LM_MAX_STEPS)
-        theta, iterations, evaluations, history = out.params, out.steps, n_pop + out.steps, None
+        theta, iterations, evaluations = out.params, out.steps, n_pop + out.steps
     else:
-        driver = run_until if use_target else run
-        out = driver(ALGORITHMS[method], polach_mae, bounds, key, pop_size, max_iter, target,
-                     args=data)
+        out = run_until(ALGORITHMS[method], polach_mae, bounds, key, pop_size, max_iter,
+                        target if use_target else None, args=data,
+                        ftol=None if use_target else STALL_FTOL)
         theta, iterations, evaluations = out.best_x, out.iterations, out.n_evals
-        history = None if use_target else out.history.best_f
     r = polach_residual(theta, data)
     mae = mean_abs(r)
-    reached = (mae <= target) if use_target else jnp.isfinite(mae)
-    return PolachFit(theta, mae, jnp.sum(r * r), iterations, evaluations, reached, history)
+    reached = (mae <= target) if use_target else jnp.zeros((), bool)
+    return PolachFit(theta, mae, jnp.sum(r * r), iterations, evaluations, reached, out.status)
 
 
 _STATIC = ("method", "pop_size", "max_iter", "use_target")
@@ -140,13 +137,48 @@ def _global_lm_many(data, keys, target, use_target):
     r = jax.vmap(polach_residual)(polish.params, data)
     mae = mean_abs(r)
     steps = seeded.steps + polish.steps
-    reached = (mae <= target) if use_target else jnp.isfinite(mae)
-    return PolachFit(polish.params, mae, jnp.sum(r * r, axis=-1), steps, n_pop + steps, reached, None)
+    reached = (mae <= target) if use_target else jnp.zeros(mae.shape, bool)
+    return PolachFit(polish.params, mae, jnp.sum(r * r, axis=-1), steps, n_pop + steps, reached,
+                     polish.status)
 
 
-def _check(method):
+#: Fewest samples a Polach fit accepts: twice the five parameters (fewer cannot identify the
+#: model; the fit would interpolate noise and report a meaningless tiny MAE).
+MIN_SAMPLES = 10
+#: Below this many samples a fit runs but warns ``few_samples``: the covariance of a
+#: five-parameter curve from coloured noise is unreliable with fewer.
+RECOMMENDED_SAMPLES = 100
+
+
+def check_float64(name, *arrays):
+    """Raise :class:`InputError` unless every array is float64 (JAX's x64 mode off would make the
+    fit run silently in float32: enable it with ``jax.config.update("jax_enable_x64", True)``)."""
+    for a in jax.tree.leaves(arrays):
+        if jnp.issubdtype(jnp.asarray(a).dtype, jnp.floating) and jnp.asarray(a).dtype != jnp.float64:
+            raise InputError(f"{name}: float64 input required, got {jnp.asarray(a).dtype} "
+                             "(enable JAX's x64 mode: jax.config.update('jax_enable_x64', True))")
+
+
+def require_samples(dataset: PolachDataset, source: str = "dataset") -> None:
+    """Raise :class:`InputError` naming ``source`` when ``dataset`` has fewer than
+    :data:`MIN_SAMPLES` samples."""
+    n = dataset.adhesion.shape[-1]
+    if n < MIN_SAMPLES:
+        raise InputError(f"{source}: {n} samples cannot identify Polach's 5 parameters "
+                         f"(at least {MIN_SAMPLES} needed, {RECOMMENDED_SAMPLES} recommended)")
+
+
+def _check(method, dataset, pop_size, max_iter, target):
     if method not in METHODS:
-        raise ValueError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
+        raise InputError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
+    check_float64("fit_polach", dataset.creep, dataset.slip, dataset.adhesion)
+    require_samples(dataset, "fit_polach")
+    if pop_size < 2:
+        raise InputError(f"fit_polach: pop_size must be >= 2, got {pop_size}")
+    if max_iter < 1:
+        raise InputError(f"fit_polach: max_iter must be >= 1, got {max_iter}")
+    if target is not None and not np.all(np.asarray(target) >= 0):
+        raise InputError(f"fit_polach: target MAE must be >= 0, got {target}")
 
 
 def fit_polach(dataset: PolachDataset, method: str, key, *, pop_size: int = 50,
@@ -155,12 +187,15 @@ def fit_polach(dataset: PolachDataset, method: str, key, *, pop_size: int = 50,
 
     ``method``: ``"itlbo"`` (improved TLBO, paper §3.2), ``"tlbo"``, ``"pso"`` or ``"lm"``. With a
     ``target`` MAE a population method stops as soon as it is reached (bounded while loop,
-    ``iterations`` = iterations used); without one it runs ``max_iter`` iterations (``history``
-    kept). ``pop_size``/``max_iter`` do not apply to LM (see :data:`LM_POP`: the best 4 of 64 random
+    ``iterations`` = iterations used; the stall test is off so Table 2 counts iterations to the
+    target); without one it stops when the stall test of :mod:`.driver` passes (best MAE improved
+    by < :data:`.driver.STALL_FTOL` relative over :data:`.driver.STALL_WINDOW` iterations),
+    ``max_iter`` being only a cap. ``status`` says which. Refuses float32 data and fewer than
+    :data:`MIN_SAMPLES` samples (:class:`jadhesion.errors.InputError`). ``pop_size``/``max_iter`` do not apply to LM (see :data:`LM_POP`: the best 4 of 64 random
     points, scored on at most 128 samples, seed projected LM there; the best is polished on all
     samples).
     """
-    _check(method)
+    _check(method, dataset, pop_size, max_iter, target)
     target_ = jnp.asarray(0.0 if target is None else target, dataset.adhesion.dtype)
     return _fit_one(method, pop_size, max_iter, target is not None, dataset, key, target_)
 
@@ -174,7 +209,7 @@ def fit_polach_batch(datasets: PolachDataset, method: str, keys, *, pop_size: in
     A batched population fit with a ``target`` (a vmapped while loop) runs until its slowest member
     stops; batched LM polishes through a work queue and costs the batch's total LM steps.
     """
-    _check(method)
+    _check(method, datasets, pop_size, max_iter, target)
     target_ = jnp.broadcast_to(jnp.asarray(0.0 if target is None else target,
                                            datasets.adhesion.dtype), datasets.adhesion.shape[:1])
     return _fit_many(method, pop_size, max_iter, target is not None, datasets, keys, target_)

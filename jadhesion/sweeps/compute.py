@@ -75,9 +75,7 @@ def _local_chunk(method, options, data, theta_true, index, seed, noise_scale, cr
     out = dict(samples=covered, params=fit.params, mae=fit.mae, iterations=fit.iterations,
                evaluations=fit.evaluations, true_mu_max=true_mu_max, true_creep_opt=true_creep_opt,
                mu_max=mu_max, creep_opt=creep_opt)
-    status = getattr(fit, "status", None)  # jadhesion.status.Status codes, once fits carry them
-    if status is not None:
-        out["status"] = status
+    out["status"] = fit.status  # jadhesion.status.Status codes
     return out
 
 

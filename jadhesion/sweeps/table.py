@@ -18,7 +18,7 @@ from ..models.polach import PARAM_NAMES
 
 COORDINATES = ("scenario", "method", "seed", "noise_scale", "creep_max")
 #: Column order of the table; ``status`` is the fit's :class:`jadhesion.status.Status` label
-#: (``converged``, ``max_steps``, …), ``unknown`` where the fit result carries no status.
+#: (``converged``, ``max_steps``, …).
 COLUMNS = (COORDINATES + ("samples",) + tuple(f"true_{p}" for p in PARAM_NAMES) + PARAM_NAMES
            + ("mae", "status", "iterations", "evaluations", "seconds",
               "true_mu_max", "mu_max", "true_creep_opt", "creep_opt"))

@@ -1,0 +1,177 @@
+"""Projected Levenberg–Marquardt on a box.
+
+:func:`box_lm` is the bounded LM of every Polach least-squares problem (fits, the Laplace start of
+the posterior, Table 2's observer polish): a small projected LM for box problems whose optimum sits on
+a bound or in a long, weakly identified valley (Polach: ``B = 1`` or ``kS = 1``, the ``A``–``B``
+valley). The sine map's derivative vanishes at a bound, so optimistix converges there only
+linearly (~250 steps on a 1000-point Polach fit against ~20 for scipy's TRF). :func:`box_lm` works
+in ``u = (p − lo)/(hi − lo) ∈ [0, 1]ᵈ``: with ``g = Jᵀr``, ``H = JᵀJ`` and the active set
+``𝒜 = {i: u_i = 0, g_i > 0} ∪ {i: u_i = 1, g_i < 0}`` it solves
+``(H + λ D) δ = −g`` on the free variables (``δ_𝒜 = 0``; ``D`` the running maximum of ``diag H``,
+Marquardt/MINPACK scaling) and projects, ``u' = clip(u + δ, 0, 1)``. The step is accepted when the
+gain ratio ``ρ = (C − C')/(−gᵀs − ½ sᵀHs) > 10⁻⁴`` (``s = u' − u``, ``C = ½‖r‖²``); ``λ`` follows
+Nielsen's rule. It stops after an accepted step with ``C − C' ≤ ftol·C`` and
+``‖s‖∞ ≤ xtol (xtol + ‖u‖∞)``; after any step whose predicted and actual decreases are both at most
+``ftol·C`` (MINPACK's test); when the projected gradient ``‖clip(u − g) − u‖∞ ≤ gtol`` (any of these three at a
+point where variables sit on a face with vanishing Jacobian columns — a plateau, e.g. ``μ0 = 0`` —
+is not a minimum when moving them :data:`PROBE` inwards lowers the cost: the run continues from
+there); and a stop whose undamped Gauss–Newton step still promises more than :data:`GN_GAIN`·C
+is ``STALLED`` (the damping, not the problem, made the model flat); when
+``λ > 10¹⁶`` (no decrease is representable: status ``STALLED``); or at ``max_steps`` (status
+``MAX_STEPS``). Only the three tests give ``CONVERGED`` (``success`` true).
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+
+from ..status import Status
+from .lm_optx import safe_residual
+from .lm_result import LMResult, status_code
+
+
+#: Inward probe (box-scaled) of variables on a face with a vanishing Jacobian column.
+PROBE = 0.01
+#: A stop counts as converged only if the undamped Gauss–Newton step would lower the cost by less
+#: than this share (a 1-σ parameter change moves the cost by ~1/n of it: far above this).
+GN_GAIN = 1e-8
+
+
+class BoxLMOptions(NamedTuple):
+    """Coefficients of :func:`box_lm` (data, so a study may vmap over them)."""
+
+    ftol: float = 1e-10
+    xtol: float = 1e-8
+    gtol: float = 1e-12
+
+
+class _BoxState(NamedTuple):
+    """Iterate ``u`` (box-scaled); at ``u``: cost ``½‖r‖²``, gradient ``g = Jᵀr``, Gauss–Newton
+    matrix ``H = JᵀJ`` and ``max |r|``; running ``max diag H``, damping ``λ`` and its growth factor
+    ``ν``, steps, done (converged or stalled), and ``fresh`` (not yet linearised: the first
+    iteration only evaluates at ``u``). Only these reductions are carried, never ``r`` or ``J``, so
+    a step's Jacobian is reduced where it is made and a lane's state is a few dozen numbers."""
+
+    u: jax.Array
+    cost: jax.Array
+    g: jax.Array
+    h: jax.Array
+    rmax: jax.Array
+    dmax: jax.Array
+    lam: jax.Array
+    nu: jax.Array
+    steps: jax.Array
+    done: jax.Array
+    converged: jax.Array
+    fresh: jax.Array
+
+
+def _box_lm_stepper(residual, bounds, options):
+    """``(init, step)`` of the projected LM: ``init(p0)`` is a fresh state (no evaluation, so
+    restarting a lane is free), ``step(state, args)`` one iteration (one residual and Jacobian)."""
+    res = safe_residual(residual)
+    lo, hi = bounds
+    width = hi - lo
+    d = lo.shape[0]
+
+    def linearise(u, args):
+        """``½‖r‖²``, ``Jᵀr``, ``JᵀJ`` and ``max |r|`` at ``u``."""
+        def f(v):
+            r = res(lo + width * v, args)
+            return r, r
+        jac, r = jax.jacfwd(f, has_aux=True)(u)
+        return 0.5 * jnp.sum(r * r), jac.T @ r, jac.T @ jac, jnp.max(jnp.abs(r))
+
+    def init(p0):
+        dtype = p0.dtype
+        scalar = lambda v: jnp.asarray(v, dtype)  # noqa: E731
+        return _BoxState(jnp.clip((p0 - lo) / width, 0.0, 1.0), scalar(jnp.inf), jnp.zeros(d, dtype),
+                         jnp.zeros((d, d), dtype), scalar(0.0), jnp.zeros(d, dtype), scalar(1e-3),
+                         scalar(2.0), jnp.asarray(0), jnp.asarray(False), jnp.asarray(False),
+                         jnp.asarray(True))
+
+    def step(st, args):
+        u, g, h, c, fresh = st.u, st.g, st.h, st.cost, st.fresh
+        active = ((u <= 0.0) & (g > 0.0)) | ((u >= 1.0) & (g < 0.0))
+        free = (~active).astype(u.dtype)
+        dmax = jnp.maximum(st.dmax, jnp.diag(h))
+        damp = jnp.maximum(dmax, 1e-12 * jnp.max(dmax) + jnp.finfo(u.dtype).tiny)
+        a = h * free[:, None] * free[None, :] + jnp.diag(jnp.where(active, 1.0, st.lam * damp))
+        u_new = jnp.where(fresh, u, jnp.clip(u + jnp.linalg.solve(a, -g * free), 0.0, 1.0))
+        s = u_new - u
+        c_new, g_new, h_new, rmax_new = linearise(u_new, args)
+        predicted = -(g @ s) - 0.5 * (s @ (h @ s))
+        rho = (c - c_new) / jnp.where(predicted > 0, predicted, jnp.inf)
+        accept = fresh | ((rho > 1e-4) & jnp.isfinite(c_new))
+        small = ((c - c_new <= options.ftol * c)
+                 & (jnp.max(jnp.abs(s)) <= options.xtol * (options.xtol + jnp.max(jnp.abs(u)))))
+        pick = lambda new, old: jnp.where(accept, new, old)  # noqa: E731
+        u, g, h, c, rmax = (pick(u_new, u), pick(g_new, g), pick(h_new, h), pick(c_new, c),
+                            pick(rmax_new, st.rmax))
+        stationary = jnp.max(jnp.abs(jnp.clip(u - g, 0.0, 1.0) - u)) <= options.gtol
+        lam = jnp.where(fresh, st.lam, jnp.where(
+            accept, st.lam * jnp.maximum(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3), st.lam * st.nu))
+        nu = jnp.where(accept, 2.0, 2.0 * st.nu)
+        # MINPACK's ftol test: neither the model nor the trial can lower the cost by more than
+        # ftol·C, so the iterate is a minimum to that precision even if the trial was rejected
+        # (without it, a converged run spends ~10 steps raising λ until it overflows the test).
+        flat = (predicted <= options.ftol * c) & (jnp.abs(c - c_new) <= options.ftol * c)
+        stopped = (~fresh & ((accept & small) | flat)) | stationary
+        # Variables on a face of the box whose Jacobian columns vanish (μ0 = 0 switches the whole
+        # curve off; A = 1 with B = 0 makes both invisible) pass every test on a plateau. Probe:
+        # move them jointly PROBE inwards; if that lowers the cost the point is no minimum, and
+        # the run continues from the probe (a descent step the linear model cannot see).
+        flat_face = (((u <= 0.0) | (u >= 1.0))
+                     & (jnp.diag(h) <= jnp.finfo(u.dtype).eps * jnp.max(jnp.diag(h))))
+        u_probe = jnp.where(flat_face, jnp.abs(u - PROBE), u)
+        c_p, g_p, h_p, rmax_p = jax.lax.cond(stopped & jnp.any(flat_face),
+                                             lambda: linearise(u_probe, args),
+                                             lambda: (c, g, h, rmax))
+        escape = stopped & (c_p < c)
+        pick = lambda new, old: jnp.where(escape, new, old)  # noqa: E731
+        u, g, h, c, rmax = (pick(u_probe, u), pick(g_p, g), pick(h_p, h), pick(c_p, c),
+                            pick(rmax_p, rmax))
+        stopped = stopped & ~escape
+        # A test may pass only because heavy damping (λ·D, D a running maximum of diag H) made
+        # the model flat: it is a minimum only if even the undamped Gauss–Newton step promises
+        # less than GN_GAIN·C; otherwise the run stopped stalled.
+        free_g = (~(((u <= 0.0) & (g > 0.0)) | ((u >= 1.0) & (g < 0.0)))).astype(u.dtype)
+        a_gn = h * free_g[:, None] * free_g[None, :] + jnp.diag(
+            jnp.where(free_g > 0, 1e-12 * jnp.max(jnp.diag(h)) + jnp.finfo(u.dtype).tiny, 1.0))
+        gn_gain = 0.5 * (g * free_g) @ jnp.linalg.solve(a_gn, g * free_g)
+        converged = stopped & (stationary | (gn_gain <= GN_GAIN * c))
+        done = stopped | (lam > 1e16)
+        steps = st.steps + jnp.where(fresh, 0, 1)
+        return _BoxState(u, c, g, h, rmax, dmax, lam, nu, steps, done, converged,
+                         jnp.asarray(False))
+
+    def result(st):
+        p = lo + width * st.u
+        finite = (st.rmax < jnp.finfo(st.rmax.dtype).max ** 0.25) & jnp.isfinite(st.cost)
+        code = status_code(st.converged, st.done & ~st.converged,
+                           finite & jnp.all(jnp.isfinite(p)))
+        return LMResult(p, jnp.where(finite, 2.0 * st.cost, jnp.inf), st.steps,
+                        code == int(Status.CONVERGED), code)
+
+    return init, step, result
+
+
+def _prepare(p0, bounds, options):
+    p0 = jnp.asarray(p0)
+    bounds = tuple(jnp.asarray(b, p0.dtype) for b in bounds)
+    return p0, bounds, BoxLMOptions(*(jnp.asarray(o, p0.dtype) for o in options))
+
+
+@functools.partial(jax.jit, static_argnames=("residual", "max_steps"))
+def box_lm(residual, p0, args, bounds, options=BoxLMOptions(), *, max_steps=100):
+    """Projected LM on the box ``bounds = (lo, hi)`` from ``p0`` (see the module docstring).
+    ``steps`` counts iterations; each costs one residual and one forward Jacobian."""
+    p0, bounds, options = _prepare(p0, bounds, options)
+    init, step, result = _box_lm_stepper(residual, bounds, options)
+    final = jax.lax.while_loop(lambda st: ~st.done & (st.steps < max_steps),
+                               lambda st: step(st, args), init(p0))
+    return result(final)

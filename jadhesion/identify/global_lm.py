@@ -1,0 +1,49 @@
+"""Global LM: a cheap search on ``‖r‖²`` seeds several projected-LM runs; the best is kept (and
+optionally polished on the full data)."""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+
+from .box_lm import BoxLMOptions, box_lm
+from .driver import run
+from .lm_result import best_of, sse_objective
+from .population import evaluate, uniform_population
+from .tlbo import ITLBO
+
+
+def seed_starts(residual, bounds, key, args=None, *, n_starts=4, pop_size=20, search_iter=5):
+    """The ``n_starts`` best points (rows, best first) of a search on ``‖r‖²`` — a short
+    improved-TLBO run (``search_iter`` iterations on a class of ``pop_size``) or, with
+    ``search_iter = 0``, a plain uniform random search of ``pop_size`` points — and its number of
+    evaluations. These seed :func:`global_lm`'s LM runs."""
+    objective = sse_objective(residual)
+    if search_iter > 0:
+        run_ = run(ITLBO, objective, bounds, key, pop_size, search_iter, args=args)
+        population, fitness, n_evals = run_.state.population, run_.state.fitness, run_.n_evals
+    else:  # plain random search: one vmapped evaluation, no optimiser to compile
+        population = uniform_population(key, tuple(jnp.asarray(b) for b in bounds), pop_size)
+        fitness = evaluate(lambda p: objective(p, args), population)
+        n_evals = jnp.asarray(pop_size)
+    return population[jnp.argsort(fitness)[:n_starts]], n_evals
+
+
+def global_lm(residual, bounds, key, args=None, *, n_starts=4, pop_size=20, search_iter=5,
+              search_args=None, max_steps=100, options=BoxLMOptions()):
+    """"Global LM": :func:`seed_starts` (a search on ``‖r‖²``) seeds ``n_starts`` :func:`box_lm`
+    runs from its best members; the lowest-SSE answer is returned.
+
+    With ``search_args`` (e.g. a subsample of the data) the search *and* the multi-start LM use
+    it, and only the best of them is polished by one :func:`box_lm` on ``args``: the expensive
+    full-data Jacobians are then paid once, not ``n_starts`` times. Returns ``(LMResult,
+    population evaluations)``; ``steps`` sums every LM run's steps."""
+    sub = args if search_args is None else search_args
+    starts, n_evals = seed_starts(residual, bounds, key, sub, n_starts=n_starts,
+                                  pop_size=pop_size, search_iter=search_iter)
+    solve = lambda p, a: box_lm(residual, p, a, bounds, options, max_steps=max_steps)  # noqa: E731
+    out = best_of(jax.vmap(solve, in_axes=(0, None))(starts, sub))
+    if search_args is not None:
+        polish = solve(out.params, args)
+        out = polish._replace(steps=polish.steps + out.steps)
+    return out, n_evals

@@ -1,0 +1,87 @@
+"""How far to trust a Polach fit: standard errors, 95 % intervals, correlations and warnings.
+
+:func:`fit_report` takes a dataset (rows in time order) and a :class:`.polach_fit.PolachFit` and
+returns the JSON-ready block of ``jadhesion fit``: ``uncertainty`` {param: {``stderr``, ``ci95``}},
+``correlation`` (5 × 5, order kA, kS, mu0, A, B), ``warnings`` [{``code``, ``params``,
+``message``}] and ``hac_lags``. Standard errors are the HAC sandwich of :mod:`.uncertainty` (the
+observer colours the noise); ``ci95 = θ ± 1.96·stderr`` clipped to the box [0, 1].
+
+Warning codes:
+
+* ``at_bound`` — a parameter within :data:`BOUND_TOL` of 0 or 1. It is held fixed for the
+  covariance: its ``stderr``/``ci95`` are ``null`` and the others' are conditional on it.
+* ``weakly_identified`` — a parameter whose 95 % interval is wider than :data:`WEAK_WIDTH` of its
+  box, or whose variance is infinite (a singular direction), named with the combination the data
+  do determine where one is known: with A and B both weak, at small slip ``w``
+  ``μ ≈ μ0 (1 − (1 − A)·B·|w|)``, so only ``(1 − A)·B`` is determined.
+* ``not_converged`` — the solver's status is not ``converged``.
+* ``few_samples`` — fewer than :data:`.polach_fit.RECOMMENDED_SAMPLES` samples.
+"""
+
+from __future__ import annotations
+
+import jax
+import numpy as np
+
+from ..models.polach import PARAM_NAMES
+from ..status import status_of
+from .polach_fit import RECOMMENDED_SAMPLES, polach_residual
+from .uncertainty import Z95, correlation, covariance
+
+#: Distance from a face of the unit box at which a parameter counts as on its bound.
+BOUND_TOL = 1e-6
+#: A 95 % interval wider than this share of the unit box marks a parameter weakly identified.
+WEAK_WIDTH = 0.5
+
+
+def _warning(code, params, message):
+    return {"code": code, "params": list(params), "message": message}
+
+
+def fit_report(data, fit) -> dict:
+    """The trust block of a fit of ``data`` (see the module docstring)."""
+    theta = np.asarray(fit.params, float)
+    r = polach_residual(fit.params, data)
+    jac = jax.jacfwd(polach_residual)(fit.params, data)
+    fixed = (theta <= BOUND_TOL) | (theta >= 1 - BOUND_TOL)
+    cov, lags = covariance(jac, r, np.asarray(fixed))
+    cov = np.asarray(cov)
+    sd = np.sqrt(np.diag(cov))
+    uncertainty, warnings = {}, []
+    for i, name in enumerate(PARAM_NAMES):
+        if fixed[i] or not np.isfinite(sd[i]):
+            uncertainty[name] = {"stderr": None if fixed[i] else float("inf"), "ci95": None}
+            continue
+        lo, hi = theta[i] - Z95 * sd[i], theta[i] + Z95 * sd[i]
+        uncertainty[name] = {"stderr": float(sd[i]),
+                             "ci95": [float(max(lo, 0.0)), float(min(hi, 1.0))]}
+    on_bound = [n for n, f in zip(PARAM_NAMES, fixed) if f]
+    if on_bound:
+        where = ", ".join(f"{n} = {theta[PARAM_NAMES.index(n)]:.3g}" for n in on_bound)
+        warnings.append(_warning("at_bound", on_bound, (
+            f"{where} on the bound of [0, 1]: no local standard error (null); the other "
+            "parameters' errors are conditional on it")))
+    weak = [n for i, n in enumerate(PARAM_NAMES)
+            if not fixed[i] and not (2 * Z95 * sd[i] <= WEAK_WIDTH)]
+    if weak:
+        w_max = float(np.max(np.abs(np.asarray(data.slip))))
+        if {"A", "B"} <= set(weak):
+            message = (f"only (1 − A)·B is determined at these slip velocities (|w| ≤ {w_max:.3g}"
+                       " m/s, where μ ≈ μ0·(1 − (1 − A)·B·|w|)): A and B separately are not")
+        else:
+            message = (f"{', '.join(weak)}: 95 % interval wider than {WEAK_WIDTH} of the box or "
+                       "undetermined (singular direction); the data do not pin "
+                       f"{'it' if len(weak) == 1 else 'them'} down")
+        warnings.append(_warning("weakly_identified", weak, message))
+    status = status_of(fit.status)
+    if not status.converged:
+        warnings.append(_warning("not_converged", [], (
+            f"the solver stopped with status {status.label}: the parameters may not be a minimum")))
+    n = int(r.shape[0])
+    if n < RECOMMENDED_SAMPLES:
+        warnings.append(_warning("few_samples", [], (
+            f"{n} samples (< {RECOMMENDED_SAMPLES} recommended): errors and intervals are rough")))
+    corr = correlation(cov)
+    return {"uncertainty": uncertainty,
+            "correlation": [[float(c) if np.isfinite(c) else None for c in row] for row in corr],
+            "warnings": warnings, "hac_lags": int(lags)}

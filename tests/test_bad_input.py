@@ -1,0 +1,150 @@
+"""A corpus of bad input (DESIGN §3): every malformed file and bad flag value → exit code 2, exactly
+one line on stderr naming the file/column/row or the flag, nothing on stdout, nothing written."""
+
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from jadhesion.cli import main
+
+HEADER = "time,vehicle_speed,wheel_speed,traction_torque"
+
+
+def good_rows(n=40):
+    t = np.arange(n) * 0.02
+    v = 0.6 + 0.01 * t
+    return [f"{a:.4f},{b:.5f},{b * 1.05:.5f},{30000 + 100 * a:.1f}" for a, b in zip(t, v)]
+
+
+def csv(*rows, header=HEADER):
+    return "\n".join([header, *rows]) + "\n"
+
+
+ROWS = good_rows()
+CREEP_HEADER = "creepage,vehicle_speed,adhesion"
+
+#: name -> (file text, sidecar text or None, words the message must contain)
+FILES = {
+    "empty.csv": ("", None, ["empty.csv"]),
+    "header_only.csv": (csv(), None, ["header_only.csv"]),
+    "missing_torque.csv": (csv(*(",".join(r.split(",")[:3]) for r in ROWS),
+                               header="time,vehicle_speed,wheel_speed"), None,
+                           ["missing_torque.csv", "traction_torque"]),
+    "text_cell.csv": (csv(*ROWS[:5], "0.1,fast,0.6,30000", *ROWS[6:]), None,
+                      ["text_cell.csv", "vehicle_speed", "row"]),
+    "nan_cell.csv": (csv(*ROWS[:7], "0.14,0.6,nan,30000", *ROWS[8:]), None,
+                     ["nan_cell.csv", "wheel_speed", "row"]),
+    "inf_torque.csv": (csv(*ROWS[:3], "0.06,0.6,0.63,inf", *ROWS[4:]), None,
+                       ["inf_torque.csv", "traction_torque", "row"]),
+    "ragged.csv": (csv(*ROWS[:4], "0.08,0.6", *ROWS[5:]), None, ["ragged.csv", "row"]),
+    "time_backwards.csv": (csv(*ROWS[:10], ROWS[3], *ROWS[11:]), None,
+                           ["time_backwards.csv", "time"]),
+    "binary.csv": ("\x00\x01\x02garbage\xff", None, ["binary.csv"]),
+    "bad_sidecar.csv": (csv(*ROWS), "{not json", ["bad_sidecar.json"]),
+    "sidecar_type.csv": (csv(*ROWS), json.dumps({"axle_load_kg": "heavy"}),
+                         ["sidecar_type.json", "axle_load_kg"]),
+    "sidecar_negative.csv": (csv(*ROWS), json.dumps({"wheel_radius_m": -0.6}),
+                             ["sidecar_negative.json", "wheel_radius_m"]),
+    "three_rows.csv": (csv(*ROWS[:3]), None, ["three_rows.csv", "samples"]),
+    "creep_too_few.csv": (csv("0.01,0.6,0.2", "0.02,0.6,0.25", header=CREEP_HEADER), None,
+                          ["creep_too_few.csv", "samples"]),
+    "creep_bad_adhesion.csv": (csv(*[f"{0.01 * (i + 1)},0.6,{'x' if i == 4 else 0.2}"
+                                     for i in range(20)], header=CREEP_HEADER), None,
+                               ["creep_bad_adhesion.csv", "adhesion", "row"]),
+}
+
+
+def run_main(capsys, argv):
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def assert_one_line_exit_2(code, out, err, words):
+    assert code == 2, err
+    assert out == ""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in err, err
+    for w in words:
+        assert w.lower() in lines[0].lower(), (w, lines[0])
+
+
+@pytest.mark.parametrize("name", sorted(FILES))
+@pytest.mark.parametrize("command", ["fit", "posterior"])
+def test_malformed_file(tmp_path, capsys, name, command):
+    text, sidecar, words = FILES[name]
+    path = tmp_path / name
+    path.write_text(text, encoding="utf-8", errors="surrogateescape")
+    if sidecar is not None:
+        path.with_suffix(".json").write_text(sidecar)
+    before = set(tmp_path.iterdir())
+    if command == "posterior" and name in ("three_rows.csv", "creep_too_few.csv"):
+        words = [name]  # posterior states its own minimum
+    code, out, err = run_main(capsys, [command, path, "--json"])
+    assert_one_line_exit_2(code, out, err, words)
+    assert set(tmp_path.iterdir()) == before
+
+
+def test_diagnose_malformed_file(tmp_path, capsys):
+    path = tmp_path / "text_cell.csv"
+    path.write_text(FILES["text_cell.csv"][0])
+    code, out, err = run_main(capsys, ["diagnose", path, "--json", "--report", tmp_path / "rep"])
+    assert_one_line_exit_2(code, out, err, ["text_cell.csv", "vehicle_speed"])
+    assert not (tmp_path / "rep").exists()
+
+
+@pytest.fixture(scope="module")
+def recording(tmp_path_factory):
+    path = tmp_path_factory.mktemp("rec") / "ok.csv"
+    path.write_text(csv(*good_rows(200)))
+    return path
+
+
+#: command line (``{rec}`` = a valid recording, ``{tmp}`` = a fresh folder) -> flag named
+FLAGS = [
+    (["fit", "{rec}", "--pop-size", "0"], "--pop-size"),
+    (["fit", "{rec}", "--pop-size", "-3"], "--pop-size"),
+    (["fit", "{rec}", "--pop-size", "1"], "--pop-size"),
+    (["fit", "{rec}", "--max-iter", "0"], "--max-iter"),
+    (["fit", "{rec}", "--seed", "-1"], "--seed"),
+    (["fit", "{rec}", "--plot", "{rec}"], "--plot"),
+    (["posterior", "{rec}", "--walkers", "0"], "--walkers"),
+    (["posterior", "{rec}", "--steps", "0"], "--steps"),
+    (["simulate", "--scenario", "dry", "--out", "{tmp}/x.txt"], "--out"),
+    (["simulate", "--scenario", "icy", "--out", "{tmp}/x.csv"], "icy"),
+    (["simulate", "--scenario", "dry", "--effect", "nonsense", "--out", "{tmp}/x.csv"], "nonsense"),
+    (["sweep", "--seeds", "0", "--out", "{tmp}/s.csv"], "--seeds"),
+    (["sweep", "--pop-size", "0", "--methods", "itlbo", "--out", "{tmp}/s.csv"], "--pop-size"),
+    (["sweep", "--max-iter", "-1", "--methods", "itlbo", "--out", "{tmp}/s.csv"], "--max-iter"),
+    (["sweep", "--chunk-size", "0", "--out", "{tmp}/s.csv"], "--chunk-size"),
+    (["sweep", "--samples", "0", "--out", "{tmp}/s.csv"], "--samples"),
+    (["reproduce", "table2", "--seeds", "0"], "--seeds"),
+    (["reproduce", "online", "--runs", "0"], "--runs"),
+]
+
+
+@pytest.mark.parametrize("argv, flag", FLAGS, ids=[" ".join(a[:1] + a[2:]) for a, _ in FLAGS])
+def test_bad_flag_value(tmp_path, capsys, recording, argv, flag):
+    work = tmp_path / "work"
+    work.mkdir()
+    argv = [a.replace("{rec}", str(recording)).replace("{tmp}", str(work)) for a in argv]
+    code, out, err = run_main(capsys, argv)
+    assert_one_line_exit_2(code, out, err, [flag])
+    assert list(work.iterdir()) == []
+
+
+def test_subprocess_bad_flag_and_file(tmp_path, recording):
+    """The same through the installed entry point (no in-process state)."""
+    env = dict(os.environ)
+    bad = tmp_path / "binary.csv"
+    bad.write_bytes(b"\x00\x01garbage")
+    for argv, word in ((["fit", str(recording), "--max-iter", "0", "--json"], "--max-iter"),
+                       (["fit", str(bad), "--json"], "binary.csv")):
+        proc = subprocess.run([sys.executable, "-m", "jadhesion", *argv], env=env,
+                              capture_output=True, text=True, timeout=300)
+        assert proc.returncode == 2 and proc.stdout == ""
+        assert len(proc.stderr.strip().splitlines()) == 1 and word in proc.stderr
