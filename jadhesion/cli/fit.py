@@ -24,10 +24,9 @@ def register(sub) -> None:
 def run(args) -> int:
     import jax
 
-    from ..data.dataset import to_dataset
     from ..data.recording import load_recording
-    from ..identify.polach_fit import fit_polach
     from ..models.polach import PARAM_NAMES
+    from .fit_program import fit_polach, to_dataset  # kept exported program: no library import
 
     dataset = to_dataset(load_recording(args.file))
     start = time.perf_counter()

@@ -36,7 +36,8 @@ class PolachDataset(NamedTuple):
     k_eps: jax.Array
 
 
-def to_dataset(recording: "Recording", observer_variant: str = "paper") -> PolachDataset:
+def to_dataset(recording: "Recording", observer_variant: str = "paper", *,
+               k_eps: float | None = None) -> PolachDataset:
     """The fitting dataset (creep s, slip w, mu_hat, v, k_eps) of a recording.
 
     With an ``adhesion`` column it is used directly: creepage from ``creepage``, else from
@@ -44,7 +45,8 @@ def to_dataset(recording: "Recording", observer_variant: str = "paper") -> Polac
     :func:`jadhesion.models.kinematics.creepage`; the slip velocity from ``slip_velocity``, else
     ``creepage · max(|v|, floor)`` (the inverse of that creepage). Without it, the adhesion observer
     (:func:`jadhesion.data.observer.observe_adhesion`, ``observer_variant``) runs on the raw
-    signals and creep comes from the wheel and vehicle speeds.
+    signals and creep comes from the wheel and vehicle speeds. ``k_eps``: the vehicle's gradient
+    constant when already known (default ``recording.vehicle.k_eps()``).
     """
     cols = recording.columns
     v = np.asarray(cols["vehicle_speed"])
@@ -65,5 +67,7 @@ def to_dataset(recording: "Recording", observer_variant: str = "paper") -> Polac
                               recording.vehicle, observer_variant)
         w = np.asarray(kinematics.slip_velocity(cols["wheel_speed"], v))
         s = np.asarray(kinematics.creepage(w, v))
+    if k_eps is None:
+        k_eps = recording.vehicle.k_eps()
     return PolachDataset(creep=jnp.asarray(s), slip=jnp.asarray(w), adhesion=jnp.asarray(mu),
-                         vehicle_speed=jnp.asarray(v), k_eps=jnp.asarray(recording.vehicle.k_eps()))
+                         vehicle_speed=jnp.asarray(v), k_eps=jnp.asarray(k_eps))
