@@ -158,8 +158,8 @@ def test_warm_fit_process_imports_no_identification_library(tmp_path):
                          path=tmp_path / "rec.csv")
     env = {**os.environ, "JADHESION_CACHE": str(tmp_path / "xla"),
            "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
-    probe = ("import runpy, sys, json; sys.argv = ['jadhesion', 'fit', sys.argv[1], '--method', 'lm', '--json'];"
-             "from jadhesion.cli import main; code = main();"
+    probe = ("import sys, json; from jadhesion.cli import main;"
+             "code = main(['fit', sys.argv[1], '--method', 'lm', '--json']);"
              "heavy = [m for m in ('jadhesion.identify', 'optimistix', 'equinox') if m in sys.modules];"
              "sys.stderr.write('HEAVY=' + json.dumps(heavy) + '\\n'); sys.exit(code)")
     runs = [subprocess.run([sys.executable, "-c", probe, str(rec)], env=env, capture_output=True, text=True,
