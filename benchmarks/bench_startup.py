@@ -6,8 +6,9 @@ Four kinds of process, run interleaved (one of each per round, so a busy machine
 
 * ``import_jax``: ``python -c "import jax"``, the yardstick;
 * ``cold``: ``jadhesion fit REC --method lm --json`` with an empty cache folder;
-* ``warm_traced``: a second run with the compilation cache warm but no kept program (what every
-  run cost before kept programs: trace and lower the fit, import the library);
+* ``warm_traced``: a second run with the compilation cache warm and kept programs turned off
+  (``JADHESION_PROGRAMS=0``: the path before kept programs — import the library, compute ``k_eps``
+  eagerly, trace and lower the fit);
 * ``warm_exported``: a second run with the kept exported program (the fast path).
 
 The recording is simulated once (2 000 samples, ``jadhesion simulate``). Results go to
@@ -41,7 +42,8 @@ def _timed(argv, env) -> float:
 
 def _commit() -> str:
     try:
-        out = subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True, check=True)
+        out = subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True,
+                             check=True)
         dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=ROOT,
                                capture_output=True, text=True).stdout.strip()
         return out.stdout.strip() + ("-dirty" if dirty else "")
@@ -61,24 +63,23 @@ def main(argv=None) -> int:
                                                        if p)}
     jad = [sys.executable, "-m", "jadhesion"]
     rec = work / "rec.csv"
-    subprocess.run([*jad, "simulate", "--out", str(rec), "--json"], env={**env, "JADHESION_CACHE": str(work / "sim")},
-                   check=True, stdout=subprocess.DEVNULL, timeout=900)
+    subprocess.run([*jad, "simulate", "--out", str(rec), "--json"],
+                   env={**env, "JADHESION_CACHE": str(work / "sim")}, check=True,
+                   stdout=subprocess.DEVNULL, timeout=900)
     fit = [*jad, "fit", str(rec), "--method", args.method, "--json"]
     warm_cache = work / "warm"
-    _timed(fit, {**env, "JADHESION_CACHE": str(warm_cache)})  # fill: compiled executables + kept programs
-    traced_cache = work / "traced"
-    shutil.copytree(warm_cache, traced_cache)
-    shutil.rmtree(traced_cache / "exported")  # compiled executables only, no kept program
+    warm = {**env, "JADHESION_CACHE": str(warm_cache)}
+    traced = {**warm, "JADHESION_PROGRAMS": "0"}
+    _timed(fit, warm)  # fill: compiled executables + kept programs
+    _timed(fit, traced)  # fill: the library path's compiled executables
 
     times = {k: [] for k in ("import_jax", "cold", "warm_traced", "warm_exported")}
     for r in range(args.repeats):
         cold = work / f"cold{r}"
         times["import_jax"].append(_timed([sys.executable, "-c", "import jax"], env))
         times["cold"].append(_timed(fit, {**env, "JADHESION_CACHE": str(cold)}))
-        # The traced path keeps a program each time it runs: remove it so every round traces.
-        shutil.rmtree(traced_cache / "exported", ignore_errors=True)
-        times["warm_traced"].append(_timed(fit, {**env, "JADHESION_CACHE": str(traced_cache)}))
-        times["warm_exported"].append(_timed(fit, {**env, "JADHESION_CACHE": str(warm_cache)}))
+        times["warm_traced"].append(_timed(fit, traced))
+        times["warm_exported"].append(_timed(fit, warm))
         shutil.rmtree(cold)
         print(f"round {r + 1}: " + ", ".join(f"{k} {v[-1]:.2f} s" for k, v in times.items()), flush=True)
 

@@ -47,7 +47,7 @@ def _assert_same(fit, ref):
 
 
 @pytest.mark.parametrize("method", ["lm", "itlbo", "pso"])
-def test_exported_fit_equals_library_bit_for_bit(programs, method):
+def test_exported_fit_equals_library_bit_for_bit(programs, method, monkeypatch):
     data, key = _dataset(), jax.random.key(3)
     options = dict(pop_size=8, max_iter=6)
     ref = fit_polach(data, method, key, **options)
@@ -56,6 +56,8 @@ def test_exported_fit_equals_library_bit_for_bit(programs, method):
     second = fit_program.fit_polach(data, method, key, **options)  # hit: deserialised
     _assert_same(first, ref)
     _assert_same(second, ref)
+    monkeypatch.setenv("JADHESION_PROGRAMS", "0")  # the way out: the library, traced as before
+    _assert_same(fit_program.fit_polach(data, method, key, **options), ref)
 
 
 def test_exported_fit_with_target_equals_library(programs):

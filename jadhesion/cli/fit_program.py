@@ -9,6 +9,9 @@ nor optimistix/equinox, and traces nothing. On a miss the library is imported, t
 kept and called (so its compilation lands in the compilation cache under the key a later process
 looks up). The vehicle's gradient constant ``k_eps`` — about a second of eager JAX operations in a
 new process — is remembered as the value it computed.
+
+``JADHESION_PROGRAMS=0`` in the environment turns both off: the library is imported and traced as
+before (for comparison and as a way out).
 """
 
 from __future__ import annotations
@@ -16,6 +19,7 @@ from __future__ import annotations
 import collections
 import dataclasses
 import functools
+import os
 
 import jax
 import numpy as np
@@ -37,6 +41,10 @@ def _code(sources: tuple, distributions: tuple = ()) -> str:
     return code_key(sources, distributions)
 
 
+def _enabled() -> bool:
+    return os.environ.get("JADHESION_PROGRAMS", "1") != "0"
+
+
 def _cache() -> ProgramCache:
     return ProgramCache(program_cache_dir())
 
@@ -45,6 +53,8 @@ def to_dataset(recording, observer_variant: str = "paper"):
     """:func:`jadhesion.data.dataset.to_dataset` with ``k_eps`` remembered across processes
     (keyed on every vehicle field and the sources of ``k_eps``)."""
     vehicle = recording.vehicle
+    if not _enabled():
+        return _dataset.to_dataset(recording, observer_variant)
     key = {"vehicle": dataclasses.asdict(vehicle), "code": _code(K_EPS_SOURCES)}
     k_eps = _cache().remember("k_eps", key, vehicle.k_eps)
     return _dataset.to_dataset(recording, observer_variant, k_eps=k_eps)
@@ -75,6 +85,10 @@ def fit_polach(dataset, method: str, key, *, pop_size: int = 50, max_iter: int =
     miss). Returns a named tuple with :class:`~jadhesion.identify.polach_fit.PolachFit`'s fields
     (in alphabetical order), equal bit for bit to the library's result."""
     use_target = target is not None
+    if not _enabled():
+        out = _polach_program(method, pop_size, max_iter, use_target)(
+            dataset, jax.random.key_data(key), target)
+        return _result_type(tuple(out))(**out)
     static = {"method": method, "pop_size": int(pop_size), "max_iter": int(max_iter),
               "use_target": use_target, "prng": str(jax.random.key_impl(key))}
     args = (dataset, jax.random.key_data(key),
