@@ -16,6 +16,17 @@ def enable_x64() -> None:
     jax.config.update("jax_enable_x64", True)
 
 
+def compilation_cache_dir() -> Path:
+    """The persistent compilation cache: ``$JADHESION_CACHE`` or ``~/.cache/jadhesion/xla``."""
+    return Path(os.environ.get("JADHESION_CACHE", Path.home() / ".cache" / "jadhesion" / "xla"))
+
+
+def program_cache_dir() -> Path:
+    """Exported programs (:mod:`jadhesion.programs`), kept beside the compiled executables:
+    ``<compilation cache>/exported``."""
+    return compilation_cache_dir() / "exported"
+
+
 def enable_compilation_cache(path: str | os.PathLike | None = None) -> Path:
     """Persist compiled XLA programs so a second CLI run does not pay compilation again.
 
@@ -23,7 +34,7 @@ def enable_compilation_cache(path: str | os.PathLike | None = None) -> Path:
     """
     import jax
 
-    cache = Path(path or os.environ.get("JADHESION_CACHE", Path.home() / ".cache" / "jadhesion" / "xla"))
+    cache = Path(path) if path else compilation_cache_dir()
     cache.mkdir(parents=True, exist_ok=True)
     jax.config.update("jax_compilation_cache_dir", str(cache))
     jax.config.update("jax_persistent_cache_min_entry_size_bytes", -1)

@@ -53,7 +53,7 @@ CREEP_OPTIONS = ("smoothed", "raw")
 
 
 def to_dataset(recording: "Recording", observer_variant: str = "paper",
-               creep: str = "smoothed") -> PolachDataset:
+               creep: str = "smoothed", *, k_eps: float | None = None) -> PolachDataset:
     """The fitting dataset (creep s, slip w, mu_hat, v, k_eps; with ``creep="smoothed"`` also
     ``slip_sd``, ``creep_sd``) of a recording (or a simulation result).
 
@@ -67,11 +67,12 @@ def to_dataset(recording: "Recording", observer_variant: str = "paper",
     :func:`jadhesion.models.kinematics.creepage`; the slip velocity from ``slip_velocity``, else
     ``creepage · max(|v|, floor)`` (the inverse of that creepage). Without it, the adhesion observer
     (:func:`jadhesion.data.observer.observe_adhesion`, ``observer_variant``) runs on the raw
-    signals and creep comes from the wheel and vehicle speeds.
+    signals and creep comes from the wheel and vehicle speeds. ``k_eps``: the vehicle's gradient
+    constant when already known (default ``recording.vehicle.k_eps()``).
     """
     if creep not in CREEP_OPTIONS:
         raise ValueError(f"creep must be one of {CREEP_OPTIONS}, got {creep!r}")
-    raw = _raw_dataset(recording, observer_variant)
+    raw = _raw_dataset(recording, observer_variant, k_eps)
     if creep == "raw" or not all(c in recording.columns for c in RAW_SIGNALS):
         return raw
     est = smooth_recording(recording)
@@ -82,7 +83,7 @@ def to_dataset(recording: "Recording", observer_variant: str = "paper",
 RAW_SIGNALS = ("time", "vehicle_speed", "wheel_speed", "traction_torque")
 
 
-def _raw_dataset(recording, observer_variant: str) -> PolachDataset:
+def _raw_dataset(recording, observer_variant: str, k_eps=None) -> PolachDataset:
     cols = recording.columns
     v = np.asarray(cols["vehicle_speed"])
     if "adhesion" in cols:
@@ -102,5 +103,7 @@ def _raw_dataset(recording, observer_variant: str) -> PolachDataset:
                               recording.vehicle, observer_variant)
         w = np.asarray(kinematics.slip_velocity(cols["wheel_speed"], v))
         s = np.asarray(kinematics.creepage(w, v))
+    if k_eps is None:
+        k_eps = recording.vehicle.k_eps()
     return PolachDataset(creep=jnp.asarray(s), slip=jnp.asarray(w), adhesion=jnp.asarray(mu),
-                         vehicle_speed=jnp.asarray(v), k_eps=jnp.asarray(recording.vehicle.k_eps()))
+                         vehicle_speed=jnp.asarray(v), k_eps=jnp.asarray(k_eps))

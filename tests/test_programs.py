@@ -1,0 +1,176 @@
+"""Kept exported programs (jadhesion.programs) and the fit command's fast start (cli/fit_program):
+results equal the library's bit for bit; damaged or stale files are rebuilt; keys follow shapes
+and code."""
+
+import hashlib
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from jadhesion.cli import fit_program
+from jadhesion.data.dataset import PolachDataset
+from jadhesion.identify.polach_fit import fit_polach
+from jadhesion.programs import ProgramCache, code_key
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _dataset(n=200, seed=0):
+    rng = np.random.default_rng(seed)
+    creep = np.linspace(1e-4, 0.05, n)
+    slip = creep * 10.0
+    adhesion = 0.3 * np.tanh(80 * creep) + 0.002 * rng.standard_normal(n)
+    return PolachDataset(jnp.asarray(creep), jnp.asarray(slip), jnp.asarray(adhesion),
+                         jnp.full(n, 10.0), jnp.asarray(129.88))
+
+
+@pytest.fixture
+def programs(tmp_path, monkeypatch):
+    monkeypatch.setenv("JADHESION_CACHE", str(tmp_path / "xla"))
+    return ProgramCache(tmp_path / "xla" / "exported")
+
+
+def _assert_same(fit, ref):
+    for name, value in ref._asdict().items():
+        got = getattr(fit, name)
+        if value is None:
+            assert got is None, name
+        else:
+            np.testing.assert_array_equal(np.asarray(got), np.asarray(value), err_msg=name)
+
+
+@pytest.mark.parametrize("method", ["lm", "itlbo", "pso"])
+def test_exported_fit_equals_library_bit_for_bit(programs, method, monkeypatch):
+    data, key = _dataset(), jax.random.key(3)
+    options = dict(pop_size=8, max_iter=6)
+    ref = fit_polach(data, method, key, **options)
+    first = fit_program.fit_polach(data, method, key, **options)  # miss: exported, kept, called
+    assert len(list(programs.directory.glob("polach_fit-*.jaxexport"))) == 1
+    second = fit_program.fit_polach(data, method, key, **options)  # hit: deserialised
+    _assert_same(first, ref)
+    _assert_same(second, ref)
+    monkeypatch.setenv("JADHESION_PROGRAMS", "0")  # the way out: the library, traced as before
+    _assert_same(fit_program.fit_polach(data, method, key, **options), ref)
+
+
+def test_exported_fit_with_target_equals_library(programs):
+    data, key = _dataset(), jax.random.key(1)
+    ref = fit_polach(data, "tlbo", key, pop_size=8, max_iter=20, target=0.05)
+    fit_program.fit_polach(data, "tlbo", key, pop_size=8, max_iter=20, target=0.05)
+    _assert_same(fit_program.fit_polach(data, "tlbo", key, pop_size=8, max_iter=20, target=0.05), ref)
+
+
+def _double(x, y):
+    return {"sum": 2.0 * x + y}
+
+
+def test_corrupt_stale_and_truncated_files_are_rebuilt(tmp_path):
+    cache = ProgramCache(tmp_path)
+    args = (jnp.arange(3.0), jnp.asarray(1.0))
+    calls = []
+
+    def make():
+        calls.append(1)
+        return _double
+
+    assert cache.load("double", args) is None and cache.last_miss == "missing"
+    np.testing.assert_array_equal(cache.get_or_export("double", make, args)(*args)["sum"], [1.0, 3.0, 5.0])
+    (path,) = tmp_path.glob("double-*.jaxexport")
+    assert cache.load("double", args) is not None and cache.last_miss is None
+    good = path.read_bytes()
+    header, _, blob = good.partition(b"\n")
+
+    meta = json.loads(header)
+    junk = b"\x00junk" * 50
+    damaged = [
+        ("corrupt", header + b"\n" + blob[:-7] + b"garbage"),
+        ("corrupt", header + b"\n" + blob[: len(blob) // 2]),  # truncated
+        ("unreadable", b"not a header\n" + blob),
+        ("unreadable", b"\xff\xfe" * 10),
+        ("unreadable", json.dumps({**meta, "sha256": hashlib.sha256(junk).hexdigest()}).encode()
+         + b"\n" + junk),  # intact checksum of bytes that are no program
+        ("key mismatch", json.dumps({**meta, "key": {**meta["key"], "code": "old"}}).encode() + b"\n" + blob),
+    ]
+    for reason, content in damaged:
+        path.write_bytes(content)
+        assert cache.load("double", args) is None
+        assert cache.last_miss.startswith(reason)
+        out = cache.get_or_export("double", make, args)(*args)
+        np.testing.assert_array_equal(out["sum"], [1.0, 3.0, 5.0])
+        assert cache.load("double", args) is not None  # rebuilt in place
+    assert len(calls) == 1 + len(damaged)
+    assert not list(tmp_path.glob(".*.tmp"))  # atomic writes leave no temporary file
+
+
+def test_key_follows_shapes_dtypes_static_options_and_code(tmp_path):
+    cache = ProgramCache(tmp_path)
+    args = (jnp.arange(3.0), jnp.asarray(1.0))
+    path = cache.path(cache.key("p", args, static={"m": "lm"}, code="abc"))
+    variants = [
+        cache.key("p", (jnp.arange(4.0), jnp.asarray(1.0)), static={"m": "lm"}, code="abc"),
+        cache.key("p", (jnp.arange(3, dtype=jnp.int32), jnp.asarray(1.0)), static={"m": "lm"}, code="abc"),
+        cache.key("p", args, static={"m": "pso"}, code="abc"),
+        cache.key("p", args, static={"m": "lm"}, code="abd"),
+        cache.key("p", (args,), static={"m": "lm"}, code="abc"),
+    ]
+    assert len({path, *map(cache.path, variants)}) == 1 + len(variants)
+    assert cache.path(cache.key("p", (jnp.ones(3), jnp.asarray(7.0)), static={"m": "lm"}, code="abc")) == path
+
+
+def test_code_key_changes_with_the_sources(tmp_path, monkeypatch):
+    import jadhesion.programs as programs_module
+
+    (tmp_path / "pkg").mkdir()
+    (tmp_path / "pkg" / "a.py").write_text("x = 1\n")
+    (tmp_path / "b.py").write_text("y = 2\n")
+    monkeypatch.setattr(programs_module, "_PACKAGE", tmp_path)
+    before = code_key(["pkg", "b.py"], ["numpy"])
+    assert code_key(["pkg", "b.py"], ["numpy"]) == before
+    (tmp_path / "pkg" / "a.py").write_text("x = 2\n")
+    assert code_key(["pkg", "b.py"], ["numpy"]) != before
+    assert code_key(["pkg", "b.py"], ["numpy", "jax"]) != code_key(["pkg", "b.py"], ["numpy"])
+
+
+def test_remembered_value_is_the_computed_one(tmp_path):
+    cache = ProgramCache(tmp_path)
+    value = 129.8844014360829 + 1e-13
+    assert cache.remember("k", {"v": 1}, lambda: value) == value
+    assert cache.remember("k", {"v": 1}, lambda: pytest.fail("recomputed")) == value
+    assert cache.remember("k", {"v": 2}, lambda: 1.5) == 1.5
+    for f in tmp_path.glob("k-*.json"):
+        f.write_text("{broken")
+    assert cache.remember("k", {"v": 1}, lambda: 2.5) == 2.5
+
+
+def test_warm_fit_process_imports_no_identification_library(tmp_path):
+    """A second ``jadhesion fit`` process runs the kept program: same JSON, and neither
+    jadhesion.identify nor optimistix/equinox is imported."""
+    from jadhesion.data.recording import save_recording
+
+    data = _dataset(300)
+    rec = save_recording({"vehicle_speed": np.asarray(data.vehicle_speed), "creepage": np.asarray(data.creep),
+                          "slip_velocity": np.asarray(data.slip), "adhesion": np.asarray(data.adhesion)},
+                         path=tmp_path / "rec.csv")
+    env = {**os.environ, "JADHESION_CACHE": str(tmp_path / "xla"),
+           "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    probe = ("import sys, json; from jadhesion.cli import main;"
+             "code = main(['fit', sys.argv[1], '--method', 'lm', '--json']);"
+             "heavy = [m for m in ('jadhesion.identify', 'optimistix', 'equinox') if m in sys.modules];"
+             "sys.stderr.write('HEAVY=' + json.dumps(heavy) + '\\n'); sys.exit(code)")
+    runs = [subprocess.run([sys.executable, "-c", probe, str(rec)], env=env, capture_output=True, text=True,
+                           timeout=600) for _ in range(2)]
+    for r in runs:
+        assert r.returncode == 0, r.stderr
+    docs = [json.loads(r.stdout) for r in runs]
+    for d in docs:
+        d.pop("seconds")
+    assert docs[0] == docs[1]
+    assert "HEAVY=[\"jadhesion.identify\", \"optimistix\", \"equinox\"]" in runs[0].stderr
+    assert "HEAVY=[]" in runs[1].stderr
