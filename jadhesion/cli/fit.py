@@ -5,6 +5,7 @@ from __future__ import annotations
 import time
 
 from .common import emit_json, table
+from .recording_options import add_recording_options, load_from_args
 
 METHODS = ("itlbo", "tlbo", "pso", "lm")
 
@@ -18,6 +19,7 @@ def register(sub) -> None:
     p.add_argument("--pop-size", type=int, default=50, help="population size (default 50)")
     p.add_argument("--max-iter", type=int, default=300, help="iteration budget (default 300)")
     p.add_argument("--json", action="store_true", help="one JSON document on stdout")
+    add_recording_options(p)
     p.set_defaults(func=run)
 
 
@@ -25,11 +27,10 @@ def run(args) -> int:
     import jax
 
     from ..data.dataset import to_dataset
-    from ..data.recording import load_recording
     from ..identify.polach_fit import fit_polach
     from ..models.polach import PARAM_NAMES
 
-    dataset = to_dataset(load_recording(args.file))
+    dataset = to_dataset(load_from_args(args, args.file))
     start = time.perf_counter()
     fit = jax.block_until_ready(fit_polach(dataset, args.method, jax.random.key(args.seed),
                                            pop_size=args.pop_size, max_iter=args.max_iter))

@@ -19,6 +19,7 @@ import warnings
 from pathlib import Path
 
 from .common import Progress, UserError, emit_json, table
+from .recording_options import add_recording_options, load_from_args
 
 
 def register(sub) -> None:
@@ -33,6 +34,7 @@ def register(sub) -> None:
                         "modelled, AR(1) noise (needs time and traction_torque)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--json", action="store_true", help="one JSON document on stdout")
+    add_recording_options(p)
     p.add_argument("--plot", metavar="DIR", default=None, help="write corner and predictive figures")
     p.set_defaults(func=run)
 
@@ -93,7 +95,6 @@ def run(args) -> int:
     import numpy as np
 
     from ..data.dataset import to_dataset
-    from ..data.recording import load_recording
     from ..identify.ensemble import ChainTooShortWarning
     from ..identify.laplace import initial_spread, lm_optimum
     from ..identify.mcmc import sample_posterior
@@ -102,7 +103,7 @@ def run(args) -> int:
         raise UserError(f"--walkers must be an even number >= 12, got {args.walkers}")
     if args.steps < 50:
         raise UserError(f"--steps must be at least 50, got {args.steps}")
-    recording = load_recording(args.file)
+    recording = load_from_args(args, args.file)
     data = to_dataset(recording)
     likelihood, obs, note = _choose_likelihood(recording, args.likelihood)
     theta0 = lm_optimum(data, obs=obs)

@@ -42,6 +42,7 @@ from typing import Optional
 import numpy as np
 
 from ..errors import RecordingError
+from .units import parse_column_map, to_si
 from .vehicle import LOCO_22E, SIDECAR_KEYS, Vehicle
 
 #: Columns of a raw-signal recording.
@@ -72,6 +73,7 @@ class Recording:
         vehicle: the locomotive, 22E defaults overridden by the sidecar.
         sidecar: the sidecar's JSON object as read (empty when there is none).
         notes: remarks that are not errors (ignored sidecar keys, ignored text columns).
+        sources: the column map applied, ``{canonical: "SOURCE[UNIT]"}`` (empty when none).
     """
 
     path: Path
@@ -79,6 +81,7 @@ class Recording:
     vehicle: Vehicle = LOCO_22E
     sidecar: dict = dataclasses.field(default_factory=dict)
     notes: tuple = ()
+    sources: dict = dataclasses.field(default_factory=dict)
 
     @property
     def n_samples(self) -> int:
@@ -217,11 +220,10 @@ def _convert_column(cells: np.ndarray, col: str, lines, name: str, strict: bool)
     return values
 
 
-def _where(col, i, lines):
-    return f"column {col!r}, row {i + 1} (line {lines[i]})"
+def _check_values(cols, vehicle: Vehicle, lines, name: str, max_speed: float, shown: dict):
+    def _where(col, i, lines):
+        return f"column {shown.get(col, col)!r}, row {i + 1} (line {lines[i]})"
 
-
-def _check_values(cols, vehicle: Vehicle, lines, name: str, max_speed: float):
     if "time" in cols and len(cols["time"]) > 1:
         dt = np.diff(cols["time"])
         bad = np.flatnonzero(dt <= 0)
@@ -237,7 +239,8 @@ def _check_values(cols, vehicle: Vehicle, lines, name: str, max_speed: float):
         if bad.size:
             i = int(bad[0])
             raise _fail(name, f"{_where(col, i, lines)}: {cols[col][i]:.6g} m/s exceeds the plausible "
-                              f"{max_speed:g} m/s; looks like km/h? divide by 3.6")
+                              f"{max_speed:g} m/s; looks like km/h? map it with --column "
+                              f"{col}={shown.get(col, col)}[km/h] (or the sidecar's \"columns\")")
     if "vehicle_speed" in cols and "wheel_speed" in cols:
         v, vw = cols["vehicle_speed"], cols["wheel_speed"]
         moving = np.abs(v) > 0.5
@@ -249,7 +252,8 @@ def _check_values(cols, vehicle: Vehicle, lines, name: str, max_speed: float):
                 i = int(np.flatnonzero(moving)[0])
                 raise _fail(name, f"{_where(fast, i, lines)}: median wheel/vehicle speed ratio is "
                                   f"{ratio:.3g} (creepage {ratio - 1:.3g}); {fast} looks like km/h "
-                                  f"while {slow} is m/s? divide {fast} by 3.6")
+                                  f"while {slow} is m/s? map it with --column "
+                                  f"{fast}={shown.get(fast, fast)}[km/h]")
     if "traction_torque" in cols:
         torque = np.abs(cols["traction_torque"])
         scale = vehicle.axle_weight_n * vehicle.wheel_radius_m  # N·m for mu = 1
@@ -258,7 +262,8 @@ def _check_values(cols, vehicle: Vehicle, lines, name: str, max_speed: float):
             i = int(np.argmax(torque))
             raise _fail(name, f"{_where('traction_torque', i, lines)}: the largest torque {peak:.4g} "
                               f"implies mu = {peak / scale:.2g}; expected N·m at the wheelset — looks "
-                              f"like kN·m? multiply by 1000")
+                              f"like kN·m? map it with --column "
+                              f"traction_torque={shown.get('traction_torque', 'traction_torque')}[kN*m]")
         bad = np.flatnonzero(torque > MAX_TORQUE_MU * scale)
         if bad.size:
             i = int(bad[0])
@@ -336,6 +341,11 @@ def _load_sidecar(csv_path: Path):
                           f"{type(data).__name__}")
     changes, notes = {}, []
     for key, value in data.items():
+        if key == "columns" and value is not None:
+            if not isinstance(value, dict) or not all(isinstance(v, str) for v in value.values()):
+                raise _fail(name, f"key 'columns': expected an object {{\"CANONICAL\": "
+                                  f"\"SOURCE[UNIT]\"}}, got {_brief(value)}")
+            continue
         if key not in SIDECAR_KEYS:
             notes.append(f"{name}: unknown key {key!r} ignored")
             continue
@@ -345,11 +355,25 @@ def _load_sidecar(csv_path: Path):
     return path, data, LOCO_22E.replace(**changes), tuple(notes)
 
 
-def load_recording(path, *, max_speed: float = MAX_SPEED) -> Recording:
+def _column_map(columns, sidecar: dict, sidecar_name: str, header, name: str):
+    """``{canonical: ColumnSpec}``: the sidecar's ``columns`` overridden by ``columns`` (--column)."""
+    specs = parse_column_map([f"{k}={v}" for k, v in (sidecar.get("columns") or {}).items()],
+                             f"{sidecar_name}: key 'columns':")
+    specs.update(parse_column_map(columns or (), "--column"))
+    for spec in specs.values():
+        if spec.source not in header:
+            raise _fail(name, f"--column {spec.canonical}={spec.source}: no column {spec.source!r} "
+                              f"in the file (columns: {', '.join(header)})")
+    return specs
+
+
+def load_recording(path, *, columns=(), max_speed: float = MAX_SPEED) -> Recording:
     """Load and validate a recording CSV and its optional sidecar ``<same stem>.json``.
 
     Args:
         path: the CSV file.
+        columns: ``CANONICAL=SOURCE[UNIT]`` strings (:mod:`jadhesion.data.units`), applied over the
+            sidecar's ``columns`` map; values are converted to SI, errors name the source column.
         max_speed: largest plausible |speed| [m/s]; larger values are reported as km/h.
 
     Raises:
@@ -359,24 +383,39 @@ def load_recording(path, *, max_speed: float = MAX_SPEED) -> Recording:
     name = str(path)
     text = _read_text(path, name)
     header, rows, lines = _parse_rows(text, name)
-    _check_layout(header, name)
-    required = [c for c in header if c in KNOWN_COLUMNS]
-    _, sidecar, vehicle, notes = _load_sidecar(path)
+    sidecar_path, sidecar, vehicle, notes = _load_sidecar(path)
+    specs = _column_map(columns, sidecar, str(sidecar_path), header, name)
+    by_source = {spec.source: spec for spec in specs.values()}
+    shadowed = [c for c in header if c in specs and c not in by_source]
+    if shadowed:
+        notes += (f"{name}: column{'s' if len(shadowed) > 1 else ''} "
+                  f"{', '.join(map(repr, shadowed))} replaced by the column map",)
+    renamed = [by_source[c].canonical if c in by_source else (None if c in shadowed else c)
+               for c in header]
+    shown = {spec.canonical: spec.source for spec in specs.values()}
+    _check_layout([c for c in renamed if c is not None], name)
+    required = [c for c in renamed if c in KNOWN_COLUMNS]
     cells = np.array(rows, dtype=str)
     columns = {}
     ignored = []
-    for j, col in enumerate(header):
-        values = _convert_column(cells[:, j], col, lines, name, strict=col in required)
+    for j, col in enumerate(renamed):
+        if col is None:
+            continue
+        values = _convert_column(cells[:, j], shown.get(col, col), lines, name,
+                                 strict=col in required)
         if values is None:
             ignored.append(col)
         else:
-            columns[col] = values
+            spec = specs.get(col)
+            columns[col] = values if spec is None else values * to_si(spec, vehicle.wheel_radius_m)
     if ignored:
         notes += (f"{name}: non-numeric column{'s' if len(ignored) > 1 else ''} "
                   f"{', '.join(map(repr, ignored))} ignored",)
     with np.errstate(all="ignore"):  # differences of huge finite values may overflow to inf
-        _check_values({c: columns[c] for c in required}, vehicle, lines, name, max_speed)
-    return Recording(path=path, columns=columns, vehicle=vehicle, sidecar=sidecar, notes=notes)
+        _check_values({c: columns[c] for c in required}, vehicle, lines, name, max_speed, shown)
+    return Recording(path=path, columns=columns, vehicle=vehicle, sidecar=sidecar, notes=notes,
+                     sources={c: str(specs[c].source) + (f"[{specs[c].unit}]" if specs[c].unit else "")
+                              for c in specs})
 
 
 # ------------------------------------------------------------------------------------------ saving
@@ -393,16 +432,15 @@ def vehicle_sidecar(vehicle: Vehicle) -> dict:
     return out
 
 
-def _atomic_write(path: Path, text: str) -> None:
-    """Write ``text`` to a temporary file beside ``path`` and rename it over ``path``."""
+def atomic_write(path: Path, write) -> None:
+    """Call ``write(tmp)`` on a temporary file beside ``path``, then rename it over ``path`` (the
+    project's one atomic writer: a reader never sees a half-written file)."""
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:
-        with open(tmp, "w", encoding="utf-8", newline="") as fh:
-            fh.write(text)
+        write(tmp)
         os.replace(tmp, path)
-    except BaseException:
+    finally:
         tmp.unlink(missing_ok=True)
-        raise
 
 
 def save_recording(columns, vehicle: Vehicle = LOCO_22E, path="recording.csv",
@@ -446,6 +484,7 @@ def save_recording(columns, vehicle: Vehicle = LOCO_22E, path="recording.csv",
     buf = io.StringIO()
     buf.write(",".join(names) + "\n")
     buf.writelines(",".join(map(repr, row)) + "\n" for row in zip(*lists))
-    _atomic_write(path, buf.getvalue())
-    _atomic_write(path.with_suffix(".json"), sidecar_text)
+    atomic_write(path, lambda tmp: tmp.write_text(buf.getvalue(), encoding="utf-8", newline=""))
+    atomic_write(path.with_suffix(".json"),
+                 lambda tmp: tmp.write_text(sidecar_text, encoding="utf-8", newline=""))
     return path
