@@ -36,6 +36,7 @@ import io
 import json
 import math
 import os
+import re
 from pathlib import Path
 from typing import Optional
 
@@ -61,6 +62,7 @@ MAX_ADHESION = 1.5
 MIN_TORQUE_MU = 1e-3
 #: Torque implying |mu| above this somewhere is implausible (even with the wheelset's inertia).
 MAX_TORQUE_MU = 3.0
+_BLANK_LINE = re.compile(r"\n[ \t\r]*\n")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -176,6 +178,36 @@ def _parse_rows(text: str, name: str):
         raise _fail(name, f"row {i + 1} (line {lines[i]}): {counts[i]} fields, but the header names "
                           f"{width} columns")
     return header, rows, lines
+
+
+def _fast_parse(text: str):
+    """``(header, float64 columns, line numbers)`` by pyarrow's vectorised CSV reader, or ``None``
+    when pyarrow is missing or the file is not plain (comments, quotes, blank lines, any cell that
+    is not a finite number): the precise pass (:func:`_parse_rows`) then reads it and names the
+    exact row and line of any error."""
+    if "#" in text or '"' in text or _BLANK_LINE.search(text) or not text[:1].strip():
+        return None
+    try:  # optional dependency (extra ``parquet``): imported only when a CSV is read
+        import pyarrow as pa
+        from pyarrow import csv as pacsv
+    except ImportError:
+        return None
+    first, _, body = text.partition("\n")
+    header = [f.strip() for f in first.rstrip("\r").split(",")]
+    if (not all(header) or len(set(header)) != len(header) or all(_is_number(f) for f in header)
+            or not body.strip()):
+        return None
+    options = pacsv.ConvertOptions(column_types={h: pa.float64() for h in header}, null_values=[],
+                                   strings_can_be_null=False, quoted_strings_can_be_null=False)
+    try:
+        table = pacsv.read_csv(io.BytesIO(body.encode()), convert_options=options,
+                               read_options=pacsv.ReadOptions(column_names=header))
+    except (pa.ArrowInvalid, ValueError):
+        return None
+    columns = [table.column(j).to_numpy() for j in range(len(header))]
+    if not all(np.isfinite(c).all() for c in columns):
+        return None
+    return header, columns, range(2, table.num_rows + 2)
 
 
 def _check_layout(header, name):
@@ -382,7 +414,12 @@ def load_recording(path, *, columns=(), max_speed: float = MAX_SPEED) -> Recordi
     path = Path(path)
     name = str(path)
     text = _read_text(path, name)
-    header, rows, lines = _parse_rows(text, name)
+    fast = _fast_parse(text)
+    if fast is None:
+        header, rows, lines = _parse_rows(text, name)
+        cells = np.array(rows, dtype=str)
+    else:
+        header, parsed, lines = fast
     sidecar_path, sidecar, vehicle, notes = _load_sidecar(path)
     specs = _column_map(columns, sidecar, str(sidecar_path), header, name)
     by_source = {spec.source: spec for spec in specs.values()}
@@ -395,14 +432,13 @@ def load_recording(path, *, columns=(), max_speed: float = MAX_SPEED) -> Recordi
     shown = {spec.canonical: spec.source for spec in specs.values()}
     _check_layout([c for c in renamed if c is not None], name)
     required = [c for c in renamed if c in KNOWN_COLUMNS]
-    cells = np.array(rows, dtype=str)
     columns = {}
     ignored = []
     for j, col in enumerate(renamed):
         if col is None:
             continue
-        values = _convert_column(cells[:, j], shown.get(col, col), lines, name,
-                                 strict=col in required)
+        values = parsed[j] if fast is not None else _convert_column(
+            cells[:, j], shown.get(col, col), lines, name, strict=col in required)
         if values is None:
             ignored.append(col)
         else:
