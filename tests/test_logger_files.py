@@ -115,3 +115,21 @@ def test_cli_bad_column_exits_2_one_line_nothing_written(tmp_path):
     assert proc.returncode == 2 and proc.stdout == ""
     assert proc.stderr.count("\n") == 1 and "unit 'kmh' is not a unit of vehicle_speed" in proc.stderr
     assert set(tmp_path.iterdir()) - before <= {tmp_path / "cache"}
+
+
+def test_axle_picks_one_axles_signals_and_the_map_overrides(tmp_path):
+    cols = _si_columns(40)
+    three = {"time": cols["time"], "vehicle_speed": cols["vehicle_speed"]}
+    for n in (1, 2, 3):
+        three[f"wheel_speed_{n}"] = cols["wheel_speed"] * (1 + 0.001 * n)
+        three[f"traction_torque_axle{n}"] = cols["traction_torque"] * (1 + 0.01 * n)
+    path = save_recording(three, LOCO_22E, tmp_path / "axles.csv")
+    rec = load_recording(path, axle=2)
+    np.testing.assert_array_equal(rec.columns["wheel_speed"], three["wheel_speed_2"])
+    np.testing.assert_array_equal(rec.columns["traction_torque"], three["traction_torque_axle2"])
+    rec = load_recording(path, axle=2, columns=["wheel_speed=wheel_speed_3"])
+    np.testing.assert_array_equal(rec.columns["wheel_speed"], three["wheel_speed_3"])
+    for axle, expected in [(4, "--axle 4: no column 'wheel_speed_4' or 'wheel_speed_axle4'"),
+                           (0, "--axle 0: expected an axle number >= 1")]:
+        with pytest.raises(RecordingError, match=expected):
+            load_recording(path, axle=axle)

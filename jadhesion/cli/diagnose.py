@@ -24,13 +24,13 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
-def diagnose_file(path, columns=()) -> tuple:
+def diagnose_file(path, columns=(), axle=None) -> tuple:
     """Load a recording (CSV + sidecar) and diagnose it: ``(result, recording)``; the code path of
     the CLI, used by the blind benchmark too."""
     from ..data.recording import load_recording
     from ..diagnose import diagnose
 
-    recording = load_recording(path, columns=columns)
+    recording = load_recording(path, columns=columns, axle=axle)
     if not recording.has_raw_signals:
         raise UserError(f"{path}: diagnosis needs the raw columns time, vehicle_speed, "
                         "wheel_speed, traction_torque")
@@ -39,7 +39,7 @@ def diagnose_file(path, columns=()) -> tuple:
 
 def run(args) -> int:
     start = time.perf_counter()
-    result, _ = diagnose_file(args.file, args.column)
+    result, _ = diagnose_file(args.file, args.column, args.axle)
     result["seconds"] = time.perf_counter() - start
     series = result.pop("_series")
     if args.report:

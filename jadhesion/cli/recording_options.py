@@ -1,4 +1,5 @@
-"""Options shared by every command that reads a recording: the column map (``--column``)."""
+"""Options shared by every command that reads a recording: the column map (``--column``) and
+the axle of a multi-axle file (``--axle``)."""
 
 from __future__ import annotations
 
@@ -9,6 +10,10 @@ def add_recording_options(parser) -> None:
                         help="read a canonical column from the file's SOURCE column in UNIT, e.g. "
                              "vehicle_speed=v_Lok_kmh[km/h] (repeatable; overrides the sidecar's "
                              "\"columns\")")
+    parser.add_argument("--axle", type=int, default=None, metavar="N",
+                        help="take wheel_speed and traction_torque of axle N from a multi-axle file "
+                             "(columns wheel_speed_N, wheel_speed_axleN or wheel_speedN, likewise "
+                             "traction_torque)")
 
 
 def load_from_args(args, path):
@@ -16,4 +21,4 @@ def load_from_args(args, path):
     # The data layer imports JAX: kept out of the module top so that ``--help`` stays instant.
     from ..data.recording import load_recording
 
-    return load_recording(path, columns=args.column)
+    return load_recording(path, columns=args.column, axle=args.axle)

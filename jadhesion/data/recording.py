@@ -43,7 +43,7 @@ from typing import Optional
 import numpy as np
 
 from ..errors import RecordingError
-from .units import parse_column_map, to_si
+from .units import ColumnSpec, parse_column_map, to_si
 from .vehicle import LOCO_22E, SIDECAR_KEYS, Vehicle
 
 #: Columns of a raw-signal recording.
@@ -62,6 +62,9 @@ MAX_ADHESION = 1.5
 MIN_TORQUE_MU = 1e-3
 #: Torque implying |mu| above this somewhere is implausible (even with the wheelset's inertia).
 MAX_TORQUE_MU = 3.0
+#: Per-axle columns of a multi-axle file and their naming patterns (``--axle N``), first match wins.
+AXLE_COLUMNS = ("wheel_speed", "traction_torque")
+AXLE_PATTERNS = ("{name}_{n}", "{name}_axle{n}", "{name}{n}")
 _BLANK_LINE = re.compile(r"\n[ \t\r]*\n")
 
 
@@ -387,11 +390,25 @@ def _load_sidecar(csv_path: Path):
     return path, data, LOCO_22E.replace(**changes), tuple(notes)
 
 
-def _column_map(columns, sidecar: dict, sidecar_name: str, header, name: str):
-    """``{canonical: ColumnSpec}``: the sidecar's ``columns`` overridden by ``columns`` (--column)."""
+def _column_map(columns, sidecar: dict, sidecar_name: str, header, name: str, axle):
+    """``{canonical: ColumnSpec}``: the sidecar's ``columns`` overridden by ``columns`` (--column);
+    with ``axle`` N, unmapped ``wheel_speed``/``traction_torque`` come from the first present of
+    ``{name}_{N}``, ``{name}_axle{N}``, ``{name}{N}``."""
     specs = parse_column_map([f"{k}={v}" for k, v in (sidecar.get("columns") or {}).items()],
                              f"{sidecar_name}: key 'columns':")
     specs.update(parse_column_map(columns or (), "--column"))
+    if axle is not None:
+        if isinstance(axle, bool) or not isinstance(axle, int) or axle < 1:
+            raise _fail(name, f"--axle {axle}: expected an axle number >= 1")
+        for canonical in AXLE_COLUMNS:
+            if canonical in specs:
+                continue
+            names = [p.format(name=canonical, n=axle) for p in AXLE_PATTERNS]
+            found = [c for c in names if c in header]
+            if not found:
+                raise _fail(name, f"--axle {axle}: no column {' or '.join(map(repr, names))} in the "
+                                  f"file (columns: {', '.join(header)}); map it with --column")
+            specs[canonical] = ColumnSpec(canonical, found[0])
     for spec in specs.values():
         if spec.source not in header:
             raise _fail(name, f"--column {spec.canonical}={spec.source}: no column {spec.source!r} "
@@ -399,13 +416,15 @@ def _column_map(columns, sidecar: dict, sidecar_name: str, header, name: str):
     return specs
 
 
-def load_recording(path, *, columns=(), max_speed: float = MAX_SPEED) -> Recording:
+def load_recording(path, *, columns=(), axle=None, max_speed: float = MAX_SPEED) -> Recording:
     """Load and validate a recording CSV and its optional sidecar ``<same stem>.json``.
 
     Args:
         path: the CSV file.
         columns: ``CANONICAL=SOURCE[UNIT]`` strings (:mod:`jadhesion.data.units`), applied over the
             sidecar's ``columns`` map; values are converted to SI, errors name the source column.
+        axle: pick this axle's wheel speed and torque from a multi-axle file
+            (:data:`AXLE_PATTERNS`, overridable by the column map).
         max_speed: largest plausible |speed| [m/s]; larger values are reported as km/h.
 
     Raises:
@@ -421,7 +440,7 @@ def load_recording(path, *, columns=(), max_speed: float = MAX_SPEED) -> Recordi
     else:
         header, parsed, lines = fast
     sidecar_path, sidecar, vehicle, notes = _load_sidecar(path)
-    specs = _column_map(columns, sidecar, str(sidecar_path), header, name)
+    specs = _column_map(columns, sidecar, str(sidecar_path), header, name, axle)
     by_source = {spec.source: spec for spec in specs.values()}
     shadowed = [c for c in header if c in specs and c not in by_source]
     if shadowed:
