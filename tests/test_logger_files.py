@@ -133,3 +133,17 @@ def test_axle_picks_one_axles_signals_and_the_map_overrides(tmp_path):
                            (0, "--axle 0: expected an axle number >= 1")]:
         with pytest.raises(RecordingError, match=expected):
             load_recording(path, axle=axle)
+
+
+def test_start_end_window_and_its_errors(tmp_path):
+    from jadhesion.data.segments import trim
+
+    rec = load_recording(_logger_twin(_si_columns(100), tmp_path / "log.csv"), columns=LOGGER_MAP)
+    part = trim(rec, 0.2, 0.5)
+    np.testing.assert_allclose(part.columns["time"][[0, -1]], [0.2, 0.5], atol=1e-12)
+    assert part.n_samples == 31 and trim(rec) is rec
+    for start, end, expected in [(0.5, 0.2, "--start 0.5 s is not before --end 0.2 s"),
+                                 (5.0, None, r"select 0 sample\(s\); the recording runs from 0 s"),
+                                 (float("nan"), None, "--start nan: expected a finite time")]:
+        with pytest.raises(RecordingError, match=expected):
+            trim(rec, start, end)

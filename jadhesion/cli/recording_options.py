@@ -1,5 +1,5 @@
 """Options shared by every command that reads a recording: the column map (``--column``) and
-the axle of a multi-axle file (``--axle``)."""
+the axle of a multi-axle file (``--axle``), the time window (``--start/--end``)."""
 
 from __future__ import annotations
 
@@ -14,11 +14,16 @@ def add_recording_options(parser) -> None:
                         help="take wheel_speed and traction_torque of axle N from a multi-axle file "
                              "(columns wheel_speed_N, wheel_speed_axleN or wheel_speedN, likewise "
                              "traction_torque)")
+    parser.add_argument("--start", type=float, default=None, metavar="SECONDS",
+                        help="use the samples from this time on [s, as recorded]")
+    parser.add_argument("--end", type=float, default=None, metavar="SECONDS",
+                        help="use the samples up to this time [s, as recorded]")
 
 
 def load_from_args(args, path):
     """The :class:`~jadhesion.data.recording.Recording` at ``path`` with the options in ``args``."""
     # The data layer imports JAX: kept out of the module top so that ``--help`` stays instant.
     from ..data.recording import load_recording
+    from ..data.segments import trim
 
-    return load_recording(path, columns=args.column, axle=args.axle)
+    return trim(load_recording(path, columns=args.column, axle=args.axle), args.start, args.end)
