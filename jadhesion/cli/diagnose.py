@@ -11,6 +11,7 @@ from __future__ import annotations
 import time
 
 from .common import UserError, emit_json, table
+from .recording_options import add_recording_options
 
 
 def register(sub) -> None:
@@ -19,16 +20,17 @@ def register(sub) -> None:
     p.add_argument("--report", metavar="DIR", default=None,
                    help="write a Markdown report with figures into DIR")
     p.add_argument("--json", action="store_true", help="one JSON document on stdout")
+    add_recording_options(p)
     p.set_defaults(func=run)
 
 
-def diagnose_file(path) -> tuple:
+def diagnose_file(path, columns=(), axle=None) -> tuple:
     """Load a recording (CSV + sidecar) and diagnose it: ``(result, recording)``; the code path of
     the CLI, used by the blind benchmark too."""
     from ..data.recording import load_recording
     from ..diagnose import diagnose
 
-    recording = load_recording(path)
+    recording = load_recording(path, columns=columns, axle=axle)
     if not recording.has_raw_signals:
         raise UserError(f"{path}: diagnosis needs the raw columns time, vehicle_speed, "
                         "wheel_speed, traction_torque")
@@ -37,7 +39,7 @@ def diagnose_file(path) -> tuple:
 
 def run(args) -> int:
     start = time.perf_counter()
-    result, _ = diagnose_file(args.file)
+    result, _ = diagnose_file(args.file, args.column, args.axle)
     result["seconds"] = time.perf_counter() - start
     series = result.pop("_series")
     if args.report:

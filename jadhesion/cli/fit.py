@@ -7,6 +7,7 @@ This module defines the arguments only; :mod:`.fit_run` does the work.
 from __future__ import annotations
 
 from . import COMMANDS
+from .recording_options import add_recording_options
 
 #: Fit methods offered (the registry's names; kept literal so ``--help`` imports no JAX — a test
 #: keeps this equal to :data:`jadhesion.identify.methods.NAMES`).
@@ -34,4 +35,5 @@ def register(sub) -> None:
     p.add_argument("--plot", metavar="DIR", default=None,
                    help="write fit.png (data, fit and residuals) into DIR")
     p.add_argument("--json", action="store_true", help="one JSON document on stdout")
+    add_recording_options(p)
     p.set_defaults(handler="jadhesion.cli.fit_run:run")

@@ -7,7 +7,6 @@ from pathlib import Path
 
 import jax
 
-from ..data.recording import load_recording
 from ..identify.kiencke_fit import fit_document, fit_kiencke
 from ..identify.polach_fit import require_samples
 from ..identify.trust import fit_report
@@ -16,6 +15,7 @@ from ..plots.fit import fit_figure
 from ..status import status_of
 from .common import UserError, emit_json, require_at_least, table
 from .fit_program import fit_polach, to_dataset
+from .loading import load_from_args
 
 
 def _check_flags(args) -> None:
@@ -83,7 +83,7 @@ def _fit_polach(args, dataset) -> dict:
 def run(args) -> int:
     """Fit one recording and print (or ``--json``) the result with its trust block."""
     _check_flags(args)
-    dataset = to_dataset(load_recording(args.file), creep=args.creep)
+    dataset = to_dataset(load_from_args(args, args.file), creep=args.creep)
     require_samples(dataset, args.file)
     if args.model == "kiencke":
         doc = _fit_kiencke(args, dataset)

@@ -15,19 +15,18 @@ says which one ran and ``likelihood_note`` why.
 signals (:mod:`jadhesion.data.creep_state`) and the likelihood integrates its uncertainty (errors in
 variables, :mod:`jadhesion.identify.likelihood`); ``--creep raw`` uses the speed difference. The
 JSON's ``creep`` says which one ran.
+
+This module defines the arguments only; :mod:`.posterior_run` does the work.
 """
 
 from __future__ import annotations
 
-import sys
-import warnings
-from pathlib import Path
-
-from .common import Progress, UserError, emit_json, table
+from . import COMMANDS
+from .recording_options import add_recording_options
 
 
 def register(sub) -> None:
-    p = sub.add_parser("posterior", help="Bayesian posterior of the Polach parameters (emcee)")
+    p = sub.add_parser("posterior", help=COMMANDS["posterior"])
     p.add_argument("file", help="recording or creepage CSV")
     p.add_argument("--walkers", type=int, default=32, help="ensemble size (default 32)")
     p.add_argument("--steps", type=int, default=5000, help="steps per walker, burn-in included")
@@ -41,107 +40,6 @@ def register(sub) -> None:
                         "likelihood (errors in variables); raw: the difference of the speeds")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--json", action="store_true", help="one JSON document on stdout")
+    add_recording_options(p)
     p.add_argument("--plot", metavar="DIR", default=None, help="write corner and predictive figures")
-    p.set_defaults(func=run)
-
-
-def _choose_likelihood(recording, requested: str):
-    """``(likelihood, ObserverTerms or None, note)`` for the loaded recording."""
-    import numpy as np
-
-    from ..data.observer import observe_adhesion
-    from ..identify.likelihood import recording_observer_terms
-
-    if requested not in ("auto", "observer"):
-        return requested, None, "requested"
-    if not recording.has_raw_signals:
-        if requested == "observer":
-            raise UserError(f"{recording.path}: --likelihood observer needs the columns time, "
-                            f"vehicle_speed, wheel_speed and traction_torque")
-        return "gauss", None, "auto: no raw signals (time, speeds, torque), i.i.d. Gaussian"
-    cols = recording.columns
-    if recording.has_adhesion:
-        mu = np.asarray(observe_adhesion(cols["time"], cols["wheel_speed"], cols["traction_torque"],
-                                         recording.vehicle))
-        if not np.allclose(mu, cols["adhesion"], rtol=1e-6, atol=1e-6):
-            if requested == "observer":
-                raise UserError(f"{recording.path}: column adhesion is not the paper observer's "
-                                f"output of the raw signals; --likelihood observer does not apply")
-            return "gauss", None, ("auto: the adhesion column is not the paper observer's output "
-                                   "of the raw signals, i.i.d. Gaussian")
-    try:
-        obs = recording_observer_terms(recording)
-    except ValueError as err:
-        raise UserError(f"{recording.path}: {err}") from None
-    return "observer", obs, "requested" if requested == "observer" else (
-        "auto: raw signals present, the observer's lag modelled")
-
-
-def _document(result, theta0, note="", creep="raw") -> dict:
-    diag = result.diagnostics
-    return {
-        "likelihood": result.likelihood,
-        "likelihood_note": note,
-        "creep": creep,
-        "lm_start": dict(zip(result.names, map(float, theta0))),
-        "params": result.params,
-        "derived": result.derived,
-        "vehicle_speed": result.vehicle_speed,
-        "diagnostics": {
-            "acceptance": diag.acceptance,
-            "tau": dict(zip(result.names, diag.tau.tolist())),
-            "ess": dict(zip(result.names, diag.ess.tolist())),
-            "n_samples": diag.n_samples, "steps": diag.steps, "burn": diag.burn,
-            "seconds": diag.seconds, "compile_seconds": diag.compile_seconds,
-            "warnings": list(diag.warnings),
-        },
-    }
-
-
-def run(args) -> int:
-    import numpy as np
-
-    from ..data.dataset import to_dataset
-    from ..data.recording import load_recording
-    from ..identify.ensemble import ChainTooShortWarning
-    from ..identify.laplace import initial_spread, lm_optimum
-    from ..identify.polach_fit import require_samples
-    from ..identify.mcmc import sample_posterior
-
-    if args.walkers < 12 or args.walkers % 2:
-        raise UserError(f"--walkers must be an even number >= 12, got {args.walkers}")
-    if args.steps < 50:
-        raise UserError(f"--steps must be at least 50, got {args.steps}")
-    recording = load_recording(args.file)
-    data = to_dataset(recording, creep=args.creep)
-    require_samples(data, args.file)
-    likelihood, obs, note = _choose_likelihood(recording, args.likelihood)
-    theta0 = lm_optimum(data, obs=obs)
-    spread = np.asarray(initial_spread(theta0, data, obs=obs))
-    theta0 = np.asarray(theta0)
-    progress = Progress(args.steps, "posterior", "steps", enabled=not args.json or sys.stderr.isatty())
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", ChainTooShortWarning)   # reported in diagnostics instead
-        result = sample_posterior(data, theta0, walkers=args.walkers, steps=args.steps,
-                                  likelihood=likelihood, seed=args.seed, spread=spread, obs=obs,
-                                  callback=lambda i: progress.update(i - progress.done))
-    for message in result.diagnostics.warnings:
-        sys.stderr.write(f"jadhesion: warning: {message}\n")
-    if args.plot:
-        from ..plots.posterior import corner_plot, predictive_plot
-
-        out = Path(args.plot)
-        out.mkdir(parents=True, exist_ok=True)
-        corner_plot(result).savefig(out / "posterior_corner.png", dpi=90)
-        predictive_plot(result, data).savefig(out / "posterior_predictive.png", dpi=110)
-    doc = _document(result, theta0, note, "smoothed" if data.slip_sd is not None else "raw")
-    if args.json:
-        emit_json(doc)
-        return 0
-    rows = [{"quantity": k, **v} for k, v in {**result.params, **result.derived}.items()]
-    print(f"likelihood: {likelihood} ({note}); creep: {doc['creep']}")
-    print(table(rows, ["quantity", "median", "q05", "q95"]))
-    d = doc["diagnostics"]
-    print(f"acceptance {d['acceptance']:.2f}, tau max {max(d['tau'].values()):.0f} steps, "
-          f"ESS min {min(d['ess'].values()):.0f}, {d['n_samples']} samples, {d['seconds']:.1f} s")
-    return 0
+    p.set_defaults(handler="jadhesion.cli.posterior_run:run")

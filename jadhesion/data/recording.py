@@ -28,38 +28,29 @@ Sign conventions: negative vehicle and wheel speeds are **allowed** (running in 
 negative torque (braking). Only magnitudes are checked for plausibility.
 """
 
-from __future__ import annotations
 
-import csv
 import dataclasses
 import io
 import json
-import math
 import os
 from pathlib import Path
 from typing import Optional
 
 import numpy as np
 
-from ..errors import RecordingError
+from .readers import _fast_parse, _parse_rows, _read_text
+from .sidecar import _load_sidecar
+from .units import ColumnSpec, parse_column_map, to_si
+# Re-exported: other code reads the validation constants from here.
+from .validate import (CREEP_COLUMNS, DATASET_COLUMNS, KNOWN_COLUMNS, MAX_ADHESION,  # noqa: F401
+                       MAX_SPEED, MAX_TORQUE_MU, MIN_TORQUE_MU, RAW_COLUMNS, _check_layout,
+                       _check_values, _convert_column, _fail)
 from .vehicle import LOCO_22E, SIDECAR_KEYS, Vehicle
 
-#: Columns of a raw-signal recording.
-RAW_COLUMNS = ("time", "vehicle_speed", "wheel_speed", "traction_torque")
-#: Columns always needed by a fitting dataset, plus one of :data:`CREEP_COLUMNS`.
-DATASET_COLUMNS = ("vehicle_speed", "adhesion")
-CREEP_COLUMNS = ("creepage", "slip_velocity", "wheel_speed")
-#: Columns that are always validated when present; any other column is carried along unchecked.
-KNOWN_COLUMNS = frozenset(RAW_COLUMNS + DATASET_COLUMNS + CREEP_COLUMNS)
-#: Largest plausible |speed| [m/s] (252 km/h, above any locomotive traction test). A larger value
-#: almost always means the column is in km/h.
-MAX_SPEED = 70.0
-#: Largest plausible |adhesion coefficient| [-] (a larger value is a force or a percentage).
-MAX_ADHESION = 1.5
-#: Torque implying |mu| below this everywhere (but not all zero) is taken to be in kN·m.
-MIN_TORQUE_MU = 1e-3
-#: Torque implying |mu| above this somewhere is implausible (even with the wheelset's inertia).
-MAX_TORQUE_MU = 3.0
+#: Per-axle columns of a multi-axle file and their naming patterns (``--axle N``), first match wins.
+AXLE_COLUMNS = ("wheel_speed", "traction_torque")
+AXLE_PATTERNS = ("{name}_{n}", "{name}_axle{n}", "{name}{n}")
+
 
 
 @dataclasses.dataclass(frozen=True)
@@ -72,6 +63,7 @@ class Recording:
         vehicle: the locomotive, 22E defaults overridden by the sidecar.
         sidecar: the sidecar's JSON object as read (empty when there is none).
         notes: remarks that are not errors (ignored sidecar keys, ignored text columns).
+        sources: the column map applied, ``{canonical: "SOURCE[UNIT]"}`` (empty when none).
     """
 
     path: Path
@@ -79,6 +71,7 @@ class Recording:
     vehicle: Vehicle = LOCO_22E
     sidecar: dict = dataclasses.field(default_factory=dict)
     notes: tuple = ()
+    sources: dict = dataclasses.field(default_factory=dict)
 
     @property
     def n_samples(self) -> int:
@@ -93,263 +86,41 @@ class Recording:
         return "adhesion" in self.columns
 
 
-# ----------------------------------------------------------------------------------------- loading
-
-
-def _fail(name: str, what: str) -> RecordingError:
-    return RecordingError(f"{name}: {what}")
-
-
-def _show(text: str, limit: int = 30) -> str:
-    return repr(text if len(text) <= limit else text[:limit] + "…")
-
-
-def _read_text(path: Path, name: str, *, kind: str = "file") -> str:
-    if not path.exists():
-        raise _fail(name, f"{kind} not found")
-    if path.is_dir():
-        raise _fail(name, f"is a directory, not a {kind}")
-    try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise _fail(name, f"cannot read {kind}: {exc.strerror or exc}") from None
-    nul = raw.find(b"\x00")
-    if nul >= 0:
-        raise _fail(name, f"binary data (NUL byte at byte {nul}), not a text {kind}")
-    try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        line = raw[:exc.start].count(b"\n") + 1
-        raise _fail(name, f"not UTF-8 text (undecodable byte 0x{raw[exc.start]:02x} at byte "
-                          f"{exc.start}, line {line})") from None
-    if not text.strip():
-        raise _fail(name, f"{kind} is empty")
-    return text
-
-
-def _is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
-
-
-def _parse_rows(text: str, name: str):
-    """Header, data rows and their 1-based line numbers; skips blank and ``#`` lines."""
-    header, rows, lines = None, [], []
-    reader = csv.reader(io.StringIO(text, newline=""))
-    try:
-        for fields in reader:
-            if not fields or (len(fields) == 1 and not fields[0].strip()):
+def _column_map(columns, sidecar: dict, sidecar_name: str, header, name: str, axle):
+    """``{canonical: ColumnSpec}``: the sidecar's ``columns`` overridden by ``columns`` (--column);
+    with ``axle`` N, unmapped ``wheel_speed``/``traction_torque`` come from the first present of
+    ``{name}_{N}``, ``{name}_axle{N}``, ``{name}{N}``."""
+    specs = parse_column_map([f"{k}={v}" for k, v in (sidecar.get("columns") or {}).items()],
+                             f"{sidecar_name}: key 'columns':")
+    specs.update(parse_column_map(columns or (), "--column"))
+    if axle is not None:
+        if isinstance(axle, bool) or not isinstance(axle, int) or axle < 1:
+            raise _fail(name, f"--axle {axle}: expected an axle number >= 1")
+        for canonical in AXLE_COLUMNS:
+            if canonical in specs:
                 continue
-            if fields[0].lstrip().startswith("#"):
-                continue
-            if header is None:
-                header = [f.strip() for f in fields]
-                header_line = reader.line_num
-                continue
-            rows.append(fields)
-            lines.append(reader.line_num)
-    except csv.Error as exc:
-        raise _fail(name, f"line {reader.line_num}: malformed CSV ({exc})") from None
-    if header is None:
-        raise _fail(name, "no header row (only blank or comment lines)")
-    if all(_is_number(f) for f in header):
-        raise _fail(name, f"no header row: line {header_line} holds numbers; the first row must name "
-                          f"the columns, e.g. {','.join(RAW_COLUMNS)}")
-    for j, col in enumerate(header):
-        if not col:
-            raise _fail(name, f"header (line {header_line}): column {j + 1} has an empty name")
-        if header.index(col) != j:
-            raise _fail(name, f"header (line {header_line}): column {col!r} appears twice")
-    if not rows:
-        raise _fail(name, "no data rows after the header")
-    width = len(header)
-    counts = np.fromiter((len(r) for r in rows), dtype=np.int64, count=len(rows))
-    bad = np.flatnonzero(counts != width)
-    if bad.size:
-        i = int(bad[0])
-        raise _fail(name, f"row {i + 1} (line {lines[i]}): {counts[i]} fields, but the header names "
-                          f"{width} columns")
-    return header, rows, lines
+            names = [p.format(name=canonical, n=axle) for p in AXLE_PATTERNS]
+            found = [c for c in names if c in header]
+            if not found:
+                raise _fail(name, f"--axle {axle}: no column {' or '.join(map(repr, names))} in the "
+                                  f"file (columns: {', '.join(header)}); map it with --column")
+            specs[canonical] = ColumnSpec(canonical, found[0])
+    for spec in specs.values():
+        if spec.source not in header:
+            raise _fail(name, f"--column {spec.canonical}={spec.source}: no column {spec.source!r} "
+                              f"in the file (columns: {', '.join(header)})")
+    return specs
 
 
-def _check_layout(header, name):
-    """Raise unless the header holds the raw-signal or the fitting-dataset columns."""
-    present = set(header)
-    if all(c in present for c in RAW_COLUMNS):
-        return
-    if all(c in present for c in DATASET_COLUMNS) and any(c in present for c in CREEP_COLUMNS):
-        return
-    # Name what is missing from the layout the file is closest to.
-    miss_raw = [c for c in RAW_COLUMNS if c not in present]
-    miss_ds = [c for c in DATASET_COLUMNS if c not in present]
-    if not any(c in present for c in CREEP_COLUMNS):
-        miss_ds.append("creepage' or 'slip_velocity")
-    missing = miss_ds if ("adhesion" in present or len(miss_ds) < len(miss_raw)) else miss_raw
-    listed = ", ".join(f"'{c}'" for c in missing)
-    raise _fail(name, f"missing column{'s' if len(missing) > 1 else ''} {listed}: a recording needs "
-                      f"{', '.join(RAW_COLUMNS)} (raw signals) or vehicle_speed, adhesion and creepage "
-                      f"or slip_velocity (fitting dataset); present: {', '.join(header)}")
-
-
-def _convert_column(cells: np.ndarray, col: str, lines, name: str, strict: bool):
-    """float64 values of one column; with ``strict``, the first bad cell raises a RecordingError."""
-    try:
-        values = cells.astype(np.float64)
-    except ValueError:
-        if not strict:
-            return None
-        for i, cell in enumerate(cells.tolist()):
-            if not _is_number(cell):
-                where = f"column {col!r}, row {i + 1} (line {lines[i]})"
-                if not cell.strip():
-                    raise _fail(name, f"{where}: empty cell (missing value)") from None
-                raise _fail(name, f"{where}: {_show(cell)} is not a number") from None
-        raise  # pragma: no cover  (numpy and float() disagree)
-    if strict:
-        bad = np.flatnonzero(~np.isfinite(values))
-        if bad.size:
-            i = int(bad[0])
-            raise _fail(name, f"column {col!r}, row {i + 1} (line {lines[i]}): {_show(cells[i].strip())}"
-                              f" is not a finite number (NaN and inf are not allowed)")
-    return values
-
-
-def _where(col, i, lines):
-    return f"column {col!r}, row {i + 1} (line {lines[i]})"
-
-
-def _check_values(cols, vehicle: Vehicle, lines, name: str, max_speed: float):
-    if "time" in cols and len(cols["time"]) > 1:
-        dt = np.diff(cols["time"])
-        bad = np.flatnonzero(dt <= 0)
-        if bad.size:
-            i = int(bad[0]) + 1
-            t = cols["time"]
-            raise _fail(name, f"{_where('time', i, lines)}: time {t[i]:.10g} s is not after the "
-                              f"previous row's {t[i - 1]:.10g} s (time must strictly increase)")
-    for col in ("vehicle_speed", "wheel_speed"):
-        if col not in cols:
-            continue
-        bad = np.flatnonzero(np.abs(cols[col]) > max_speed)
-        if bad.size:
-            i = int(bad[0])
-            raise _fail(name, f"{_where(col, i, lines)}: {cols[col][i]:.6g} m/s exceeds the plausible "
-                              f"{max_speed:g} m/s; looks like km/h? divide by 3.6")
-    if "vehicle_speed" in cols and "wheel_speed" in cols:
-        v, vw = cols["vehicle_speed"], cols["wheel_speed"]
-        moving = np.abs(v) > 0.5
-        if np.count_nonzero(moving) >= 10:
-            ratio = float(np.median(vw[moving] / v[moving]))
-            if 3.2 <= ratio <= 4.0 or 1 / 4.0 <= ratio <= 1 / 3.2:
-                slow = "vehicle_speed" if ratio > 1 else "wheel_speed"
-                fast = "wheel_speed" if ratio > 1 else "vehicle_speed"
-                i = int(np.flatnonzero(moving)[0])
-                raise _fail(name, f"{_where(fast, i, lines)}: median wheel/vehicle speed ratio is "
-                                  f"{ratio:.3g} (creepage {ratio - 1:.3g}); {fast} looks like km/h "
-                                  f"while {slow} is m/s? divide {fast} by 3.6")
-    if "traction_torque" in cols:
-        torque = np.abs(cols["traction_torque"])
-        scale = vehicle.axle_weight_n * vehicle.wheel_radius_m  # N·m for mu = 1
-        peak = float(np.max(torque))
-        if 0.0 < peak < MIN_TORQUE_MU * scale:
-            i = int(np.argmax(torque))
-            raise _fail(name, f"{_where('traction_torque', i, lines)}: the largest torque {peak:.4g} "
-                              f"implies mu = {peak / scale:.2g}; expected N·m at the wheelset — looks "
-                              f"like kN·m? multiply by 1000")
-        bad = np.flatnonzero(torque > MAX_TORQUE_MU * scale)
-        if bad.size:
-            i = int(bad[0])
-            raise _fail(name, f"{_where('traction_torque', i, lines)}: torque "
-                              f"{cols['traction_torque'][i]:.4g} N·m implies mu = "
-                              f"{torque[i] / scale:.3g}, implausible for this axle "
-                              f"({vehicle.axle_load_kg:g} kg, r = {vehicle.wheel_radius_m:g} m)")
-    if "adhesion" in cols:
-        bad = np.flatnonzero(np.abs(cols["adhesion"]) > MAX_ADHESION)
-        if bad.size:
-            i = int(bad[0])
-            raise _fail(name, f"{_where('adhesion', i, lines)}: adhesion coefficient "
-                              f"{cols['adhesion'][i]:.4g} is implausible (|mu| <= {MAX_ADHESION:g}); "
-                              f"a force or a percentage?")
-
-
-def _brief(value) -> str:
-    text = json.dumps(value)
-    return text if len(text) <= 40 else text[:40] + "…"
-
-
-def _finite(x) -> bool:
-    """A JSON number (not a bool) representable as a finite float."""
-    if isinstance(x, bool) or not isinstance(x, (int, float)):
-        return False
-    try:
-        return math.isfinite(float(x))
-    except OverflowError:  # an integer beyond float range
-        return False
-
-
-def _check_sidecar_value(key, value, name):
-    where = f"key {key!r}"
-    kind = SIDECAR_KEYS[key]
-    if kind is str:
-        if not isinstance(value, str):
-            raise _fail(name, f"{where}: expected a string, got {type(value).__name__} "
-                              f"{_brief(value)}")
-        return value
-    if kind is list:  # contact_semi_axes_m
-        ok = (isinstance(value, list) and len(value) == 2
-              and all(_finite(x) and x > 0 for x in value))
-        if not ok:
-            raise _fail(name, f"{where}: expected two positive numbers [a, b] in metres, got "
-                              f"{json.dumps(value)}")
-        return (float(value[0]), float(value[1]))
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise _fail(name, f"{where}: expected a number, got {type(value).__name__} "
-                          f"{_brief(value)}")
-    if not _finite(value):
-        raise _fail(name, f"{where}: {_brief(value)} is not a finite number")
-    if key == "poisson_ratio":
-        if not 0.0 <= value < 0.5:
-            raise _fail(name, f"{where}: {value} is outside [0, 0.5)")
-    elif value <= 0:
-        raise _fail(name, f"{where}: {value} must be positive")
-    return float(value)
-
-
-def _load_sidecar(csv_path: Path):
-    path = csv_path.with_suffix(".json")
-    if not path.exists():
-        return path, {}, LOCO_22E, ()
-    name = str(path)
-    text = _read_text(path, name, kind="sidecar")
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise _fail(name, f"sidecar is not valid JSON (line {exc.lineno}, column {exc.colno}: "
-                          f"{exc.msg})") from None
-    except RecursionError:
-        raise _fail(name, "sidecar is not valid JSON (nested too deeply)") from None
-    if not isinstance(data, dict):
-        raise _fail(name, f"sidecar must be a JSON object {{\"key\": value, ...}}, got a JSON "
-                          f"{type(data).__name__}")
-    changes, notes = {}, []
-    for key, value in data.items():
-        if key not in SIDECAR_KEYS:
-            notes.append(f"{name}: unknown key {key!r} ignored")
-            continue
-        if value is None:
-            continue
-        changes[key] = _check_sidecar_value(key, value, name)
-    return path, data, LOCO_22E.replace(**changes), tuple(notes)
-
-
-def load_recording(path, *, max_speed: float = MAX_SPEED) -> Recording:
+def load_recording(path, *, columns=(), axle=None, max_speed: float = MAX_SPEED) -> Recording:
     """Load and validate a recording CSV and its optional sidecar ``<same stem>.json``.
 
     Args:
         path: the CSV file.
+        columns: ``CANONICAL=SOURCE[UNIT]`` strings (:mod:`jadhesion.data.units`), applied over the
+            sidecar's ``columns`` map; values are converted to SI, errors name the source column.
+        axle: pick this axle's wheel speed and torque from a multi-axle file
+            (:data:`AXLE_PATTERNS`, overridable by the column map).
         max_speed: largest plausible |speed| [m/s]; larger values are reported as km/h.
 
     Raises:
@@ -358,25 +129,44 @@ def load_recording(path, *, max_speed: float = MAX_SPEED) -> Recording:
     path = Path(path)
     name = str(path)
     text = _read_text(path, name)
-    header, rows, lines = _parse_rows(text, name)
-    _check_layout(header, name)
-    required = [c for c in header if c in KNOWN_COLUMNS]
-    _, sidecar, vehicle, notes = _load_sidecar(path)
-    cells = np.array(rows, dtype=str)
+    fast = _fast_parse(text)
+    if fast is None:
+        header, rows, lines = _parse_rows(text, name)
+        cells = np.array(rows, dtype=str)
+    else:
+        header, parsed, lines = fast
+    sidecar_path, sidecar, vehicle, notes = _load_sidecar(path)
+    specs = _column_map(columns, sidecar, str(sidecar_path), header, name, axle)
+    by_source = {spec.source: spec for spec in specs.values()}
+    shadowed = [c for c in header if c in specs and c not in by_source]
+    if shadowed:
+        notes += (f"{name}: column{'s' if len(shadowed) > 1 else ''} "
+                  f"{', '.join(map(repr, shadowed))} replaced by the column map",)
+    renamed = [by_source[c].canonical if c in by_source else (None if c in shadowed else c)
+               for c in header]
+    shown = {spec.canonical: spec.source for spec in specs.values()}
+    _check_layout([c for c in renamed if c is not None], name)
+    required = [c for c in renamed if c in KNOWN_COLUMNS]
     columns = {}
     ignored = []
-    for j, col in enumerate(header):
-        values = _convert_column(cells[:, j], col, lines, name, strict=col in required)
+    for j, col in enumerate(renamed):
+        if col is None:
+            continue
+        values = parsed[j] if fast is not None else _convert_column(
+            cells[:, j], shown.get(col, col), lines, name, strict=col in required)
         if values is None:
             ignored.append(col)
         else:
-            columns[col] = values
+            spec = specs.get(col)
+            columns[col] = values if spec is None else values * to_si(spec, vehicle.wheel_radius_m)
     if ignored:
         notes += (f"{name}: non-numeric column{'s' if len(ignored) > 1 else ''} "
                   f"{', '.join(map(repr, ignored))} ignored",)
     with np.errstate(all="ignore"):  # differences of huge finite values may overflow to inf
-        _check_values({c: columns[c] for c in required}, vehicle, lines, name, max_speed)
-    return Recording(path=path, columns=columns, vehicle=vehicle, sidecar=sidecar, notes=notes)
+        _check_values({c: columns[c] for c in required}, vehicle, lines, name, max_speed, shown)
+    return Recording(path=path, columns=columns, vehicle=vehicle, sidecar=sidecar, notes=notes,
+                     sources={c: str(specs[c].source) + (f"[{specs[c].unit}]" if specs[c].unit else "")
+                              for c in specs})
 
 
 # ------------------------------------------------------------------------------------------ saving
@@ -393,16 +183,15 @@ def vehicle_sidecar(vehicle: Vehicle) -> dict:
     return out
 
 
-def _atomic_write(path: Path, text: str) -> None:
-    """Write ``text`` to a temporary file beside ``path`` and rename it over ``path``."""
+def atomic_write(path: Path, write) -> None:
+    """Call ``write(tmp)`` on a temporary file beside ``path``, then rename it over ``path`` (the
+    project's one atomic writer: a reader never sees a half-written file)."""
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:
-        with open(tmp, "w", encoding="utf-8", newline="") as fh:
-            fh.write(text)
+        write(tmp)
         os.replace(tmp, path)
-    except BaseException:
+    finally:
         tmp.unlink(missing_ok=True)
-        raise
 
 
 def save_recording(columns, vehicle: Vehicle = LOCO_22E, path="recording.csv",
@@ -446,6 +235,7 @@ def save_recording(columns, vehicle: Vehicle = LOCO_22E, path="recording.csv",
     buf = io.StringIO()
     buf.write(",".join(names) + "\n")
     buf.writelines(",".join(map(repr, row)) + "\n" for row in zip(*lists))
-    _atomic_write(path, buf.getvalue())
-    _atomic_write(path.with_suffix(".json"), sidecar_text)
+    atomic_write(path, lambda tmp: tmp.write_text(buf.getvalue(), encoding="utf-8", newline=""))
+    atomic_write(path.with_suffix(".json"),
+                 lambda tmp: tmp.write_text(sidecar_text, encoding="utf-8", newline=""))
     return path

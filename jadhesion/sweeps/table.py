@@ -8,11 +8,11 @@ rename), so a reader never sees half a file and an interrupted sweep leaves no c
 from __future__ import annotations
 
 import csv
-import os
 from pathlib import Path
 
 import numpy as np
 
+from ..data.recording import atomic_write
 from ..errors import InputError
 from ..models.polach import PARAM_NAMES
 
@@ -34,15 +34,6 @@ def concat(tables) -> dict:
     """Rows of several tables, in order."""
     tables = list(tables)
     return {c: np.concatenate([np.asarray(t[c], dtype=_dtype(c)) for t in tables]) for c in COLUMNS}
-
-
-def _atomic(path: Path, write) -> None:
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    try:
-        write(tmp)
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
 
 
 def _cell(value):
@@ -79,9 +70,9 @@ def write_table(table: dict, path) -> Path:
     if path.suffix == ".parquet":
         pa = _pyarrow()
         arrow = pa.table({c: np.asarray(table[c], dtype=_dtype(c)) for c in COLUMNS})
-        _atomic(path, lambda p: pa.parquet.write_table(arrow, p))
+        atomic_write(path, lambda p: pa.parquet.write_table(arrow, p))
     else:
-        _atomic(path, lambda p: _write_csv(table, p))
+        atomic_write(path, lambda p: _write_csv(table, p))
     return path
 
 

@@ -1,0 +1,111 @@
+"""CSV reading: the file's text, its header and data rows with their line numbers; a vectorised
+pass (pyarrow) for plain files and a precise pass that names the exact row and line of any error."""
+
+from __future__ import annotations
+
+import csv
+import io
+import re
+from pathlib import Path
+
+import numpy as np
+
+from .validate import RAW_COLUMNS, _fail, _is_number
+
+_BLANK_LINE = re.compile(r"\n[ \t\r]*\n")
+
+
+
+def _read_text(path: Path, name: str, *, kind: str = "file") -> str:
+    if not path.exists():
+        raise _fail(name, f"{kind} not found")
+    if path.is_dir():
+        raise _fail(name, f"is a directory, not a {kind}")
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise _fail(name, f"cannot read {kind}: {exc.strerror or exc}") from None
+    nul = raw.find(b"\x00")
+    if nul >= 0:
+        raise _fail(name, f"binary data (NUL byte at byte {nul}), not a text {kind}")
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = raw[:exc.start].count(b"\n") + 1
+        raise _fail(name, f"not UTF-8 text (undecodable byte 0x{raw[exc.start]:02x} at byte "
+                          f"{exc.start}, line {line})") from None
+    if not text.strip():
+        raise _fail(name, f"{kind} is empty")
+    return text
+
+
+
+def _parse_rows(text: str, name: str):
+    """Header, data rows and their 1-based line numbers; skips blank and ``#`` lines."""
+    header, rows, lines = None, [], []
+    reader = csv.reader(io.StringIO(text, newline=""))
+    try:
+        for fields in reader:
+            if not fields or (len(fields) == 1 and not fields[0].strip()):
+                continue
+            if fields[0].lstrip().startswith("#"):
+                continue
+            if header is None:
+                header = [f.strip() for f in fields]
+                header_line = reader.line_num
+                continue
+            rows.append(fields)
+            lines.append(reader.line_num)
+    except csv.Error as exc:
+        raise _fail(name, f"line {reader.line_num}: malformed CSV ({exc})") from None
+    if header is None:
+        raise _fail(name, "no header row (only blank or comment lines)")
+    if all(_is_number(f) for f in header):
+        raise _fail(name, f"no header row: line {header_line} holds numbers; the first row must name "
+                          f"the columns, e.g. {','.join(RAW_COLUMNS)}")
+    for j, col in enumerate(header):
+        if not col:
+            raise _fail(name, f"header (line {header_line}): column {j + 1} has an empty name")
+        if header.index(col) != j:
+            raise _fail(name, f"header (line {header_line}): column {col!r} appears twice")
+    if not rows:
+        raise _fail(name, "no data rows after the header")
+    width = len(header)
+    counts = np.fromiter((len(r) for r in rows), dtype=np.int64, count=len(rows))
+    bad = np.flatnonzero(counts != width)
+    if bad.size:
+        i = int(bad[0])
+        raise _fail(name, f"row {i + 1} (line {lines[i]}): {counts[i]} fields, but the header names "
+                          f"{width} columns")
+    return header, rows, lines
+
+
+def _fast_parse(text: str):
+    """``(header, float64 columns, line numbers)`` by pyarrow's vectorised CSV reader, or ``None``
+    when pyarrow is missing or the file is not plain (comments, quotes, blank lines, any cell that
+    is not a finite number): the precise pass (:func:`_parse_rows`) then reads it and names the
+    exact row and line of any error."""
+    if "#" in text or '"' in text or _BLANK_LINE.search(text) or not text[:1].strip():
+        return None
+    try:  # optional dependency (extra ``parquet``): imported only when a CSV is read
+        import pyarrow as pa
+        from pyarrow import csv as pacsv
+    except ImportError:
+        return None
+    first, _, body = text.partition("\n")
+    header = [f.strip() for f in first.rstrip("\r").split(",")]
+    if (not all(header) or len(set(header)) != len(header) or all(_is_number(f) for f in header)
+            or not body.strip()):
+        return None
+    options = pacsv.ConvertOptions(column_types={h: pa.float64() for h in header}, null_values=[],
+                                   strings_can_be_null=False, quoted_strings_can_be_null=False)
+    try:
+        table = pacsv.read_csv(io.BytesIO(body.encode()), convert_options=options,
+                               read_options=pacsv.ReadOptions(column_names=header))
+    except (pa.ArrowInvalid, ValueError):
+        return None
+    columns = [table.column(j).to_numpy() for j in range(len(header))]
+    if not all(np.isfinite(c).all() for c in columns):
+        return None
+    return header, columns, range(2, table.num_rows + 2)
+

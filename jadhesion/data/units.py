@@ -1,0 +1,78 @@
+"""Column names and units: the map from a logger's columns to the canonical SI columns (DESIGN §3).
+
+A map entry is ``CANONICAL=SOURCE[UNIT]`` (``--column`` on the command line) or, in the sidecar,
+``"columns": {"CANONICAL": "SOURCE[UNIT]"}``; ``[UNIT]`` may be left out (SI assumed). Units:
+
+* ``time``: ``s``, ``ms``;
+* ``vehicle_speed``, ``slip_velocity``: ``m/s``, ``km/h``, ``mph``;
+* ``wheel_speed``: also ``rpm`` and ``rad/s`` (times the vehicle's nominal wheel radius [m]);
+* ``traction_torque``: ``N*m``, ``kN*m`` (``Nm``, ``kNm`` accepted);
+* ``creepage``, ``adhesion``: ``-`` (dimensionless).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from typing import NamedTuple
+
+from ..errors import RecordingError
+
+_SPEED = {"m/s": 1.0, "km/h": 1.0 / 3.6, "mph": 0.44704}
+_TORQUE = {"N*m": 1.0, "Nm": 1.0, "kN*m": 1e3, "kNm": 1e3}
+#: Units accepted per canonical column, as factors to SI; ``None`` marks units through the radius.
+UNITS = {
+    "time": {"s": 1.0, "ms": 1e-3},
+    "vehicle_speed": _SPEED,
+    "slip_velocity": _SPEED,
+    "wheel_speed": {**_SPEED, "rpm": None, "rad/s": None},
+    "traction_torque": _TORQUE,
+    "creepage": {"-": 1.0},
+    "adhesion": {"-": 1.0},
+}
+_SPEC = re.compile(r"^\s*([^=\s]+)\s*=\s*([^\[\]]*?)\s*(?:\[([^\[\]]*)\])?\s*$")
+
+
+class ColumnSpec(NamedTuple):
+    """One map entry: canonical column, the file's column name, its unit (SI when ``None``)."""
+
+    canonical: str
+    source: str
+    unit: str | None = None
+
+
+def parse_column_spec(text: str, where: str) -> ColumnSpec:
+    """Parse ``CANONICAL=SOURCE[UNIT]``; ``where`` (e.g. ``--column``) prefixes the error line."""
+    match = _SPEC.match(text)
+    if not match or not match.group(2):
+        raise RecordingError(f"{where} {text!r}: expected CANONICAL=SOURCE[UNIT], e.g. "
+                             f"vehicle_speed=v_Lok_kmh[km/h]")
+    canonical, source, unit = match.group(1), match.group(2), match.group(3)
+    if canonical not in UNITS:
+        raise RecordingError(f"{where} {text!r}: unknown canonical column {canonical!r}; expected "
+                             f"one of {', '.join(UNITS)}")
+    if unit is not None and unit.strip() not in UNITS[canonical]:
+        raise RecordingError(f"{where} {text!r}: unit {unit!r} is not a unit of {canonical}; "
+                             f"expected one of {', '.join(UNITS[canonical])}")
+    return ColumnSpec(canonical, source, None if unit is None else unit.strip())
+
+
+def parse_column_map(specs, where: str) -> dict:
+    """``{canonical: ColumnSpec}`` from ``CANONICAL=SOURCE[UNIT]`` strings; a canonical twice fails."""
+    out = {}
+    for text in specs:
+        spec = parse_column_spec(text, where)
+        if spec.canonical in out:
+            raise RecordingError(f"{where} {text!r}: {spec.canonical} is mapped twice")
+        out[spec.canonical] = spec
+    return out
+
+
+def to_si(spec: ColumnSpec, wheel_radius_m: float) -> float:
+    """Factor taking the source column to SI (rpm and rad/s through ``wheel_radius_m`` [m])."""
+    if spec.unit is None:
+        return 1.0
+    factor = UNITS[spec.canonical][spec.unit]
+    if factor is not None:
+        return factor
+    return wheel_radius_m * (2.0 * math.pi / 60.0 if spec.unit == "rpm" else 1.0)
