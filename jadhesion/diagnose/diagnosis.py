@@ -20,6 +20,7 @@ import numpy as np
 
 from ..data.vehicle import Vehicle
 from ..models.polach import PARAM_NAMES
+from ..status import Status
 from . import extensions as ext
 from . import features, fitting, select, sensitivity
 from .explain import explain
@@ -73,6 +74,11 @@ def _fit_round(sig, n, p0, sets):
     return {k: v[: len(sets)] for k, v in table.items()}, actives[: len(sets)]
 
 
+def _status(table: dict, i: int) -> str:
+    """Status label of row ``i`` of a fit table: the worse of its full-data and fold fits."""
+    return Status(int(max(table["status"][i], table["fold_status"][i]))).label
+
+
 def _n_extra(names) -> int:
     """Extra parameters of an effect set for BIC (thermal softening's grid-picked lag counts)."""
     return sum(len(e.params) + (e.name == "thermal_softening") for e in ext.EFFECTS
@@ -102,7 +108,7 @@ def diagnose(columns: dict, vehicle: Vehicle, name: str = "recording") -> dict:
     """Diagnose a recording's raw columns (time, vehicle_speed, wheel_speed, traction_torque)."""
     sig = from_columns(columns, vehicle, name)
     n_valid = int(sig.time.shape[0])
-    p_base = fitting.fit_base(fitting.pad_signals(sig), n_valid)
+    p_base, base_status = fitting.fit_base(fitting.pad_signals(sig), n_valid)
     none = np.zeros(ext.N_EXTRA, bool)
     target, pred = (np.asarray(x) for x in _predict(p_base, none, sig))
     r_base = target - pred
@@ -129,6 +135,7 @@ def diagnose(columns: dict, vehicle: Vehicle, name: str = "recording") -> dict:
             "name": names1[i], "params": _row(t1["params"][i], act1[i], sig, tau_th),
             "mae": float(t1["mae"][i]), "heldout_mae": float(t1["heldout_mae"][i]),
             "delta_bic": float(dbic1[i]), "gain": float(gain1[i]),
+            "status": _status(t1, i), "steps": int(t1["steps"][i]),
             "evidence": {"signal": signal, "eta2_base_residual": sigs[signal]}})
     leader, _ = select.effects_from(candidates, None, select.ROUND2_MIN)
     second_round, table, acts, final = None, t1, act1, 0
@@ -143,7 +150,8 @@ def diagnose(columns: dict, vehicle: Vehicle, name: str = "recording") -> dict:
                                      [_n_extra(s) for s in sets2], 0, n_eff2)
         second_round = {"first": first, "candidates": [
             {"name": n, "gain": float(gain2[j + 1]), "delta_bic": float(dbic2[j + 1]),
-             "heldout_mae": float(t2["heldout_mae"][j + 1])} for j, n in enumerate(others)]}
+             "heldout_mae": float(t2["heldout_mae"][j + 1]), "status": _status(t2, j + 1)}
+            for j, n in enumerate(others)]}
     effects, close = select.effects_from(candidates, second_round)
     if len(effects) == 2:
         table, acts, final = t2, act2, 1 + others.index(effects[1])
@@ -164,9 +172,11 @@ def diagnose(columns: dict, vehicle: Vehicle, name: str = "recording") -> dict:
                               for c in close],
         "second_round": second_round,
         "base": {"params": _row(p_base, none, sig, tau_th), "mae": float(t1["mae"][0]),
-                 "heldout_mae": float(t1["heldout_mae"][0])},
+                 "heldout_mae": float(t1["heldout_mae"][0]), "status": base_status.label,
+                 "cv_status": _status(t1, 0)},
         "extended": {"effects": effects, "params": ext_params, "mae": float(table["mae"][final]),
-                     "heldout_mae": float(table["heldout_mae"][final])},
+                     "heldout_mae": float(table["heldout_mae"][final]),
+                     "status": _status(table, final)},
         "generic": generic,
         "sensitivity": seen,
         "residual_signatures": sigs,

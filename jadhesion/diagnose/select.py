@@ -5,6 +5,8 @@ confirms, and a threshold calibrated on clean simulated recordings bounds the fa
   the reference model (the base fit in round 1, the accepted effect in round 2).
 * ``ΔBIC_c = n_eff ln(SSE_c/SSE_ref) + k_c ln(n_eff)``, ``n_eff = n (1 − ρ1)/(1 + ρ1)`` from the
   lag-1 autocorrelation ρ1 of the reference residual (clipped to [10, n]).
+* Only candidates whose fits (full data and every fold) converged are ranked; the others are
+  reported with their status.
 * An effect is accepted when it has the best held-out error, ``gain ≥ GAIN_THRESHOLD`` and
   ``ΔBIC < 0``. Other candidates with ``gain ≥ AMBIGUITY · gain_best`` are reported with it as a set
   the recording cannot separate, with the experiment that would.
@@ -90,6 +92,9 @@ def effects_from(candidates: list, second_round, threshold: float = GAIN_THRESHO
     """Accepted effects (0–2, greedy) and the set indistinguishable from the first, from the
     candidate lists of a diagnosis (each entry with ``name``, ``gain``, ``delta_bic``)."""
     def pick(rows):
+        rows = [c for c in rows if c.get("status", "converged") == "converged"]
+        if not rows:
+            return None, []
         return decide([c["name"] for c in rows], [c["gain"] for c in rows],
                       [c["delta_bic"] for c in rows], threshold)
 
