@@ -18,13 +18,14 @@ from __future__ import annotations
 import jax
 import numpy as np
 
+from ..data.observer import lowpass_foh
 from ..data.vehicle import Vehicle
 from ..models.polach import PARAM_NAMES
 from ..status import Status
 from . import extensions as ext
 from . import features, fitting, select, sensitivity
 from .explain import explain
-from .signals import from_columns, lowpass
+from .signals import from_columns
 
 #: Extra round-1 starts for the wheel-radius error, whose fit from δ = 0 can end in a degenerate
 #: minimum (a large δ with a flattened creep slope): δ0 = ±3 %; the best full-data fit is kept.
@@ -115,7 +116,7 @@ def diagnose(columns: dict, vehicle: Vehicle, name: str = "recording") -> dict:
     lib = features.library(sig, pred)
     sigs = features.signatures(r_base, lib)
     drop, u_change, tau_th = features.starting_values(sig, r_base, pred)
-    sig = sig._replace(heat=np.asarray(lowpass(np.asarray(sig.power), float(sig.dt), tau_th)))
+    sig = sig._replace(heat=lowpass_foh(sig.time, sig.power, tau_th))
     padded = fitting.pad_signals(sig)
     p0 = p_base.copy()
     start = {"drop": drop, "u_change": u_change}

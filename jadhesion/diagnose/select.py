@@ -11,16 +11,16 @@ confirms, and a threshold calibrated on clean simulated recordings bounds the fa
   ``ΔBIC < 0``. Other candidates with ``gain ≥ AMBIGUITY · gain_best`` are reported with it as a set
   the recording cannot separate, with the experiment that would.
 
-:data:`GAIN_THRESHOLD` comes from :func:`jadhesion.diagnose.calibrate.calibrate` (the largest
+:data:`GAIN_THRESHOLD` comes from :func:`validation.diagnose_cases.null_statistics` (the largest
 round-1 gain on clean simulated recordings, 95th percentile, across scenarios, seeds and profiles);
-``python -m jadhesion.diagnose.calibrate`` recomputes it.
+``python -m validation.diagnose_cases`` recomputes it.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-#: Calibrated held-out-gain threshold. ``python -m jadhesion.diagnose.calibrate --n 24
+#: Calibrated held-out-gain threshold. ``python -m validation.diagnose_cases --n 24
 #: --samples 1500 --seed 12345`` (24 clean recordings, random scenario/seed/vehicle) gave a largest
 #: round-1 gain with its 95th percentile at 0.90 % and its maximum at 1.26 %; the threshold sits
 #: above every null value. (A 24-recording null bounds the false-alarm rate only loosely: the
