@@ -13,7 +13,7 @@ from jadhesion.data.recording import save_recording
 from jadhesion.data.simulator import simulate
 from jadhesion.diagnose import DETECTION_THRESHOLDS, EFFECT_NAMES, diagnose
 from jadhesion.diagnose import extensions as ext
-from jadhesion.diagnose import features, fitting, select
+from jadhesion.diagnose import features, fitting, null, select
 from jadhesion.data.scenarios import SCENARIOS
 from jadhesion.diagnose.signals import from_columns
 from jadhesion.models.effects import EFFECTS
@@ -185,3 +185,24 @@ def test_cli_bad_file(tmp_path, capsys):
     captured = capsys.readouterr()
     assert captured.out == ""
     assert "bad.csv" in captured.err
+
+
+def test_noise_model_recovers_ar1_and_quantisation():
+    """Level, colour and quantisation of a slow signal plus AR(1) noise, from the data alone."""
+    rng = np.random.default_rng(4)
+    t = np.arange(20000) * 0.02
+    e = null._noisy(np.zeros_like(t), {"sigma": 0.004, "rho": 0.5, "q": 0.0}, rng)
+    model = null.noise_model(2.0 + 0.5 * np.sin(2 * np.pi * 0.2 * t) + e)
+    assert abs(model["rho"] - 0.5) < 0.05 and abs(model["sigma"] / 0.004 - 1) < 0.05, model
+    q = null.noise_model(np.round((2.0 + e) / 0.01) * 0.01)["q"]
+    assert q == pytest.approx(0.01, rel=1e-9)
+
+
+def test_max_t_pvalues_hold_their_level():
+    """Under the null (observed gains exchangeable with the replicas'), P(p ≤ 0.05) ≤ 0.05."""
+    rng = np.random.default_rng(5)
+    rejections = 0
+    for _ in range(2000):
+        g = rng.standard_normal((20, 7))
+        rejections += np.min(null.max_t_pvalues(g[0], g[1:])) <= 0.05
+    assert rejections / 2000 <= 0.05 + 3 * np.sqrt(0.05 * 0.95 / 2000)

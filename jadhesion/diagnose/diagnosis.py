@@ -23,7 +23,7 @@ from ..data.vehicle import Vehicle
 from ..models.polach import PARAM_NAMES
 from ..status import Status
 from . import extensions as ext
-from . import features, fitting, select, sensitivity
+from . import features, fitting, null, select, sensitivity
 from .explain import explain
 from .signals import from_columns
 
@@ -49,12 +49,11 @@ def _row(params, active, sig, tau_th: float) -> dict:
     return out
 
 
-def _fit_round(sig, n, p0, sets):
-    """Fit the effect sets (the first is the reference) from ``p0`` on the padded signals ``sig``
-    (``n`` valid samples), plus the wheel-radius error from :data:`RADIUS_STARTS` where it is a
-    set's only effect or its addition, keeping the better full-data fit; rows are padded to
-    :data:`N_CANDIDATES` and indices to :data:`fitting.WIDTH`, so every round runs one compiled
-    program."""
+def _round_rows(p0, sets) -> tuple:
+    """Rows ``(starts, idx, actives)`` of one round: the effect sets (the first is the reference)
+    from ``p0``, plus the wheel-radius error from :data:`RADIUS_STARTS` where it is a set's only
+    effect or its addition; padded to :data:`N_CANDIDATES` rows and :data:`fitting.WIDTH`
+    indices, so every round runs one compiled program."""
     radius = [i for i, s in enumerate(sets) if s and s[-1] == "wheel_radius_error"]
     rows = list(sets) + [sets[i] for i in radius for _ in RADIUS_STARTS]
     starts = np.tile(np.asarray(p0, float), (N_CANDIDATES, 1))
@@ -64,15 +63,32 @@ def _fit_round(sig, n, p0, sets):
     rows += [sets[0]] * (N_CANDIDATES - len(rows))
     actives = np.stack([np.asarray(ext.active_mask(s)) for s in rows])
     idx = np.array([fitting.free_indices(s) for s in rows])
+    return starts, idx, actives
+
+
+def _merger(sets):
+    """``merge(table) -> table``: each radius row takes its best-SSE start, rows cut to the sets."""
+    radius = [i for i, s in enumerate(sets) if s and s[-1] == "wheel_radius_error"]
+
+    def merge(table):
+        for i in radius:
+            alts = [i] + [len(sets) + k for k in range(len(RADIUS_STARTS))]
+            ok = table["status"][alts] == int(Status.CONVERGED)
+            sse = np.where(ok, table["sse"][alts], np.inf) if ok.any() else table["sse"][alts]
+            best = alts[int(np.argmin(sse))]
+            for v in table.values():
+                v[i] = v[best]
+        return {k: v[: len(sets)] for k, v in table.items()}
+    return merge
+
+
+def _fit_round(sig, n, p0, sets):
+    """Fit one round (:func:`_round_rows`) on the padded signals ``sig`` (``n`` valid samples)."""
+    starts, idx, actives = _round_rows(p0, sets)
     table = {k: np.array(v) for k, v in
              fitting.fit_candidates(starts, idx, actives, sig, n)._asdict().items()}
     table["residual"] = table["residual"][:, :n]
-    for i in radius:
-        alts = [i] + [len(sets) + k for k in range(len(RADIUS_STARTS))]
-        best = alts[int(np.argmin(table["sse"][alts]))]
-        for v in table.values():
-            v[i] = v[best]
-    return {k: v[: len(sets)] for k, v in table.items()}, actives[: len(sets)]
+    return _merger(sets)(table), actives[: len(sets)]
 
 
 def _status(table: dict, i: int) -> str:
@@ -105,8 +121,11 @@ def _generic(sig, residual, mu_pred) -> dict:
             "gain": float(1.0 - np.mean(np.abs(held)) / np.mean(np.abs(residual)))}
 
 
-def diagnose(columns: dict, vehicle: Vehicle, name: str = "recording") -> dict:
-    """Diagnose a recording's raw columns (time, vehicle_speed, wheel_speed, traction_torque)."""
+def diagnose(columns: dict, vehicle: Vehicle, name: str = "recording",
+             n_replicas: int = null.N_REPLICAS, seed: int = 0) -> dict:
+    """Diagnose a recording's raw columns (time, vehicle_speed, wheel_speed, traction_torque);
+    ``n_replicas`` clean re-synthesised replicas (seeded by ``seed``) form its null
+    (:mod:`.null`; 0 skips it and every p-value is null)."""
     sig = from_columns(columns, vehicle, name)
     n_valid = int(sig.time.shape[0])
     p_base, base_status = fitting.fit_base(fitting.pad_signals(sig), n_valid)
@@ -129,6 +148,13 @@ def diagnose(columns: dict, vehicle: Vehicle, name: str = "recording") -> dict:
     k1 = [_n_extra(s) for s in sets1]
     gain1, dbic1 = select.scores(t1["heldout_mae"], t1["sse"], k1, 0, n_eff)
     names1 = ["none"] + list(ext.NAMES)
+    p_values, noise = [None] * len(sets1), None
+    if n_replicas:
+        null_gain, noise = null.null_gains(columns, vehicle, p_base, tau_th, _round_rows(p0, sets1),
+                                           _merger(sets1), n_valid, n_replicas, seed)
+        ok = np.array([_status(t1, i) == "converged" for i in range(len(sets1))])
+        p_values = [None] + list(null.max_t_pvalues(np.where(ok[1:], gain1[1:], -np.inf),
+                                                    null_gain))
     candidates = []
     for i in np.argsort(t1["heldout_mae"][1:]) + 1:
         signal = features.REVEALING_SIGNAL[names1[i]]
@@ -137,6 +163,7 @@ def diagnose(columns: dict, vehicle: Vehicle, name: str = "recording") -> dict:
             "mae": float(t1["mae"][i]), "heldout_mae": float(t1["heldout_mae"][i]),
             "delta_bic": float(dbic1[i]), "gain": float(gain1[i]),
             "status": _status(t1, i), "steps": int(t1["steps"][i]),
+            "p_value": None if p_values[i] is None else float(p_values[i]),
             "evidence": {"signal": signal, "eta2_base_residual": sigs[signal]}})
     leader, _ = select.effects_from(candidates, None, select.ROUND2_MIN)
     second_round, table, acts, final = None, t1, act1, 0
@@ -183,6 +210,8 @@ def diagnose(columns: dict, vehicle: Vehicle, name: str = "recording") -> dict:
         "residual_signatures": sigs,
         "strongest_signal": strongest,
         "n_eff": n_eff,
+        "null": {"replicas": n_replicas, "alpha": null.ALPHA, "noise": noise,
+                 "method": "parametric bootstrap on this recording, max-T p-values"},
     }
     result["explanation"] = explain(result, vehicle)
     result["_series"] = {

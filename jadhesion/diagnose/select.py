@@ -33,6 +33,9 @@ GENERIC_THRESHOLD = 0.02
 #: Round 2 (a second effect) is fitted whenever round 1's best gain reaches this (below any
 #: plausible threshold), so a decision can be re-taken at another threshold without refitting.
 ROUND2_MIN = 0.01
+#: Family-wise level of the per-recording null (:mod:`.null`): a round-1 candidate is ranked only
+#: with a max-T p-value ≤ ALPHA (when the null was run).
+ALPHA = 0.05
 #: Candidates within this fraction of the best gain are reported as indistinguishable.
 AMBIGUITY = 0.8
 
@@ -92,7 +95,8 @@ def effects_from(candidates: list, second_round, threshold: float = GAIN_THRESHO
     """Accepted effects (0–2, greedy) and the set indistinguishable from the first, from the
     candidate lists of a diagnosis (each entry with ``name``, ``gain``, ``delta_bic``)."""
     def pick(rows):
-        rows = [c for c in rows if c.get("status", "converged") == "converged"]
+        rows = [c for c in rows if c.get("status", "converged") == "converged"
+                and (c.get("p_value") is None or c["p_value"] <= ALPHA)]
         if not rows:
             return None, []
         return decide([c["name"] for c in rows], [c["gain"] for c in rows],
