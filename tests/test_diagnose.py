@@ -166,14 +166,15 @@ def test_cli_json_and_report(tmp_path, capsys):
     path = save_recording(_raw(sim), sim.vehicle, tmp_path / "rec.csv")
     assert main(["diagnose", str(path), "--json", "--report", str(tmp_path / "rep")]) == 0
     doc = json.loads(capsys.readouterr().out)
-    # a 0.03 torque bias is detected, and attributed within the intercept family that the
-    # saturated curve cannot separate without a coasting run (DESIGN: offset / radius / load)
-    assert doc["verdict"] in {"torque_offset", "wheel_radius_error", "load_transfer"}, doc["verdict"]
-    assert doc["extended"]["heldout_mae"] < 0.99 * doc["base"]["heldout_mae"]
-    assert doc["base"]["status"] == "converged" and doc["extended"]["status"] == "converged"
+    # a 0.03 torque bias on a saturated curve is absorbed by mu0/kA: the recording says it cannot
+    # see it (and names the coasting run) instead of naming an unrelated effect; nothing outside
+    # the intercept family (offset / radius / load) may be named
+    assert doc["verdict"] in {"none", "torque_offset", "wheel_radius_error", "load_transfer"}
+    seen = doc["sensitivity"]["torque_offset"]
+    assert seen["absorbed"] > 0.9 and not seen["visible"]
+    assert doc["base"]["status"] == "converged"
     assert all(c["status"] in STATUS_LABELS for c in doc["candidates"])
-    named = next(c for c in doc["candidates"] if c["name"] == doc["verdict"])
-    assert named["status"] == "converged" and named["gain"] >= select.GAIN_THRESHOLD
+    assert all(0.0 < c["p_value"] <= 1.0 for c in doc["candidates"])
     assert (tmp_path / "rep" / "report.md").exists()
     assert (tmp_path / "rep" / "adhesion_vs_creep.png").exists()
 
