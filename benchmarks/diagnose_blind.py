@@ -5,7 +5,7 @@ Each case: random scenario (dry/wet/sand), seed (profile wander, excursions, noi
 22E or a variant: worn radius 0.57–0.61 m, inertia ±25 %, axle load 18–23 t), driving profile (the
 published test or, with probability ``--p-varied``, a different one: speed, ramp, creep level,
 wander, excursions, Polach parameters ×0.8–1.2, 1500–3000 samples) and effects with log-uniform
-magnitudes over :data:`jadhesion.diagnose.calibrate.MAGNITUDE_RANGE` (reaching well below the
+magnitudes over :data:`validation.diagnose_cases.MAGNITUDE_RANGE` (reaching well below the
 detection thresholds). The diagnoser sees only the CSV and a vehicle-only sidecar, through the CLI's
 code path. Reported: confusion matrix (true primary effect × verdict), false alarms on clean
 recordings (k/n with a 95 % Clopper–Pearson interval), per effect top-1 accuracy in magnitude bins
@@ -31,12 +31,12 @@ import numpy as np
 
 from jadhesion.cli.common import Progress, emit_json, table
 from jadhesion.config import enable_compilation_cache, enable_x64
-from jadhesion.diagnose.calibrate import MAGNITUDE_RANGE, random_effects, run_case
 from jadhesion.diagnose.extensions import NAMES
 from jadhesion.diagnose.select import GAIN_THRESHOLD, effects_from
 from jadhesion.diagnose.sensitivity import MAGNITUDE_PARAM
 from jadhesion.diagnose.thresholds import DETECTION_THRESHOLDS, MIN_CASES, TARGET_ACCURACY
 from jadhesion.models.polach import PARAM_NAMES
+from validation.diagnose_cases import MAGNITUDE_RANGE, random_effects, run_case
 
 RESULTS = Path(__file__).resolve().parent / "results"
 #: Mix of the main cases: clean, one effect, two effects.

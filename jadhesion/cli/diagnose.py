@@ -2,8 +2,9 @@
 
 JSON keys (DESIGN §3): ``verdict`` — the primary effect (a catalogue name) or ``"none"``, always a
 string; ``effects`` — the accepted effects in order (0, 1 or 2; with two, ``verdict`` is the first);
-``candidates`` (name, params, mae, heldout_mae, delta_bic, gain, evidence), ``indistinguishable``,
-``base`` and ``extended`` (params, mae, heldout_mae), ``generic``, ``explanation``, ``seconds``.
+``candidates`` (name, params, mae, heldout_mae, delta_bic, gain, status, p_value, evidence),
+``indistinguishable``, ``base`` and ``extended`` (params, mae, heldout_mae, status), ``generic``,
+``null`` (replicas, level, the recording's noise model), ``explanation``, ``seconds``.
 """
 
 from __future__ import annotations

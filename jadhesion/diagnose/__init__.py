@@ -5,7 +5,7 @@ Modules: :mod:`.signals` (the recording split at the observer), :mod:`.extension
 models), :mod:`.fitting` (vmapped LM + blocked CV), :mod:`.features` (residual analysis, starts,
 sparse discrepancy), :mod:`.select` (statistics, calibrated decision), :mod:`.sensitivity` (the
 smallest magnitude of each effect a recording could show), :mod:`.diagnosis` (the pipeline),
-:mod:`.explain`, :mod:`.report`, :mod:`.calibrate`, :mod:`.thresholds` (documented detection
+:mod:`.explain`, :mod:`.report`, :mod:`.thresholds` (documented detection
 thresholds).
 """
 

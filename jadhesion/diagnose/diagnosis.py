@@ -18,12 +18,14 @@ from __future__ import annotations
 import jax
 import numpy as np
 
+from ..data.observer import lowpass_foh
 from ..data.vehicle import Vehicle
 from ..models.polach import PARAM_NAMES
+from ..status import Status
 from . import extensions as ext
-from . import features, fitting, select, sensitivity
+from . import features, fitting, null, select, sensitivity
 from .explain import explain
-from .signals import from_columns, lowpass
+from .signals import from_columns
 
 #: Extra round-1 starts for the wheel-radius error, whose fit from δ = 0 can end in a degenerate
 #: minimum (a large δ with a flattened creep slope): δ0 = ±3 %; the best full-data fit is kept.
@@ -47,12 +49,11 @@ def _row(params, active, sig, tau_th: float) -> dict:
     return out
 
 
-def _fit_round(sig, n, p0, sets):
-    """Fit the effect sets (the first is the reference) from ``p0`` on the padded signals ``sig``
-    (``n`` valid samples), plus the wheel-radius error from :data:`RADIUS_STARTS` where it is a
-    set's only effect or its addition, keeping the better full-data fit; rows are padded to
-    :data:`N_CANDIDATES` and indices to :data:`fitting.WIDTH`, so every round runs one compiled
-    program."""
+def _round_rows(p0, sets) -> tuple:
+    """Rows ``(starts, idx, actives)`` of one round: the effect sets (the first is the reference)
+    from ``p0``, plus the wheel-radius error from :data:`RADIUS_STARTS` where it is a set's only
+    effect or its addition; padded to :data:`N_CANDIDATES` rows and :data:`fitting.WIDTH`
+    indices, so every round runs one compiled program."""
     radius = [i for i, s in enumerate(sets) if s and s[-1] == "wheel_radius_error"]
     rows = list(sets) + [sets[i] for i in radius for _ in RADIUS_STARTS]
     starts = np.tile(np.asarray(p0, float), (N_CANDIDATES, 1))
@@ -62,15 +63,37 @@ def _fit_round(sig, n, p0, sets):
     rows += [sets[0]] * (N_CANDIDATES - len(rows))
     actives = np.stack([np.asarray(ext.active_mask(s)) for s in rows])
     idx = np.array([fitting.free_indices(s) for s in rows])
+    return starts, idx, actives
+
+
+def _merger(sets):
+    """``merge(table) -> table``: each radius row takes its best-SSE start, rows cut to the sets."""
+    radius = [i for i, s in enumerate(sets) if s and s[-1] == "wheel_radius_error"]
+
+    def merge(table):
+        for i in radius:
+            alts = [i] + [len(sets) + k for k in range(len(RADIUS_STARTS))]
+            ok = table["status"][alts] == int(Status.CONVERGED)
+            sse = np.where(ok, table["sse"][alts], np.inf) if ok.any() else table["sse"][alts]
+            best = alts[int(np.argmin(sse))]
+            for v in table.values():
+                v[i] = v[best]
+        return {k: v[: len(sets)] for k, v in table.items()}
+    return merge
+
+
+def _fit_round(sig, n, p0, sets):
+    """Fit one round (:func:`_round_rows`) on the padded signals ``sig`` (``n`` valid samples)."""
+    starts, idx, actives = _round_rows(p0, sets)
     table = {k: np.array(v) for k, v in
              fitting.fit_candidates(starts, idx, actives, sig, n)._asdict().items()}
     table["residual"] = table["residual"][:, :n]
-    for i in radius:
-        alts = [i] + [len(sets) + k for k in range(len(RADIUS_STARTS))]
-        best = alts[int(np.argmin(table["sse"][alts]))]
-        for v in table.values():
-            v[i] = v[best]
-    return {k: v[: len(sets)] for k, v in table.items()}, actives[: len(sets)]
+    return _merger(sets)(table), actives[: len(sets)]
+
+
+def _status(table: dict, i: int) -> str:
+    """Status label of row ``i`` of a fit table: the worse of its full-data and fold fits."""
+    return Status(int(max(table["status"][i], table["fold_status"][i]))).label
 
 
 def _n_extra(names) -> int:
@@ -98,18 +121,21 @@ def _generic(sig, residual, mu_pred) -> dict:
             "gain": float(1.0 - np.mean(np.abs(held)) / np.mean(np.abs(residual)))}
 
 
-def diagnose(columns: dict, vehicle: Vehicle, name: str = "recording") -> dict:
-    """Diagnose a recording's raw columns (time, vehicle_speed, wheel_speed, traction_torque)."""
+def diagnose(columns: dict, vehicle: Vehicle, name: str = "recording",
+             n_replicas: int = null.N_REPLICAS, seed: int = 0) -> dict:
+    """Diagnose a recording's raw columns (time, vehicle_speed, wheel_speed, traction_torque);
+    ``n_replicas`` clean re-synthesised replicas (seeded by ``seed``) form its null
+    (:mod:`.null`; 0 skips it and every p-value is null)."""
     sig = from_columns(columns, vehicle, name)
     n_valid = int(sig.time.shape[0])
-    p_base = fitting.fit_base(fitting.pad_signals(sig), n_valid)
+    p_base, base_status = fitting.fit_base(fitting.pad_signals(sig), n_valid)
     none = np.zeros(ext.N_EXTRA, bool)
     target, pred = (np.asarray(x) for x in _predict(p_base, none, sig))
     r_base = target - pred
     lib = features.library(sig, pred)
     sigs = features.signatures(r_base, lib)
     drop, u_change, tau_th = features.starting_values(sig, r_base, pred)
-    sig = sig._replace(heat=np.asarray(lowpass(np.asarray(sig.power), float(sig.dt), tau_th)))
+    sig = sig._replace(heat=lowpass_foh(sig.time, sig.power, tau_th))
     padded = fitting.pad_signals(sig)
     p0 = p_base.copy()
     start = {"drop": drop, "u_change": u_change}
@@ -122,6 +148,13 @@ def diagnose(columns: dict, vehicle: Vehicle, name: str = "recording") -> dict:
     k1 = [_n_extra(s) for s in sets1]
     gain1, dbic1 = select.scores(t1["heldout_mae"], t1["sse"], k1, 0, n_eff)
     names1 = ["none"] + list(ext.NAMES)
+    p_values, noise = [None] * len(sets1), None
+    if n_replicas:
+        null_gain, noise = null.null_gains(columns, vehicle, p_base, tau_th, _round_rows(p0, sets1),
+                                           _merger(sets1), n_valid, n_replicas, seed)
+        ok = np.array([_status(t1, i) == "converged" for i in range(len(sets1))])
+        p_values = [None] + list(null.max_t_pvalues(np.where(ok[1:], gain1[1:], -np.inf),
+                                                    null_gain))
     candidates = []
     for i in np.argsort(t1["heldout_mae"][1:]) + 1:
         signal = features.REVEALING_SIGNAL[names1[i]]
@@ -129,6 +162,8 @@ def diagnose(columns: dict, vehicle: Vehicle, name: str = "recording") -> dict:
             "name": names1[i], "params": _row(t1["params"][i], act1[i], sig, tau_th),
             "mae": float(t1["mae"][i]), "heldout_mae": float(t1["heldout_mae"][i]),
             "delta_bic": float(dbic1[i]), "gain": float(gain1[i]),
+            "status": _status(t1, i), "steps": int(t1["steps"][i]),
+            "p_value": None if p_values[i] is None else float(p_values[i]),
             "evidence": {"signal": signal, "eta2_base_residual": sigs[signal]}})
     leader, _ = select.effects_from(candidates, None, select.ROUND2_MIN)
     second_round, table, acts, final = None, t1, act1, 0
@@ -143,7 +178,8 @@ def diagnose(columns: dict, vehicle: Vehicle, name: str = "recording") -> dict:
                                      [_n_extra(s) for s in sets2], 0, n_eff2)
         second_round = {"first": first, "candidates": [
             {"name": n, "gain": float(gain2[j + 1]), "delta_bic": float(dbic2[j + 1]),
-             "heldout_mae": float(t2["heldout_mae"][j + 1])} for j, n in enumerate(others)]}
+             "heldout_mae": float(t2["heldout_mae"][j + 1]), "status": _status(t2, j + 1)}
+            for j, n in enumerate(others)]}
     effects, close = select.effects_from(candidates, second_round)
     if len(effects) == 2:
         table, acts, final = t2, act2, 1 + others.index(effects[1])
@@ -164,14 +200,18 @@ def diagnose(columns: dict, vehicle: Vehicle, name: str = "recording") -> dict:
                               for c in close],
         "second_round": second_round,
         "base": {"params": _row(p_base, none, sig, tau_th), "mae": float(t1["mae"][0]),
-                 "heldout_mae": float(t1["heldout_mae"][0])},
+                 "heldout_mae": float(t1["heldout_mae"][0]), "status": base_status.label,
+                 "cv_status": _status(t1, 0)},
         "extended": {"effects": effects, "params": ext_params, "mae": float(table["mae"][final]),
-                     "heldout_mae": float(table["heldout_mae"][final])},
+                     "heldout_mae": float(table["heldout_mae"][final]),
+                     "status": _status(table, final)},
         "generic": generic,
         "sensitivity": seen,
         "residual_signatures": sigs,
         "strongest_signal": strongest,
         "n_eff": n_eff,
+        "null": {"replicas": n_replicas, "alpha": null.ALPHA, "noise": noise,
+                 "method": "parametric bootstrap on this recording, max-T p-values"},
     }
     result["explanation"] = explain(result, vehicle)
     result["_series"] = {

@@ -53,9 +53,11 @@ def explain(result: dict, vehicle: Vehicle) -> str:
     base, extended = result["base"], result["extended"]
     if not result["effects"]:
         best = result["candidates"][0]
+        p = best.get("p_value")
         text = ("The Polach model explains this recording: no catalogue effect lowers the held-out "
-                f"error beyond the calibrated threshold (best candidate {best['name']}, "
-                f"{best['gain']:+.1%}).")
+                "error beyond the calibrated threshold and beyond what clean re-synthesised "
+                f"versions of this recording show (best candidate {best['name']}, "
+                f"{best['gain']:+.1%}" + ("" if p is None else f", p = {p:.2f}") + ").")
         if result["generic"]["used"]:
             text += (" Residual structure remains that no catalogue effect explains; it follows "
                      f"{result['strongest_signal']} most closely, and a sparse discrepancy term "

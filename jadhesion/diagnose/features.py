@@ -6,15 +6,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..data.observer import lowpass_foh
+from ..models.effects import EFFECTS
 from .extensions import POWER_REF, STEP_WIDTH
-from .signals import Signals, lowpass
+from .signals import Signals
 
-#: The signal each effect's residual signature follows (for the evidence and the figures).
-REVEALING_SIGNAL = {
-    "rail_change": "time", "wheel_radius_error": "speed", "signal_delay": "torque_rate",
-    "speed_dependence": "speed", "torque_offset": "adhesion", "thermal_softening": "heat",
-    "load_transfer": "traction_ratio",
-}
+#: The signal each effect's residual signature follows (from the effect registry).
+REVEALING_SIGNAL = {name: spec.signal for name, spec in EFFECTS.items()}
 #: Candidate thermal lags τ_th [s] and rail-change times (fractions of the duration) scanned.
 THERMAL_LAGS = (0.5, 1.0, 2.0, 5.0, 10.0, 30.0)
 CHANGE_GRID = np.linspace(0.05, 0.95, 37)
@@ -75,8 +73,8 @@ def starting_values(sig: Signals, residual, mu_pred) -> tuple:
         if gain > best[0]:
             best = (gain, c, u)
     _, drop, u_change = best
-    power, dt = np.asarray(sig.power), float(sig.dt)
-    gains = [_ls_gain(r, -mu * lowpass(power, dt, tau) / POWER_REF)[1] for tau in THERMAL_LAGS]
+    gains = [_ls_gain(r, -mu * np.asarray(lowpass_foh(sig.time, sig.power, tau)) / POWER_REF)[1]
+             for tau in THERMAL_LAGS]
     tau_th = THERMAL_LAGS[int(np.argmax(gains))]
     return float(np.clip(drop, -1.0, 0.9)), float(u_change), float(tau_th)
 

@@ -3,8 +3,10 @@
 Held-out error is measured by blocked cross-validation in time: the recording is cut into
 ``N_FOLDS`` contiguous blocks; fold k fits on the other blocks (zero weight on block k) and predicts
 block k. Contiguous blocks keep autocorrelated neighbours out of the training set, so the held-out
-error is honest for slowly varying effects. Every fit uses :func:`jadhesion.identify.lm.lm_solve`
-(optimistix Levenberg–Marquardt, sine-map box).
+error is honest for slowly varying effects. Every fit uses the project's one bounded LM,
+:func:`jadhesion.identify.lm.box_lm` (projected LM, MINPACK convergence tests), run to its
+convergence test with :data:`MAX_STEPS` / :data:`MAX_STEPS_FOLD` as caps, and every fit carries its
+:class:`jadhesion.status.Status` code (:attr:`FitTable.status`).
 
 Compilation: a diagnosis compiles :func:`fit_candidates` **once** per padded length. Recordings
 are padded (edge values, zero weight) to a multiple of :data:`PAD_BLOCK` samples
@@ -21,17 +23,19 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..identify.lm import lm_solve
+from ..identify.lm import BoxLMOptions, box_lm
 from ..models.kinematics import creepage
 from ..models.polach import polach_adhesion
+from ..status import Status
 from . import extensions as ext
 from .signals import Signals
 
 N_FOLDS = 5
-#: LM budgets (full-data fit; folds warm-start from it) and tolerances: the decisions compare
-#: errors at the 1 % level, so 1e-5 relative is ample.
-MAX_STEPS, MAX_STEPS_FOLD = 30, 10
-RTOL, ATOL = 1e-5, 1e-8
+#: LM step caps (full-data fit; folds warm-start from it) and tolerances. A cap is a cap: a fit
+#: stops at its convergence test (relative cost change ≤ FTOL with a step ≤ XTOL, or a projected
+#: gradient ≤ GTOL); one that reaches the cap is reported as ``max_steps``, never ranked.
+MAX_STEPS, MAX_STEPS_FOLD = 200, 100
+OPTIONS = BoxLMOptions(ftol=1e-9, xtol=1e-7, gtol=1e-10)
 #: Rows of every :func:`fit_candidates` call (base + 7 effects + 2 extra radius starts) and free
 #: parameters per row (the Polach five + at most three extras: a pair with the rail change).
 N_CANDIDATES = 10
@@ -71,13 +75,18 @@ BASE_STARTS = halton(N_SCREEN)
 
 class FitTable(NamedTuple):
     """Fits of C candidates: ``params`` (C, P) on all data, ``mae``/``sse`` (C,) in-sample,
-    ``heldout_mae`` (C,) blocked-CV, ``residual`` (C, n) of the full-data fit (zero on padding)."""
+    ``heldout_mae`` (C,) blocked-CV, ``residual`` (C, n) of the full-data fit (zero on padding),
+    ``status`` (C,) int32 :class:`~jadhesion.status.Status` of the full-data fit, ``fold_status``
+    (C,) the worst status among its cross-validation fits, ``steps`` (C,) LM steps of the full fit."""
 
     params: jax.Array
     mae: jax.Array
     sse: jax.Array
     heldout_mae: jax.Array
     residual: jax.Array
+    status: jax.Array
+    fold_status: jax.Array
+    steps: jax.Array
 
 
 def fold_weights(n: int, n_folds: int = N_FOLDS, n_total=None) -> jax.Array:
@@ -118,15 +127,21 @@ def _free_residual(z, args):
     return ext.residual(full.at[idx].set(z)[:PAD], (active, weights, sig))
 
 
+def status_code(result, max_steps: int):
+    """int32 :class:`~jadhesion.status.Status` of a :class:`~jadhesion.identify.lm.LMResult`."""
+    finite = jnp.isfinite(result.sse) & jnp.all(jnp.isfinite(result.params))
+    return jnp.where(~finite, int(Status.NONFINITE), jnp.where(
+        result.success, int(Status.CONVERGED),
+        jnp.where(result.steps >= max_steps, int(Status.MAX_STEPS), int(Status.STALLED))))
+
+
 def _solve(full, idx, active, weights, sig, max_steps):
-    """LM over the free entries ``idx`` of ``full`` (P + 1,), started 0.1 % inside the box (the
-    sine map is flat on the bounds); returns the updated ``full``."""
+    """Projected LM over the free entries ``idx`` of ``full`` (P + 1,); returns the updated
+    ``full``, the fit's status code and its steps."""
     lo, hi = jnp.asarray(_LO)[idx], jnp.asarray(_HI)[idx]
-    margin = 1e-3 * (hi - lo)
-    z0 = jnp.clip(full[idx], lo + margin, hi - margin)
-    z = lm_solve(_free_residual, z0, (full, idx, active, weights, sig), (lo, hi), rtol=RTOL,
-                 atol=ATOL, max_steps=max_steps).params
-    return full.at[idx].set(z)
+    result = box_lm(_free_residual, jnp.clip(full[idx], lo, hi), (full, idx, active, weights, sig),
+                    (lo, hi), OPTIONS, max_steps=max_steps)
+    return full.at[idx].set(result.params), status_code(result, max_steps), result.steps
 
 
 def _pad(p):
@@ -161,9 +176,9 @@ def fit_candidates(p0, idx, actives, sig: Signals, n_valid) -> FitTable:
     each CV fold warm-started from that fit; evaluate in-sample and held-out errors."""
     n = sig.time.shape[0]
     weights = fold_weights(n_valid, N_FOLDS, n)
-    full = jax.vmap(lambda p, i, a: _solve(_pad(p), i, a, weights[0], sig, MAX_STEPS))(
-        p0, idx, actives)
-    folds = jax.vmap(lambda p, i, a: jax.vmap(
+    full, status, steps = jax.vmap(
+        lambda p, i, a: _solve(_pad(p), i, a, weights[0], sig, MAX_STEPS))(p0, idx, actives)
+    folds, fold_status, _ = jax.vmap(lambda p, i, a: jax.vmap(
         lambda w: _solve(p, i, a, w, sig, MAX_STEPS_FOLD))(weights[1:]))(full, idx, actives)
 
     def resid(p, a):
@@ -175,13 +190,19 @@ def fit_candidates(p0, idx, actives, sig: Signals, n_valid) -> FitTable:
     heldout = jnp.sum(jnp.abs(r_folds) * (1.0 - weights[None, 1:]), axis=(1, 2)) / n_valid
     sse = jnp.sum(r_full**2, axis=1)
     return FitTable(full[:, :PAD], jnp.sum(jnp.abs(r_full), axis=1) / n_valid,
-                    jnp.where(jnp.isfinite(sse), sse, jnp.inf), heldout, r_full)
+                    jnp.where(jnp.isfinite(sse), sse, jnp.inf), heldout, r_full, status,
+                    jnp.max(fold_status, axis=1), steps)
 
 
-def fit_base(sig: Signals, n_valid=None) -> np.ndarray:
-    """Best LM fit of the plain Polach model (full vector (P,)) from the screened
-    :data:`BASE_STARTS`, through :func:`fit_candidates` (no extra compilation)."""
+def fit_base(sig: Signals, n_valid=None) -> tuple:
+    """Best LM fit of the plain Polach model from the screened :data:`BASE_STARTS`, through
+    :func:`fit_candidates` (no extra compilation): ``(params (P,), Status)``. The lowest-SSE
+    *converged* start wins; only when no start converged is the lowest-SSE one returned, with its
+    status."""
     n_valid = sig.time.shape[0] if n_valid is None else n_valid
     starts, idx, actives = base_rows(sig, n_valid)
     table = fit_candidates(starts, idx, actives, sig, n_valid)
-    return np.asarray(table.params)[int(np.argmin(np.asarray(table.sse)))]
+    sse, status = np.asarray(table.sse), np.asarray(table.status)
+    ok = status == int(Status.CONVERGED)
+    i = int(np.argmin(np.where(ok, sse, np.inf))) if ok.any() else int(np.argmin(sse))
+    return np.asarray(table.params)[i], Status(int(status[i]))

@@ -86,7 +86,8 @@ def write_report(result: dict, series: dict, directory) -> Path:
     out.mkdir(parents=True, exist_ok=True)
     figs = figures(result, series, out)
     rows = "\n".join(f"| {c['name']} | {c['heldout_mae']:.5f} | {100 * c['gain']:+.1f} % | "
-                     f"{c['delta_bic']:+.1f} | {c['evidence']['signal']} |"
+                     f"{c['delta_bic']:+.1f} | {c['p_value']} | {c['status']} | "
+                     f"{c['evidence']['signal']} |"
                      for c in result["candidates"])
     params = ", ".join(f"{k} = {v:.4g}" for k, v in result["extended"]["params"].items())
     seen = "\n".join(f"| {n} | {s['min_detectable']:.3g} | {100 * s['absorbed']:.0f} % | "
@@ -110,14 +111,16 @@ Extended parameters: {params}.
 
 ## Candidates (round 1, best held-out error first)
 
-| effect | held-out MAE | gain | ΔBIC | revealing signal |
-|---|---|---|---|---|
+| effect | held-out MAE | gain | ΔBIC | p (max-T null) | fit status | revealing signal |
+|---|---|---|---|---|---|---|
 {rows}
 
 ![candidate ranking]({figs[2]})
 
 Decision: an effect is accepted when it has the best held-out error, its gain exceeds the
-calibrated {100 * GAIN_THRESHOLD:.1f} % and ΔBIC < 0 (n_eff = {result['n_eff']:.0f}).
+calibrated {100 * GAIN_THRESHOLD:.1f} %, its max-T p-value against {result['null']['replicas']}
+clean re-synthesised replicas of this recording is ≤ {result['null']['alpha']}, its fits converged
+and ΔBIC < 0 (n_eff = {result['n_eff']:.0f}).
 
 ## What this recording can see
 

@@ -5,20 +5,22 @@ confirms, and a threshold calibrated on clean simulated recordings bounds the fa
   the reference model (the base fit in round 1, the accepted effect in round 2).
 * ``ΔBIC_c = n_eff ln(SSE_c/SSE_ref) + k_c ln(n_eff)``, ``n_eff = n (1 − ρ1)/(1 + ρ1)`` from the
   lag-1 autocorrelation ρ1 of the reference residual (clipped to [10, n]).
+* Only candidates whose fits (full data and every fold) converged are ranked; the others are
+  reported with their status.
 * An effect is accepted when it has the best held-out error, ``gain ≥ GAIN_THRESHOLD`` and
   ``ΔBIC < 0``. Other candidates with ``gain ≥ AMBIGUITY · gain_best`` are reported with it as a set
   the recording cannot separate, with the experiment that would.
 
-:data:`GAIN_THRESHOLD` comes from :func:`jadhesion.diagnose.calibrate.calibrate` (the largest
+:data:`GAIN_THRESHOLD` comes from :func:`validation.diagnose_cases.null_statistics` (the largest
 round-1 gain on clean simulated recordings, 95th percentile, across scenarios, seeds and profiles);
-``python -m jadhesion.diagnose.calibrate`` recomputes it.
+``python -m validation.diagnose_cases`` recomputes it.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-#: Calibrated held-out-gain threshold. ``python -m jadhesion.diagnose.calibrate --n 24
+#: Calibrated held-out-gain threshold. ``python -m validation.diagnose_cases --n 24
 #: --samples 1500 --seed 12345`` (24 clean recordings, random scenario/seed/vehicle) gave a largest
 #: round-1 gain with its 95th percentile at 0.90 % and its maximum at 1.26 %; the threshold sits
 #: above every null value. (A 24-recording null bounds the false-alarm rate only loosely: the
@@ -31,6 +33,9 @@ GENERIC_THRESHOLD = 0.02
 #: Round 2 (a second effect) is fitted whenever round 1's best gain reaches this (below any
 #: plausible threshold), so a decision can be re-taken at another threshold without refitting.
 ROUND2_MIN = 0.01
+#: Family-wise level of the per-recording null (:mod:`.null`): a round-1 candidate is ranked only
+#: with a max-T p-value ≤ ALPHA (when the null was run).
+ALPHA = 0.05
 #: Candidates within this fraction of the best gain are reported as indistinguishable.
 AMBIGUITY = 0.8
 
@@ -90,6 +95,10 @@ def effects_from(candidates: list, second_round, threshold: float = GAIN_THRESHO
     """Accepted effects (0–2, greedy) and the set indistinguishable from the first, from the
     candidate lists of a diagnosis (each entry with ``name``, ``gain``, ``delta_bic``)."""
     def pick(rows):
+        rows = [c for c in rows if c.get("status", "converged") == "converged"
+                and (c.get("p_value") is None or c["p_value"] <= ALPHA)]
+        if not rows:
+            return None, []
         return decide([c["name"] for c in rows], [c["gain"] for c in rows],
                       [c["delta_bic"] for c in rows], threshold)
 

@@ -33,24 +33,15 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..models.effects import EFFECTS
 from . import extensions as ext
-from .calibrate import MAGNITUDE_RANGE
 from .select import GAIN_THRESHOLD
 
 #: Each effect's magnitude parameter (the one the simulator's catalogue magnitude maps to).
 MAGNITUDE_PARAM = {e.name: e.params[0] for e in ext.EFFECTS}
 
-#: The run that would expose each effect when this recording cannot.
-EXPOSING_EXPERIMENT = {
-    "rail_change": "a run over each rail section separately",
-    "wheel_radius_error": "a coasting run at two speeds, where creep grows with speed without torque",
-    "signal_delay": "a torque step, timed against the wheel acceleration",
-    "speed_dependence": "a speed sweep at constant creep",
-    "torque_offset": "a coasting run, where zero torque reads the bias",
-    "thermal_softening": "a repeat run after a pause, when a thermal drop has recovered",
-    "load_transfer": "a run with the other axles' torque changed independently (one bogie "
-                     "coasting), so that tractive effort no longer follows this axle's adhesion",
-}
+#: The run that would expose each effect when this recording cannot (from the effect registry).
+EXPOSING_EXPERIMENT = {name: spec.exposing_run for name, spec in EFFECTS.items()}
 
 
 @jax.jit
@@ -68,7 +59,7 @@ def detectable_magnitudes(params, active, u_change, sig, n_valid: int, accepted=
     """Per effect: ``min_detectable`` (|magnitude| in the catalogue's units, ``inf`` when the fitted
     model absorbs the signature entirely), ``absorbed`` (share of the signature the fitted model
     takes up), ``visible`` (``min_detectable`` within the catalogue's typical range,
-    :data:`~.calibrate.MAGNITUDE_RANGE`) and ``experiment`` (:data:`EXPOSING_EXPERIMENT`).
+    :attr:`~jadhesion.models.effects.EffectSpec.typical`) and ``experiment`` (:data:`EXPOSING_EXPERIMENT`).
 
     ``params`` (N_PARAMS,) and ``active`` (N_EXTRA,) are the final fit, ``accepted`` its effects;
     ``u_change`` places the rail change's step where it is not fitted (its signature depends on
@@ -96,6 +87,6 @@ def detectable_magnitudes(params, active, u_change, sig, n_valid: int, accepted=
         out[effect.name] = {
             "min_detectable": m_min,
             "absorbed": float(np.clip(1.0 - q2 / spread, 0.0, 1.0)) if spread > 0 else 1.0,
-            "visible": m_min <= MAGNITUDE_RANGE[effect.name][1],
+            "visible": m_min <= EFFECTS[effect.name].typical[1],
             "experiment": EXPOSING_EXPERIMENT[effect.name]}
     return out

@@ -17,7 +17,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..data.observer import observer_core
+from ..data.observer import lowpass_foh, observer_core
 from ..data.vehicle import GRAVITY, Vehicle
 from ..errors import InputError
 from ..models import kinematics
@@ -34,7 +34,8 @@ class Signals(NamedTuple):
     time [s]; speed ``v`` [m/s]; wheel_speed ``v_w`` [m/s, at the nominal radius]; torque_mu
     ``T/(m g r)`` [-]; deriv_mu ``J d/(m g r)`` [-]; adhesion ``mu_hat = torque_mu − deriv_mu`` [-];
     accel ``dv/dt`` [m/s²]; torque_rate ``d torque_mu/dt`` [1/s]; power ``|mu_hat m g w|`` [W]
-    (frictional power of the axle); heat: power through ``1/(1 + s τ_th)`` [W] (τ_th =
+    (frictional power of the axle); heat: power through ``1/(1 + s τ_th)`` [W] (the exact
+    first-order-hold filter :func:`~jadhesion.data.observer.lowpass_foh`; τ_th =
     :data:`THERMAL_LAG_S` until :func:`jadhesion.diagnose.features.pick_thermal_lag` sets it);
     traction_ratio ``F_t/(M g) = n T/(r M g)`` [-] from the smoothed torque; dt () [s];
     speed_ref () mean speed [m/s];
@@ -71,15 +72,6 @@ def smooth_derivative(time: np.ndarray, x: np.ndarray) -> np.ndarray:
     return smooth(np.gradient(x, time), float(np.median(np.diff(time))))
 
 
-def lowpass(u: np.ndarray, dt: float, tau: float) -> np.ndarray:
-    """First-order low-pass ``x_k = α x_{k−1} + (1 − α) u_k``, ``α = exp(−Δt/τ)``, from rest, as a
-    causal FFT convolution with ``h_k = (1 − α) α^k``."""
-    n = u.size
-    alpha = np.exp(-dt / tau)
-    h = (1.0 - alpha) * alpha ** np.arange(n)
-    return np.fft.irfft(np.fft.rfft(u, 2 * n) * np.fft.rfft(h, 2 * n), 2 * n)[:n]
-
-
 def from_columns(columns: dict, vehicle: Vehicle, name: str = "recording") -> Signals:
     """Build :class:`Signals` from raw recording columns (time, vehicle_speed, wheel_speed,
     traction_torque) and the vehicle's constants; raises :class:`InputError` if they are missing."""
@@ -111,5 +103,5 @@ def from_columns(columns: dict, vehicle: Vehicle, name: str = "recording") -> Si
         time=f(t), speed=f(v), wheel_speed=f(vw), torque_mu=f(torque_mu), deriv_mu=f(deriv_mu),
         adhesion=f(adhesion), accel=f(smooth_derivative(t, v)),
         torque_rate=f(smooth_derivative(t, torque_mu)), power=f(power),
-        heat=f(lowpass(power, dt, THERMAL_LAG_S)), traction_ratio=f(traction), dt=f(dt),
+        heat=lowpass_foh(f(t), f(power), THERMAL_LAG_S), traction_ratio=f(traction), dt=f(dt),
         speed_ref=f(np.mean(v)), duration=f(t[-1] - t[0]), k_eps=f(vehicle.k_eps()))

@@ -3,7 +3,7 @@ names each effect correctly (top-1) in at least :data:`TARGET_ACCURACY` of blind
 
 How it was measured: ``python -m benchmarks.diagnose_blind`` (saved in
 ``benchmarks/results/diagnose_blind.json``) simulates single-effect recordings with log-uniform
-magnitudes over :data:`jadhesion.diagnose.calibrate.MAGNITUDE_RANGE`, random scenario, seed, vehicle
+magnitudes over :attr:`jadhesion.models.effects.EffectSpec.typical`, random scenario, seed, vehicle
 and (30 % of them) driving profile, and diagnoses each blind. For every effect the cases are sorted
 by |magnitude|; the threshold is the smallest magnitude m such that the cases with |magnitude| ≥ m
 (at least :data:`MIN_CASES` of them) have top-1 accuracy ≥ :data:`TARGET_ACCURACY`. With roughly
@@ -25,7 +25,7 @@ MIN_CASES = 5
 #: the truth in the reported set), ``unit``, ``note``. Measured by ``python
 #: benchmarks/diagnose_blind.py --n 220 --null 100 --seed 2026`` (320 recordings; 170 with one
 #: effect, 16–30 per effect; thresholds rounded up to two significant figures). A threshold equal
-#: to the bottom of :data:`~jadhesion.diagnose.calibrate.MAGNITUDE_RANGE` means "from the smallest
+#: to the bottom of the registry's :attr:`~jadhesion.models.effects.EffectSpec.typical` range means "from the smallest
 #: magnitude simulated"; below it nothing was measured. Confirmed on a run they were not fitted to,
 #: ``--n 250 --null 50 --seed 11`` (``benchmarks/results/diagnose_blind_seed11.json``): top-1 above
 #: the thresholds 21/21 (rail change), 21/21 (radius), 25/25 (speed), 14/15 (thermal), 81/82 in

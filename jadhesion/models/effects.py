@@ -46,7 +46,15 @@ from ..errors import InputError
 
 
 class EffectSpec(NamedTuple):
-    """A catalogue entry: default magnitude, allowed interval, unit and a one-line summary."""
+    """One effect's record in the registry: everything the code knows about it in one place.
+
+    ``default``/``low``/``high`` — the simulator's default magnitude and allowed interval; ``unit``;
+    ``summary`` (one line); ``typical`` — the log-uniform |magnitude| range of blind cases and of
+    the sensitivity's "visible at typical magnitudes"; ``signed`` — the sign is drawn at random;
+    ``signal`` — the recording signal its residual signature follows
+    (:func:`jadhesion.diagnose.features.library` key); ``exposing_run`` — the run that exposes it
+    when a recording cannot.
+    """
 
     name: str
     default: float
@@ -54,16 +62,33 @@ class EffectSpec(NamedTuple):
     high: float
     unit: str
     summary: str
+    typical: tuple
+    signed: bool
+    signal: str
+    exposing_run: str
 
 
 EFFECTS = {spec.name: spec for spec in (
-    EffectSpec("rail_change", 0.2, 0.0, 0.95, "-", "relative drop of mu0 at a step in time"),
-    EffectSpec("wheel_radius_error", 0.01, -0.2, 0.2, "-", "true radius = nominal · (1 + m)"),
-    EffectSpec("signal_delay", 0.05, 0.0, 2.0, "s", "torque lags the speed signals by m seconds"),
-    EffectSpec("speed_dependence", 0.3, -2.0, 2.0, "-", "mu0 falls by m per relative speed rise"),
-    EffectSpec("torque_offset", 0.02, -0.3, 0.3, "-", "torque bias as an adhesion offset"),
-    EffectSpec("thermal_softening", 0.5, 0.0, 10.0, "-", "mu0 / (1 + m · P_th / P_ref)"),
-    EffectSpec("load_transfer", 0.5, -2.0, 2.0, "-", "N1 = N (1 − m · F_t / (M g))"),
+    EffectSpec("rail_change", 0.2, 0.0, 0.95, "-", "relative drop of mu0 at a step in time",
+               (0.02, 0.5), False, "time", "a run over each rail section separately"),
+    EffectSpec("wheel_radius_error", 0.01, -0.2, 0.2, "-", "true radius = nominal · (1 + m)",
+               (0.002, 0.05), True, "speed",
+               "a coasting run at two speeds, where creep grows with speed without torque"),
+    EffectSpec("signal_delay", 0.05, 0.0, 2.0, "s", "torque lags the speed signals by m seconds",
+               (0.01, 0.3), False, "torque_rate",
+               "a torque step, timed against the wheel acceleration"),
+    EffectSpec("speed_dependence", 0.3, -2.0, 2.0, "-", "mu0 falls by m per relative speed rise",
+               (0.05, 1.0), True, "speed", "a speed sweep at constant creep"),
+    EffectSpec("torque_offset", 0.02, -0.3, 0.3, "-", "torque bias as an adhesion offset",
+               (0.002, 0.05), True, "adhesion",
+               "a coasting run, where zero torque reads the bias"),
+    EffectSpec("thermal_softening", 0.5, 0.0, 10.0, "-", "mu0 / (1 + m · P_th / P_ref)",
+               (0.05, 3.0), False, "heat",
+               "a repeat run after a pause, when a thermal drop has recovered"),
+    EffectSpec("load_transfer", 0.5, -2.0, 2.0, "-", "N1 = N (1 − m · F_t / (M g))",
+               (0.1, 1.5), False, "traction_ratio",
+               "a run with the other axles' torque changed independently (one bogie coasting), "
+               "so that tractive effort no longer follows this axle's adhesion"),
 )}
 EFFECT_NAMES = tuple(EFFECTS)
 INDEX = {name: i for i, name in enumerate(EFFECT_NAMES)}

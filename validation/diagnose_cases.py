@@ -1,6 +1,7 @@
 """Simulated cases for calibration and the blind benchmark, and the null calibration itself.
 
-``python -m jadhesion.diagnose.calibrate [--n N]`` diagnoses N clean simulated recordings (random
+Test- and benchmark-only (the library never imports it). ``python -m validation.diagnose_cases
+[--n N]`` diagnoses N clean simulated recordings (random
 scenario, seed and vehicle) and prints the 95th percentiles of the largest round-1 held-out gain and
 of the generic term's gain: the values behind :data:`.select.GAIN_THRESHOLD` and
 :data:`.select.GENERIC_THRESHOLD`.
@@ -19,14 +20,19 @@ from pathlib import Path
 
 import numpy as np
 
-#: Log-uniform magnitude ranges |m| per effect for random cases (simulator units, see
-#: :mod:`jadhesion.models.effects`); ``signed`` effects draw a random sign.
-MAGNITUDE_RANGE = {
-    "rail_change": (0.02, 0.5), "wheel_radius_error": (0.002, 0.05), "signal_delay": (0.01, 0.3),
-    "speed_dependence": (0.05, 1.0), "torque_offset": (0.002, 0.05),
-    "thermal_softening": (0.05, 3.0), "load_transfer": (0.1, 1.5),
-}
-SIGNED = {"wheel_radius_error", "speed_dependence", "torque_offset"}
+from jadhesion.cli.common import Progress
+from jadhesion.cli.diagnose import diagnose_file
+from jadhesion.config import enable_compilation_cache, enable_x64
+from jadhesion.data.recording import save_recording
+from jadhesion.data.scenarios import get_scenario
+from jadhesion.data.simulator import simulate
+from jadhesion.data.vehicle import LOCO_22E
+from jadhesion.models.effects import EFFECTS
+
+#: Log-uniform magnitude ranges |m| per effect for random cases (simulator units), and the effects
+#: whose sign is drawn at random: both from the effect registry (:mod:`jadhesion.models.effects`).
+MAGNITUDE_RANGE = {name: spec.typical for name, spec in EFFECTS.items()}
+SIGNED = {name for name, spec in EFFECTS.items() if spec.signed}
 SCENARIOS = ("dry", "wet", "sand")
 
 
@@ -38,8 +44,6 @@ VARIED_SAMPLES = (1500, 2000, 2500, 3000)
 def random_vehicle(rng, p_varied: float = 0.5):
     """The 22E, or (with probability ``p_varied``) a variant: worn wheel radius 0.57–0.61 m,
     inertia ±25 %, axle load 18–23 t (locomotive mass six axle loads)."""
-    from ..data.vehicle import LOCO_22E
-
     if rng.random() >= p_varied:
         return LOCO_22E, False
     axle = float(rng.uniform(18000.0, 23000.0))
@@ -53,8 +57,6 @@ def random_profile(rng, name: str, p_varied: float = 0.0):
     ``p_varied``) a different driving profile and friction condition — mean speed ×0.6–1.8, speed
     ramp 0.2–0.8, creep level ×0.6–1.6, wander 0.1–0.4, 0–3 minor excursions, each Polach
     parameter ×0.8–1.2 (clipped to the box), 1500–3000 samples."""
-    from ..data.scenarios import get_scenario
-
     base = get_scenario(name)
     if rng.random() >= p_varied:
         return base, None, False
@@ -81,10 +83,6 @@ def run_case(effects, rng, directory, n_samples=None, p_varied_profile: float = 
              p_varied_vehicle: float = 0.5) -> dict:
     """Simulate one recording, write CSV + sidecar into ``directory``, diagnose it through the CLI
     code path; returns the truth and the diagnosis (without its arrays)."""
-    from ..cli.diagnose import diagnose_file
-    from ..data.recording import save_recording
-    from ..data.simulator import simulate
-
     name = str(rng.choice(SCENARIOS))
     seed = int(rng.integers(0, 2**31 - 1))
     vehicle, varied = random_vehicle(rng, p_varied_vehicle)
@@ -121,9 +119,6 @@ def null_statistics(n: int, seed: int = 0, n_samples=None, progress=None) -> dic
 
 
 def main(argv=None) -> None:
-    from ..cli.common import Progress
-    from ..config import enable_compilation_cache, enable_x64
-
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=int, default=60)
     parser.add_argument("--seed", type=int, default=12345)
