@@ -15,9 +15,9 @@ import pytest
 from jadhesion import LOCO_22E, polach_adhesion
 from jadhesion.cli import main
 from jadhesion.data.dataset import PolachDataset
-from jadhesion.identify.batch_fit import (bucket_length, buckets, fit_datasets,
+from jadhesion.identify.batch_fit import (SHORT_BUCKET, bucket_length, buckets, fit_datasets,
                                           fit_datasets_vmapped, pad_dataset, valid_samples)
-from jadhesion.identify.polach_fit import fit_polach, polach_mae, subsample
+from jadhesion.identify.polach_fit import SEED_SAMPLES, fit_polach, polach_mae, subsample
 
 THETA = np.array([0.43, 0.6, 0.36, 0.36, 0.13])
 SMALL = {"pop_size": 8, "max_iter": 25}  # population budgets: equality, not accuracy, is tested
@@ -46,6 +46,7 @@ def _write(path, n, seed):
 
 
 def test_buckets_and_padding():
+    assert SHORT_BUCKET == SEED_SAMPLES  # short data: LM seeds on all of it, padded or not
     assert [bucket_length(n) for n in (10, 128, 129, 256, 257, 1000, 2000, 2048, 2049)] == \
         [128, 128, 256, 256, 512, 1024, 2048, 2048, 4096]
     data = _dataset(150, 0)

@@ -30,9 +30,13 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..data.dataset import PolachDataset
-from .polach_fit import SEED_SAMPLES, PolachFit, fit_polach, fit_polach_batch
 
-#: The smallest bucket above :data:`.polach_fit.SEED_SAMPLES` (buckets then double).
+# No module-level import of the fits (:mod:`.polach_fit` pulls in optimistix/equinox): the
+# command line's warm start, which calls a kept program, must not import them.
+
+#: The bucket of short datasets: :data:`.polach_fit.SEED_SAMPLES` (a test keeps them equal).
+SHORT_BUCKET = 128
+#: The smallest bucket above :data:`SHORT_BUCKET` (buckets then double).
 MIN_LONG_BUCKET = 256
 #: Fields with one value per sample (padded); ``k_eps`` is one per dataset.
 SAMPLE_FIELDS = ("creep", "slip", "adhesion", "vehicle_speed", "slip_sd", "creep_sd")
@@ -43,8 +47,8 @@ def bucket_length(n: int) -> int:
     to 128 samples (LM then seeds on all of them, as unpadded), else the next power of two
     ≥ :data:`MIN_LONG_BUCKET` — at most twice the work of the unpadded fit, and one program for
     every length in ``(2^(k-1), 2^k]``."""
-    if n <= SEED_SAMPLES:
-        return SEED_SAMPLES
+    if n <= SHORT_BUCKET:
+        return SHORT_BUCKET
     return max(MIN_LONG_BUCKET, 1 << (int(n) - 1).bit_length())
 
 
@@ -76,26 +80,28 @@ def valid_samples(data: PolachDataset) -> int:
 
 
 class Fitted(NamedTuple):
-    """One dataset's result: the fit (its ``mae``/``sse`` over the valid samples) and the
-    seconds it took (the bucket's compilation is charged to the first dataset of the bucket)."""
+    """One dataset's result: the fit (a :class:`.polach_fit.PolachFit` or the kept program's
+    equal named tuple; ``mae``/``sse`` over the valid samples) and the seconds it took (the
+    bucket's compilation is charged to the first dataset of the bucket)."""
 
-    fit: PolachFit
+    fit: NamedTuple
     seconds: float
 
 
 def fit_datasets(datasets: Sequence[PolachDataset], method: str, key, *, pop_size: int = 50,
-                 max_iter: int = 300, fit: Callable = fit_polach) -> list[Fitted]:
+                 max_iter: int = 300, fit: Callable | None = None) -> list[Fitted]:
     """Fit every dataset, padded to its bucket, with the same ``key`` (as one file at a time);
     ``fit`` is :func:`.polach_fit.fit_polach` or a drop-in (the command line's kept program,
     :func:`jadhesion.cli.fit_program.fit_polach`). One compiled program per method and bucket."""
+    if fit is None:
+        from .polach_fit import fit_polach as fit
     out = []
     for data in datasets:
         padded = pad_dataset(data)
         start = time.perf_counter()
         result = jax.block_until_ready(fit(padded, method, key, pop_size=pop_size,
                                            max_iter=max_iter))
-        out.append(Fitted(PolachFit(**{f: getattr(result, f) for f in PolachFit._fields}),
-                          time.perf_counter() - start))
+        out.append(Fitted(result, time.perf_counter() - start))
     return out
 
 
@@ -110,10 +116,12 @@ def buckets(datasets: Sequence[PolachDataset]) -> dict:
 
 
 def fit_datasets_vmapped(datasets: Sequence[PolachDataset], method: str, key, *,
-                         pop_size: int = 50, max_iter: int = 300) -> list[PolachFit]:
+                         pop_size: int = 50, max_iter: int = 300) -> list:
     """Fit every dataset, stacked per bucket, with one vmapped program per method and bucket
     (:func:`.polach_fit.fit_polach_batch`; the same ``key`` for every dataset). Agrees with
     :func:`fit_datasets` to round-off, not bit for bit (the batch changes XLA's reductions)."""
+    from .polach_fit import fit_polach_batch
+
     results: list = [None] * len(datasets)
     for (length, _), idx in buckets(datasets).items():
         stacked = jax.tree.map(lambda *a: jnp.stack(a),
