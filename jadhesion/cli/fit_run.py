@@ -20,7 +20,7 @@ import jax
 from ..data.recording import atomic_write
 from ..identify.batch_fit import fit_datasets
 from ..identify.kiencke_fit import fit_document, fit_kiencke
-from ..identify.polach_fit import require_samples
+from ..identify.polach_fit import MIN_SAMPLES, RECOMMENDED_SAMPLES, require_samples
 from ..identify.trust import fit_report
 from ..models.polach import PARAM_NAMES
 from ..plots.fit import fit_figure
@@ -64,7 +64,12 @@ def expand_files(names) -> tuple[list[Path], bool]:
 
 
 def _load(args, path):
-    dataset = to_dataset(load_from_args(args, path), creep=args.creep)
+    recording = load_from_args(args, path)
+    rows = min((len(c) for c in recording.columns.values()), default=0)
+    if rows < MIN_SAMPLES:  # before the creep smoother, which needs a few rows itself
+        raise UserError(f"{path}: {rows} samples cannot identify the model "
+                        f"(at least {MIN_SAMPLES} needed, {RECOMMENDED_SAMPLES} recommended)")
+    dataset = to_dataset(recording, creep=args.creep)
     require_samples(dataset, str(path))
     return dataset
 
