@@ -144,9 +144,11 @@ def test_many_files_equal_one_at_a_time(files, capsys, tmp_path, method):
         assert row["stderr_mu0"] == ("" if s is None else repr(s))
 
 
-def test_many_files_human_table(files, capsys):
-    code, out, _ = _fit(capsys, *files, "--method", "lm")
+def test_many_files_human_table_and_plots(files, capsys, tmp_path):
+    code, out, _ = _fit(capsys, *files, "--method", "lm", "--plot", tmp_path / "plots")
     assert code == 0 and "3 files" in out and all(p.name in out for p in files)
+    assert sorted(p.name for p in (tmp_path / "plots").iterdir()) == \
+        sorted(f"{p.stem}.fit.png" for p in files)
 
 
 def test_a_bad_file_fails_the_call_before_any_fit(files, capsys, tmp_path):

@@ -16,6 +16,7 @@ import time
 from pathlib import Path
 
 import jax
+import numpy as np
 
 from ..data.recording import atomic_write
 from ..identify.batch_fit import fit_datasets
@@ -133,7 +134,7 @@ def _fit_all(args, datasets) -> list[dict]:
 def _plot(args, path, dataset, doc, many: bool) -> None:
     out = Path(args.plot)
     out.mkdir(parents=True, exist_ok=True)
-    theta = [doc["params"][n] for n in PARAM_NAMES]
+    theta = np.array([doc["params"][n] for n in PARAM_NAMES])
     fit_figure(dataset, theta, title=f"{path.name}: {args.method}").savefig(
         out / (f"{path.stem}.fit.png" if many else "fit.png"), dpi=110)
 
