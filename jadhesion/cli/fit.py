@@ -1,5 +1,6 @@
-"""``jadhesion fit FILE.csv``: identify Polach's (or Kiencke's) parameters from a recording or creepage
-file, with its status, standard errors, 95 % intervals, correlations and warnings.
+"""``jadhesion fit FILE.csv [FILE.csv | DIR ...]``: identify Polach's (or Kiencke's) parameters from
+recordings or creepage files, with status, standard errors, 95 % intervals, correlations and
+warnings.
 
 This module defines the arguments only; :mod:`.fit_run` does the work.
 """
@@ -20,7 +21,10 @@ CREEP = ("smoothed", "raw")
 
 def register(sub) -> None:
     p = sub.add_parser("fit", help=COMMANDS["fit"])
-    p.add_argument("file", help="recording or creepage CSV")
+    p.add_argument("file", nargs="+",
+                   help="recording or creepage CSV(s), or directories of them (every *.csv): "
+                        "several are fitted in one process, one compiled program per length "
+                        "bucket, each exactly as when fitted alone")
     p.add_argument("--method", choices=METHODS, default="itlbo",
                    help="improved TLBO (default), TLBO, PSO or Levenberg–Marquardt")
     p.add_argument("--model", choices=MODELS, default="polach",
@@ -33,7 +37,12 @@ def register(sub) -> None:
                    help="iteration cap of a population method (default 300); it stops earlier "
                         "when its best MAE stalls")
     p.add_argument("--plot", metavar="DIR", default=None,
-                   help="write fit.png (data, fit and residuals) into DIR")
-    p.add_argument("--json", action="store_true", help="one JSON document on stdout")
+                   help="write fit.png (data, fit and residuals) into DIR (several files: "
+                        "one STEM.fit.png each)")
+    p.add_argument("--json", action="store_true",
+                   help="one JSON document on stdout (several files: {\"fits\": [one per file]})")
+    p.add_argument("--out", metavar="FILE.csv", default=None,
+                   help="also write a CSV table, one row per file: file, method, params, mae, "
+                        "status, converged, stderr per parameter")
     add_recording_options(p)
     p.set_defaults(handler="jadhesion.cli.fit_run:run")

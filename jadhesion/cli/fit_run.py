@@ -1,14 +1,27 @@
-"""``jadhesion fit``'s work: load, observe, fit, report how far to trust it (arguments: :mod:`.fit`)."""
+"""``jadhesion fit``'s work: load, observe, fit, report how far to trust it (arguments: :mod:`.fit`).
+
+One file gives today's document; several files (or a directory) give ``{"fits": [...]}``, one
+single-fit document per file with its ``file``. Every file is loaded and checked before any fit
+(a bad one: exit 2, one line naming it, nothing written). Polach fits go through
+:func:`jadhesion.identify.batch_fit.fit_datasets`: each dataset padded to its length bucket, one
+compiled (kept) program per method and bucket — a lone file takes the same path, so its result is
+the same whether it is fitted alone or with others.
+"""
 
 from __future__ import annotations
 
+import csv
+import io
 import time
 from pathlib import Path
 
 import jax
+import numpy as np
 
+from ..data.recording import atomic_write
+from ..identify.batch_fit import fit_datasets
 from ..identify.kiencke_fit import fit_document, fit_kiencke
-from ..identify.polach_fit import require_samples
+from ..identify.polach_fit import MIN_SAMPLES, RECOMMENDED_SAMPLES, require_samples
 from ..identify.trust import fit_report
 from ..models.polach import PARAM_NAMES
 from ..plots.fit import fit_figure
@@ -24,7 +37,45 @@ def _check_flags(args) -> None:
     require_at_least("fit", 1, max_iter=args.max_iter)
     if args.plot is not None and Path(args.plot).exists() and not Path(args.plot).is_dir():
         raise UserError(f"fit: --plot {args.plot}: exists and is not a directory")
+    if args.out is not None:
+        out = Path(args.out)
+        if out.suffix.lower() != ".csv":
+            raise UserError(f"fit: --out {args.out}: must name a .csv file")
+        if not out.parent.is_dir():
+            raise UserError(f"fit: --out {args.out}: directory {out.parent} does not exist")
 
+
+# ---- which files ------------------------------------------------------------------------------
+
+def expand_files(names) -> tuple[list[Path], bool]:
+    """The CSV files named (a directory stands for its ``*.csv``, sorted) and whether the call is
+    a many-file one (more than one name, or a directory)."""
+    paths, many = [], len(names) > 1
+    for name in names:
+        p = Path(name)
+        if p.is_dir():
+            found = sorted(q for q in p.glob("*.csv") if q.is_file())
+            if not found:
+                raise UserError(f"fit: {p}: directory holds no .csv file")
+            paths += found
+            many = True
+        else:
+            paths.append(p)
+    return paths, many
+
+
+def _load(args, path):
+    recording = load_from_args(args, path)
+    rows = min((len(c) for c in recording.columns.values()), default=0)
+    if rows < MIN_SAMPLES:  # before the creep smoother, which needs a few rows itself
+        raise UserError(f"{path}: {rows} samples cannot identify the model "
+                        f"(at least {MIN_SAMPLES} needed, {RECOMMENDED_SAMPLES} recommended)")
+    dataset = to_dataset(recording, creep=args.creep)
+    require_samples(dataset, str(path))
+    return dataset
+
+
+# ---- fits -------------------------------------------------------------------------------------
 
 def _describe(doc) -> str:
     """The trust block in words."""
@@ -54,13 +105,11 @@ def _fit_kiencke(args, dataset) -> dict:
     return {"method": args.method, **fit_document(fit), "seconds": time.perf_counter() - start}
 
 
-def _fit_polach(args, dataset) -> dict:
-    start = time.perf_counter()
-    fit = jax.block_until_ready(fit_polach(dataset, args.method, jax.random.key(args.seed),
-                                           pop_size=args.pop_size, max_iter=args.max_iter))
-    seconds = time.perf_counter() - start
+def _polach_doc(args, dataset, fit, seconds) -> dict:
+    """One file's document (``fit.mae``/``sse`` over its own samples; the trust block from the
+    unpadded dataset)."""
     status = status_of(fit.status)
-    doc = {
+    return {
         "model": "polach",
         "method": args.method,
         "params": dict(zip(PARAM_NAMES, map(float, fit.params))),
@@ -72,27 +121,50 @@ def _fit_polach(args, dataset) -> dict:
         "converged": status.converged,
         **fit_report(dataset, fit),
     }
-    if args.plot is not None:
-        out = Path(args.plot)
-        out.mkdir(parents=True, exist_ok=True)
-        fit_figure(dataset, fit.params, title=f"{Path(args.file).name}: {args.method}").savefig(
-            out / "fit.png", dpi=110)
-    return doc
 
 
-def run(args) -> int:
-    """Fit one recording and print (or ``--json``) the result with its trust block."""
-    _check_flags(args)
-    dataset = to_dataset(load_from_args(args, args.file), creep=args.creep)
-    require_samples(dataset, args.file)
+def _fit_all(args, datasets) -> list[dict]:
     if args.model == "kiencke":
-        doc = _fit_kiencke(args, dataset)
-    else:
-        doc = _fit_polach(args, dataset)
-    doc["creep"] = args.creep
-    if args.json:
-        emit_json(doc)
-    elif args.model == "kiencke":
+        return [_fit_kiencke(args, d) for d in datasets]
+    fitted = fit_datasets(datasets, args.method, jax.random.key(args.seed),
+                          pop_size=args.pop_size, max_iter=args.max_iter, fit=fit_polach)
+    return [_polach_doc(args, d, f.fit, f.seconds) for d, f in zip(datasets, fitted)]
+
+
+def _plot(args, path, dataset, doc, many: bool) -> None:
+    out = Path(args.plot)
+    out.mkdir(parents=True, exist_ok=True)
+    theta = np.array([doc["params"][n] for n in PARAM_NAMES])
+    fit_figure(dataset, theta, title=f"{path.name}: {args.method}").savefig(
+        out / (f"{path.stem}.fit.png" if many else "fit.png"), dpi=110)
+
+
+# ---- output -----------------------------------------------------------------------------------
+
+def table_rows(paths, docs) -> list[dict]:
+    """``--out``'s rows: file, method, the parameters, mae, status, converged and (Polach) one
+    ``stderr_<param>`` per parameter (empty: on a bound; ``inf``: undetermined)."""
+    rows = []
+    for path, doc in zip(paths, docs):
+        row = {"file": str(path), "method": doc["method"], **doc["params"], "mae": doc["mae"],
+               "status": doc["status"], "converged": doc["converged"]}
+        for name, u in doc.get("uncertainty", {}).items():
+            row[f"stderr_{name}"] = "" if u["stderr"] is None else u["stderr"]
+        rows.append(row)
+    return rows
+
+
+def write_table(path, rows) -> None:
+    buf = io.StringIO()
+    writer = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
+    writer.writeheader()
+    writer.writerows({k: repr(v) if isinstance(v, float) else v for k, v in r.items()}
+                     for r in rows)
+    atomic_write(Path(path), lambda tmp: tmp.write_text(buf.getvalue(), encoding="utf-8"))
+
+
+def _print_one(args, doc) -> None:
+    if args.model == "kiencke":
         p = doc["params"]
         print(f"Kiencke by {args.method}: p1 {p['p1']:.5g}, p2 {p['p2']:.5g}, a_s {p['a_s']:.5g}; "
               f"mu_max {doc['mu_max']}, creep_opt {doc['creep_opt']}; MAE {doc['mae']:.5g}; "
@@ -101,4 +173,38 @@ def run(args) -> int:
         print(f"method {doc['method']}: MAE {doc['mae']:.5g}, {doc['iterations']} iterations, "
               f"{doc['evaluations']} evaluations, {doc['seconds']:.2f} s (compilation included)")
         print(_describe(doc))
+
+
+def _print_many(args, paths, docs) -> None:
+    rows = [{"file": p.name, **{k: (f"{v:.5g}" if isinstance(v, float) else v)
+                                for k, v in d["params"].items()},
+             "MAE": f"{d['mae']:.5g}", "status": d["status"],
+             "warnings": ",".join(sorted({w["code"] for w in d.get("warnings", [])})) or "-"}
+            for p, d in zip(paths, docs)]
+    print(f"{len(docs)} files, {args.model} by {args.method}, "
+          f"{sum(d['seconds'] for d in docs):.2f} s fitting (compilation included)")
+    print(table(rows, list(rows[0])))
+
+
+def run(args) -> int:
+    """Fit one or many recordings and print (or ``--json``, ``--out``) the results with their
+    trust blocks."""
+    _check_flags(args)
+    paths, many = expand_files(args.file)
+    datasets = [_load(args, p) for p in paths]  # every file checked before any fit
+    docs = _fit_all(args, datasets)
+    for doc in docs:
+        doc["creep"] = args.creep
+    if args.plot is not None and args.model == "polach":
+        for path, dataset, doc in zip(paths, datasets, docs):
+            _plot(args, path, dataset, doc, many)
+    if args.out is not None:
+        write_table(args.out, table_rows(paths, docs))
+    if args.json:
+        emit_json({"fits": [{"file": str(p), **d} for p, d in zip(paths, docs)]} if many
+                  else docs[0])
+    elif many:
+        _print_many(args, paths, docs)
+    else:
+        _print_one(args, docs[0])
     return 0

@@ -38,6 +38,10 @@ class PolachDataset(NamedTuple):
         k_eps: Polach gradient constant [-] of the vehicle's contact, shape ().
         slip_sd: standard deviation of ``slip`` [m/s], shape (n,), or None (exact / unknown).
         creep_sd: standard deviation of ``creep`` [-], shape (n,), or None.
+        weight: per-sample mask (n,) — 1 for a sample, 0 for padding — or None (every sample
+            counts; results bit-identical to a dataset without the field). Set by
+            :func:`jadhesion.identify.batch_fit.pad_dataset` to fit datasets of different lengths
+            with one compiled program.
     """
 
     creep: jax.Array
@@ -47,6 +51,7 @@ class PolachDataset(NamedTuple):
     k_eps: jax.Array
     slip_sd: Optional[jax.Array] = None
     creep_sd: Optional[jax.Array] = None
+    weight: Optional[jax.Array] = None
 
 
 CREEP_OPTIONS = ("smoothed", "raw")

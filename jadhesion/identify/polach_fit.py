@@ -48,8 +48,10 @@ class PolachFit(NamedTuple):
 
 
 def polach_residual(theta, data: PolachDataset):
-    """``mu_adh(theta) − mu_hat`` per sample, shape (n,)."""
-    return polach_adhesion(theta, data.creep, data.slip, data.k_eps) - data.adhesion
+    """``mu_adh(theta) − mu_hat`` per sample, shape (n,); times ``data.weight`` when the dataset
+    has one (padding: 0), so padded samples add nothing to any sum."""
+    r = polach_adhesion(theta, data.creep, data.slip, data.k_eps) - data.adhesion
+    return r if data.weight is None else r * data.weight
 
 
 def mean_abs(r):
@@ -59,9 +61,17 @@ def mean_abs(r):
     return jnp.abs(r) @ jnp.full(r.shape[-1], 1.0 / r.shape[-1], r.dtype)
 
 
+def dataset_mae(r, data: PolachDataset):
+    """:func:`mean_abs` of residuals ``r`` of ``data``; with a ``weight`` (mask) the mean over its
+    valid samples, ``|r| · (w / Σw)``."""
+    if data.weight is None:
+        return mean_abs(r)
+    return jnp.abs(r) @ (data.weight / jnp.sum(data.weight))
+
+
 def polach_mae(theta, data: PolachDataset):
     """The paper's fitness (eq 15): mean absolute error of the adhesion coefficient."""
-    return mean_abs(polach_residual(theta, data))
+    return dataset_mae(polach_residual(theta, data), data)
 
 
 def _box(dtype):
@@ -76,10 +86,18 @@ SEED_LANES = 32
 
 
 def subsample(data: PolachDataset, n_max: int = SEED_SAMPLES) -> PolachDataset:
-    """Every ``n/n_max``-th sample (evenly strided indices; static shape ``min(n, n_max)``)."""
+    """Every ``n/n_max``-th sample (evenly strided indices; static shape ``min(n, n_max)``).
+    A padded dataset (``weight``; its valid samples first, more than ``n_max`` of them) gives
+    the same rows as its unpadded self."""
     n = data.adhesion.shape[-1]
     if n <= n_max:
         return data
+    if data.weight is not None:
+        valid = jnp.sum(data.weight).astype(jnp.int32)
+        idx = jnp.round(jnp.arange(n_max) * ((valid - 1) / (n_max - 1))).astype(jnp.int32)
+        return data._replace(creep=data.creep[idx], slip=data.slip[idx],
+                             adhesion=data.adhesion[idx], vehicle_speed=data.vehicle_speed[idx],
+                             weight=data.weight[idx])
     idx = np.linspace(0, n - 1, n_max).round().astype(np.int32)
     return data._replace(creep=data.creep[idx], slip=data.slip[idx], adhesion=data.adhesion[idx],
                          vehicle_speed=data.vehicle_speed[idx])
@@ -100,7 +118,7 @@ def _fit(method, pop_size, max_iter, use_target, data, key, target):
                         ftol=None if use_target else STALL_FTOL)
         theta, iterations, evaluations = out.best_x, out.iterations, out.n_evals
     r = polach_residual(theta, data)
-    mae = mean_abs(r)
+    mae = dataset_mae(r, data)
     reached = (mae <= target) if use_target else jnp.zeros((), bool)
     return PolachFit(theta, mae, jnp.sum(r * r), iterations, evaluations, reached, out.status)
 
@@ -135,7 +153,7 @@ def _global_lm_many(data, keys, target, use_target):
     seeded = jax.vmap(best_of)(jax.tree.map(lambda a: a.reshape((n, LM_STARTS) + a.shape[1:]), seeded))
     polish = box_lm_queue(polach_residual, seeded.params, data, bounds, max_steps=LM_MAX_STEPS)
     r = jax.vmap(polach_residual)(polish.params, data)
-    mae = mean_abs(r)
+    mae = mean_abs(r) if data.weight is None else jax.vmap(dataset_mae)(r, data)
     steps = seeded.steps + polish.steps
     reached = (mae <= target) if use_target else jnp.zeros(mae.shape, bool)
     return PolachFit(polish.params, mae, jnp.sum(r * r, axis=-1), steps, n_pop + steps, reached,

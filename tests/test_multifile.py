@@ -1,0 +1,172 @@
+"""Many recordings in one process (issue #16 item 3): masks, length buckets, ``fit A B … | DIR``.
+
+The contract: a file's result does not depend on the other files of the call, and the padded,
+masked fit solves the unpadded problem (population methods bit for bit, LM to round-off).
+"""
+
+import csv
+import json
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from jadhesion import LOCO_22E, polach_adhesion
+from jadhesion.cli import main
+from jadhesion.data.dataset import PolachDataset
+from jadhesion.identify.batch_fit import (SHORT_BUCKET, bucket_length, buckets, fit_datasets,
+                                          fit_datasets_vmapped, pad_dataset, valid_samples)
+from jadhesion.identify.polach_fit import SEED_SAMPLES, fit_polach, polach_mae, subsample
+
+THETA = np.array([0.43, 0.6, 0.36, 0.36, 0.13])
+SMALL = {"pop_size": 8, "max_iter": 25}  # population budgets: equality, not accuracy, is tested
+
+
+def _columns(n, seed):
+    rng = np.random.default_rng(seed)
+    creep = np.sort(rng.uniform(1e-3, 0.3, n))
+    speed = np.full(n, 0.6 + 0.1 * seed)
+    mu = np.asarray(polach_adhesion(THETA, creep, creep * speed, LOCO_22E.k_eps()))
+    return creep, speed, mu + 0.005 * rng.standard_normal(n)
+
+
+def _dataset(n, seed):
+    creep, speed, mu = _columns(n, seed)
+    return PolachDataset(jnp.asarray(creep), jnp.asarray(creep * speed), jnp.asarray(mu),
+                         jnp.asarray(speed), jnp.asarray(LOCO_22E.k_eps()))
+
+
+def _write(path, n, seed):
+    creep, speed, mu = _columns(n, seed)
+    path.write_text("creepage,vehicle_speed,adhesion\n"
+                    + "".join(f"{float(c)!r},{float(v)!r},{float(m)!r}\n"
+                              for c, v, m in zip(creep, speed, mu)))
+    return path
+
+
+def test_buckets_and_padding():
+    assert SHORT_BUCKET == SEED_SAMPLES  # short data: LM seeds on all of it, padded or not
+    assert [bucket_length(n) for n in (10, 128, 129, 256, 257, 1000, 2000, 2048, 2049)] == \
+        [128, 128, 256, 256, 512, 1024, 2048, 2048, 4096]
+    data = _dataset(150, 0)
+    padded = pad_dataset(data)
+    assert padded.adhesion.shape == (256,) and valid_samples(padded) == 150
+    assert np.all(np.asarray(padded.weight[:150]) == 1) and np.all(np.asarray(padded.weight[150:]) == 0)
+    assert np.array_equal(padded.adhesion[:150], data.adhesion)
+    # the padded MAE is the unpadded one; the LM's seeding subsample picks the same rows
+    assert float(polach_mae(THETA, padded)) == pytest.approx(float(polach_mae(THETA, data)), rel=1e-14)
+    sub, sub_padded = subsample(data), subsample(padded)
+    assert np.array_equal(sub.adhesion, sub_padded.adhesion) and np.all(sub_padded.weight == 1)
+    groups = buckets([_dataset(n, 0) for n in (150, 200, 300, 60)])
+    assert sorted(idx for idx in groups.values()) == [[0, 1], [2], [3]]
+
+
+def test_weight_of_ones_is_bit_identical_to_no_weight():
+    data = _dataset(300, 1)
+    ones = data._replace(weight=jnp.ones(300))
+    a = fit_polach(data, "lm", jax.random.key(0))
+    b = fit_polach(ones, "lm", jax.random.key(0))
+    assert np.array_equal(a.params, b.params) and float(a.mae) == float(b.mae)
+
+
+@pytest.mark.parametrize("method", ["itlbo", "tlbo", "pso"])
+def test_population_methods_padded_equal_unpadded_bit_for_bit(method):
+    key = jax.random.key(3)
+    for n, seed in ((60, 0), (300, 1)):
+        data = _dataset(n, seed)
+        a = fit_polach(data, method, key, **SMALL)
+        b = fit_polach(pad_dataset(data), method, key, **SMALL)
+        assert np.array_equal(a.params, b.params), (method, n)
+        assert int(a.iterations) == int(b.iterations) and int(a.status) == int(b.status)
+        assert float(b.mae) == pytest.approx(float(a.mae), rel=1e-14)
+
+
+def test_lm_padded_equals_unpadded_to_round_off():
+    key = jax.random.key(0)
+    for n, seed, rel in ((300, 1, 1e-12), (700, 2, 1e-12), (60, 0, 1e-6)):
+        data = _dataset(n, seed)
+        a = fit_polach(data, "lm", key)
+        b = fit_polach(pad_dataset(data), "lm", key)
+        np.testing.assert_allclose(b.params, a.params, rtol=rel, atol=rel)
+        assert float(b.mae) == pytest.approx(float(a.mae), rel=rel)
+
+
+@pytest.mark.parametrize("method", ["lm", "itlbo"])
+def test_vmapped_buckets_agree_with_one_at_a_time(method):
+    datasets = [_dataset(n, s) for s, n in enumerate((150, 200, 300))]
+    key = jax.random.key(1)
+    one = fit_datasets(datasets, method, key, **SMALL)
+    many = fit_datasets_vmapped(datasets, method, key, **SMALL)
+    for f, g in zip(one, many):
+        np.testing.assert_allclose(g.params, f.fit.params, rtol=1e-10, atol=1e-12)
+
+
+# ---- command line ------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("campaign")
+    return [_write(folder / f"run{i}.csv", n, i) for i, n in enumerate((150, 220, 400))]
+
+
+def _fit(capsys, *argv):
+    code = main(["fit", *map(str, argv)])
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+@pytest.mark.parametrize("method", ["lm", "pso"])
+def test_many_files_equal_one_at_a_time(files, capsys, tmp_path, method):
+    flags = ["--method", method, "--pop-size", "8", "--max-iter", "25", "--json"]
+    code, out, _ = _fit(capsys, files[0].parent, *flags, "--out", tmp_path / "t.csv")
+    assert code == 0
+    fits = json.loads(out)["fits"]
+    assert [f["file"] for f in fits] == [str(p) for p in files]
+    for path, doc in zip(files, fits):
+        code, out, _ = _fit(capsys, path, *flags)
+        single = json.loads(out)
+        assert "fits" not in single and "file" not in single  # one file: today's document
+        assert set(doc) == set(single) | {"file"}
+        assert doc["params"] == single["params"]  # bit for bit: the same program on the same data
+        for key in ("mae", "status", "converged", "uncertainty", "correlation", "warnings",
+                    "iterations", "evaluations", "hac_lags", "creep"):
+            assert doc[key] == single[key], key
+    with open(tmp_path / "t.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    assert [r["file"] for r in rows] == [str(p) for p in files]
+    assert list(rows[0]) == ["file", "method", "kA", "kS", "mu0", "A", "B", "mae", "status",
+                             "converged", "stderr_kA", "stderr_kS", "stderr_mu0", "stderr_A",
+                             "stderr_B"]
+    for row, doc in zip(rows, fits):
+        assert float(row["kS"]) == doc["params"]["kS"] and float(row["mae"]) == doc["mae"]
+        s = doc["uncertainty"]["mu0"]["stderr"]
+        assert row["stderr_mu0"] == ("" if s is None else repr(s))
+
+
+def test_many_files_human_table_and_plots(files, capsys, tmp_path):
+    code, out, _ = _fit(capsys, *files, "--method", "lm", "--plot", tmp_path / "plots")
+    assert code == 0 and "3 files" in out and all(p.name in out for p in files)
+    assert sorted(p.name for p in (tmp_path / "plots").iterdir()) == \
+        sorted(f"{p.stem}.fit.png" for p in files)
+
+
+def test_a_bad_file_fails_the_call_before_any_fit(files, capsys, tmp_path):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("creepage,vehicle_speed,adhesion\n0.01,0.6,0.3\n0.02,fast,0.3\n")
+    out_csv = tmp_path / "out.csv"
+    code, out, err = _fit(capsys, files[0], bad, files[1], "--json", "--out", out_csv)
+    assert code == 2 and out == ""
+    assert "bad.csv" in err and len(err.strip().splitlines()) == 1
+    assert not out_csv.exists()
+    few = _write(tmp_path / "few.csv", 5, 0)
+    code, out, err = _fit(capsys, files[0], few, "--out", out_csv)
+    assert code == 2 and out == "" and "few.csv" in err and not out_csv.exists()
+    code, out, err = _fit(capsys, files[0], tmp_path / "missing.csv")
+    assert code == 2 and "missing.csv" in err
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    code, out, err = _fit(capsys, empty)
+    assert code == 2 and "no .csv" in err
+    code, out, err = _fit(capsys, files[0], "--out", tmp_path / "t.txt")
+    assert code == 2 and "--out" in err and out == ""
