@@ -15,7 +15,7 @@ from ..plots.fit import fit_figure
 from ..status import status_of
 from .common import UserError, emit_json, require_at_least, table
 from .fit_program import fit_polach, to_dataset
-from .loading import load_from_args
+from .loading import load_dataset
 
 
 def _check_flags(args) -> None:
@@ -83,16 +83,19 @@ def _fit_polach(args, dataset) -> dict:
 def run(args) -> int:
     """Fit one recording and print (or ``--json``) the result with its trust block."""
     _check_flags(args)
-    dataset = to_dataset(load_from_args(args, args.file), creep=args.creep)
+    _, dataset, selection = load_dataset(args, args.file, to_dataset)
     require_samples(dataset, args.file)
     if args.model == "kiencke":
         doc = _fit_kiencke(args, dataset)
     else:
         doc = _fit_polach(args, dataset)
     doc["creep"] = args.creep
+    doc["selection"] = selection.document()
     if args.json:
         emit_json(doc)
-    elif args.model == "kiencke":
+        return 0
+    print(selection.summary())
+    if args.model == "kiencke":
         p = doc["params"]
         print(f"Kiencke by {args.method}: p1 {p['p1']:.5g}, p2 {p['p2']:.5g}, a_s {p['a_s']:.5g}; "
               f"mu_max {doc['mu_max']}, creep_opt {doc['creep_opt']}; MAE {doc['mae']:.5g}; "

@@ -8,7 +8,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ..data.dataset import to_dataset
 from ..data.observer import observe_adhesion
 from ..identify.ensemble import ChainTooShortWarning
 from ..identify.laplace import initial_spread, lm_optimum
@@ -17,7 +16,7 @@ from ..identify.mcmc import sample_posterior
 from ..identify.polach_fit import require_samples
 from ..plots.posterior import corner_plot, predictive_plot
 from .common import Progress, UserError, emit_json, table
-from .loading import load_from_args
+from .loading import load_dataset
 
 
 def _choose_likelihood(recording, requested: str):
@@ -75,10 +74,16 @@ def run(args) -> int:
         raise UserError(f"--walkers must be an even number >= 12, got {args.walkers}")
     if args.steps < 50:
         raise UserError(f"--steps must be at least 50, got {args.steps}")
-    recording = load_from_args(args, args.file)
-    data = to_dataset(recording, creep=args.creep)
+    recording, data, selection = load_dataset(args, args.file)
     require_samples(data, args.file)
-    likelihood, obs, note = _choose_likelihood(recording, args.likelihood)
+    if selection.complete:
+        likelihood, obs, note = _choose_likelihood(recording, args.likelihood)
+    elif args.likelihood == "observer":
+        raise UserError(f"{recording.path}: --likelihood observer needs one contiguous series, but "
+                        f"{selection.summary()}; use --likelihood gauss or --start/--end")
+    else:  # the observer likelihood models the lag along one contiguous series
+        likelihood, obs = ("gauss" if args.likelihood == "auto" else args.likelihood), None
+        note = f"{args.likelihood}: samples excluded ({selection.summary()}), i.i.d. Gaussian"
     theta0 = lm_optimum(data, obs=obs)
     spread = np.asarray(initial_spread(theta0, data, obs=obs))
     theta0 = np.asarray(theta0)
@@ -97,6 +102,7 @@ def run(args) -> int:
         corner_plot(result).savefig(out / "posterior_corner.png", dpi=90)
         predictive_plot(result, data).savefig(out / "posterior_predictive.png", dpi=110)
     doc = _document(result, theta0, note, "smoothed" if data.slip_sd is not None else "raw")
+    doc["selection"] = selection.document()
     if args.json:
         emit_json(doc)
         return 0
