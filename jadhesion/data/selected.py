@@ -35,6 +35,15 @@ def no_samples_message(recording, selection: Selection) -> str:
             f"another --phase or --start/--end")
 
 
+def per_stretch_dataset(recording, selection: Selection, observer_variant: str = "paper",
+                        creep: str = "raw", *, build=to_dataset) -> PolachDataset:
+    """The dataset of every sample (none masked), the observer run on each stretch alone (default
+    ``creep="raw"``: any stretch length); for inspection and figures."""
+    parts = [build(slice_recording(recording, slice(a, b)), observer_variant, creep)
+             for a, b in selection.stretches]
+    return parts[0] if len(parts) == 1 else _concatenate(parts)
+
+
 def selected_dataset(recording, phase: str = "traction", observer_variant: str = "paper",
                      creep: str = "smoothed", *, build=to_dataset):
     """``(PolachDataset, Selection)``: the dataset of the samples of ``phase``.
