@@ -4,11 +4,10 @@ import json
 
 import numpy as np
 import pytest
+from logger_data import write_logger_file
 
 from jadhesion.cli import main
 from jadhesion.data.inspection import identifiability, sampling
-
-from logger_data import write_logger_file
 
 
 @pytest.fixture(scope="module")

@@ -8,6 +8,7 @@ import sys
 
 import numpy as np
 import pytest
+from logger_data import SCALE, stretches_si, write_logger_file
 
 from jadhesion.data.dataset import to_dataset
 from jadhesion.data.recording import load_recording, save_recording
@@ -15,8 +16,6 @@ from jadhesion.data.segments import select, slice_recording
 from jadhesion.data.selected import selected_dataset
 from jadhesion.data.vehicle import LOCO_22E
 from jadhesion.errors import RecordingError
-
-from logger_data import SCALE, stretches_si, write_logger_file
 
 EXCLUDED_TRACTION = [
     {"reason": "standstill", "start": 0.0, "end": 0.99, "samples": 100},
