@@ -128,3 +128,24 @@ def test_fit_json_reports_the_selection_and_fits_braking_alone(tmp_path):
     assert none.returncode == 2 and none.stdout == "" and none.stderr.count("\n") == 1
     assert f"{path}: --phase traction selects no sample (standstill 91)" in none.stderr
     assert set(tmp_path.iterdir()) == before
+
+
+def test_adhesion_column_is_ignored_when_raw_signals_are_present(tmp_path):
+    from argparse import Namespace
+
+    from jadhesion.cli.loading import load_from_args
+    from jadhesion.data.observer import observe_adhesion
+
+    cols = {k: v[100:500] for k, v in stretches_si().items()}
+    bogus = save_recording({**cols, "adhesion": np.full(400, 0.9)}, LOCO_22E, tmp_path / "b.csv")
+    args = Namespace(column=[], axle=None, start=None, end=None)
+    rec = load_from_args(args, bogus)
+    assert rec.notes == (f"{bogus}: column 'adhesion' ignored: mu_hat is the observer's output of "
+                         f"the raw signals",)
+    mu = np.asarray(to_dataset(rec, creep="raw").adhesion)
+    expected = observe_adhesion(cols["time"], cols["wheel_speed"], cols["traction_torque"], LOCO_22E)
+    np.testing.assert_array_equal(mu, np.asarray(expected))
+    # Without the raw signals (a fitting-dataset file) the column is mu_hat.
+    ds = save_recording({"vehicle_speed": cols["vehicle_speed"], "creepage": np.full(400, 0.01),
+                         "adhesion": np.full(400, 0.3)}, LOCO_22E, tmp_path / "d.csv")
+    np.testing.assert_array_equal(np.asarray(to_dataset(load_recording(ds)).adhesion), 0.3)

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-from ..data.dataset import to_dataset
+import dataclasses
+
+from ..data.dataset import adhesion_source, to_dataset
 from ..data.recording import Recording, load_recording
 from ..data.segments import trim
 from ..data.selected import selected_dataset
@@ -10,8 +12,14 @@ from ..data.selected import selected_dataset
 
 def load_from_args(args, path) -> Recording:
     """The :class:`~jadhesion.data.recording.Recording` at ``path`` with ``--column``, ``--axle``,
-    ``--start`` and ``--end`` from ``args`` applied."""
-    return trim(load_recording(path, columns=args.column, axle=args.axle), args.start, args.end)
+    ``--start`` and ``--end`` from ``args`` applied (with a note when its ``adhesion`` column is
+    ignored, :func:`jadhesion.data.dataset.adhesion_source`)."""
+    recording = load_recording(path, columns=args.column, axle=args.axle)
+    if recording.has_adhesion and adhesion_source(recording) == "observer":
+        note = (f"{recording.path}: column 'adhesion' ignored: mu_hat is the observer's output of "
+                f"the raw signals")
+        recording = dataclasses.replace(recording, notes=recording.notes + (note,))
+    return trim(recording, args.start, args.end)
 
 
 def load_dataset(args, path, build=to_dataset):

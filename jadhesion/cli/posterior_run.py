@@ -8,7 +8,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ..data.observer import observe_adhesion
 from ..identify.ensemble import ChainTooShortWarning
 from ..identify.laplace import initial_spread, lm_optimum
 from ..identify.likelihood import recording_observer_terms
@@ -28,16 +27,8 @@ def _choose_likelihood(recording, requested: str):
             raise UserError(f"{recording.path}: --likelihood observer needs the columns time, "
                             f"vehicle_speed, wheel_speed and traction_torque")
         return "gauss", None, "auto: no raw signals (time, speeds, torque), i.i.d. Gaussian"
-    cols = recording.columns
-    if recording.has_adhesion:
-        mu = np.asarray(observe_adhesion(cols["time"], cols["wheel_speed"], cols["traction_torque"],
-                                         recording.vehicle))
-        if not np.allclose(mu, cols["adhesion"], rtol=1e-6, atol=1e-6):
-            if requested == "observer":
-                raise UserError(f"{recording.path}: column adhesion is not the paper observer's "
-                                f"output of the raw signals; --likelihood observer does not apply")
-            return "gauss", None, ("auto: the adhesion column is not the paper observer's output "
-                                   "of the raw signals, i.i.d. Gaussian")
+    # With the raw signals mu_hat is the observer's output (an adhesion column is ignored:
+    # jadhesion.data.dataset.adhesion_source), so the observer likelihood applies.
     try:
         obs = recording_observer_terms(recording)
     except ValueError as err:

@@ -62,8 +62,9 @@ def recording_overview(recording_or_columns, mu_hat=None, truth_params=None,
     Args:
         recording_or_columns: a :class:`~jadhesion.data.recording.Recording` or a column mapping
             (then the 22E vehicle is assumed for k_eps).
-        mu_hat: observed adhesion per sample; default the ``adhesion`` column, else the recording's
-            observer output when it can be computed, else none.
+        mu_hat: observed adhesion per sample; default the recording's observer output when it has
+            the raw signals (the one rule of :mod:`jadhesion.data.dataset`), else the
+            ``adhesion`` column (also for a column mapping), else none.
         truth_params: true Polach parameters to overlay.
         title: figure title (default: the recording's file name).
         selection: a :class:`~jadhesion.data.segments.Selection`: its excluded stretches and gaps
@@ -76,7 +77,9 @@ def recording_overview(recording_or_columns, mu_hat=None, truth_params=None,
         cols, vehicle, name = rec.columns, rec.vehicle, rec.path.name
     cols = {k: np.asarray(v, dtype=np.float64) for k, v in cols.items()}
     n = len(next(iter(cols.values())))
-    if mu_hat is None and "adhesion" in cols:
+    raw = all(c in cols for c in ("time", "vehicle_speed", "wheel_speed", "traction_torque"))
+    if mu_hat is None and "adhesion" in cols and (not raw or isinstance(recording_or_columns,
+                                                                        Mapping)):
         mu_hat = cols["adhesion"]
     elif mu_hat is None and not isinstance(recording_or_columns, Mapping):
         try:
