@@ -72,9 +72,11 @@ def run(args) -> int:
     elif args.likelihood == "observer":
         raise UserError(f"{recording.path}: --likelihood observer needs one contiguous series, but "
                         f"{selection.summary()}; use --likelihood gauss or --start/--end")
-    else:  # the observer likelihood models the lag along one contiguous series
-        likelihood, obs = ("gauss" if args.likelihood == "auto" else args.likelihood), None
-        note = f"{args.likelihood}: samples excluded ({selection.summary()}), i.i.d. Gaussian"
+    elif args.likelihood == "auto":  # the observer likelihood needs one contiguous series
+        likelihood, obs = "gauss", None
+        note = f"auto: samples excluded ({selection.summary()}), i.i.d. Gaussian"
+    else:
+        likelihood, obs, note = args.likelihood, None, "requested"
     theta0 = lm_optimum(data, obs=obs)
     spread = np.asarray(initial_spread(theta0, data, obs=obs))
     theta0 = np.asarray(theta0)
