@@ -100,7 +100,7 @@ def test_direction_change_and_short_stretch(tmp_path):
 
 def test_nothing_selected_and_bad_phase(logger):
     sub = slice_recording(logger, slice(0, 100))  # standstill only
-    with pytest.raises(RecordingError, match=r"--phase traction selects no sample \(standstill 100\)"):
+    with pytest.raises(RecordingError, match=r"--phase traction selects no samples \(standstill 100\)"):
         selected_dataset(sub)
     with pytest.raises(RecordingError, match="--phase coast: expected one of traction, braking, both"):
         select(logger, "coast")
@@ -126,7 +126,7 @@ def test_fit_json_reports_the_selection_and_fits_braking_alone(tmp_path):
     assert "argument --phase: invalid choice: 'coast'" in bad.stderr.splitlines()[-1]
     none = _cli(tmp_path, "fit", path, "--method", "lm", "--end", "0.9", "--json")
     assert none.returncode == 2 and none.stdout == "" and none.stderr.count("\n") == 1
-    assert f"{path}: --phase traction selects no sample (standstill 91)" in none.stderr
+    assert f"{path}: --phase traction selects no samples (standstill 91)" in none.stderr
     assert set(tmp_path.iterdir()) == before
 
 

@@ -3,8 +3,9 @@ selection of the samples the observer can use (:func:`select`). NumPy only.
 
 **Stretches (gaps).** A time step longer than ``max(GAP_FACTOR × median step, GAP_MIN_S)`` (5× the
 median step and at least 0.5 s) is a gap: it splits the recording into stretches, and the observer
-and the creep smoother run on each stretch alone (never across a gap). A stretch with fewer than
-:data:`MIN_STRETCH_SAMPLES` samples is too short for the smoother and is excluded.
+and the creep smoother run on each stretch alone (never across a gap). A stretch between gaps with fewer than
+:data:`MIN_STRETCH_SAMPLES` samples is too short for the smoother and is excluded (a recording
+too short as a whole is left to the identification's own minimum, which names it).
 
 **Samples used.** Each sample of a stretch gets one reason, the first that applies:
 
@@ -225,7 +226,7 @@ def select(recording, phase: str = "traction") -> Selection:
     for reason, hit in tests:  # later tests take precedence
         labels[hit] = reason
     short = np.zeros(n, bool)
-    for a, b in stretches:
+    for a, b in stretches if len(stretches) > 1 else ():  # one short recording: too few samples
         short[a:b] = b - a < MIN_STRETCH_SAMPLES
     labels[short] = "short stretch"
     wanted = ("traction", "braking") if phase == "both" else (phase,)

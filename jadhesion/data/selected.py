@@ -12,7 +12,7 @@ import jax.numpy as jnp
 
 from ..errors import RecordingError
 from .dataset import PolachDataset, to_dataset
-from .segments import Selection, select, slice_recording
+from .segments import MIN_STRETCH_SAMPLES, Selection, select, slice_recording
 
 
 def _concatenate(parts) -> PolachDataset:
@@ -31,7 +31,7 @@ def _concatenate(parts) -> PolachDataset:
 def no_samples_message(recording, selection: Selection) -> str:
     """One line: the phase selected nothing, and what the samples were."""
     counts = ", ".join(f"{k} {v}" for k, v in sorted(selection.counts().items()))
-    return (f"{recording.path}: --phase {selection.phase} selects no sample ({counts}); try "
+    return (f"{recording.path}: --phase {selection.phase} selects no samples ({counts}); try "
             f"another --phase or --start/--end")
 
 
@@ -57,6 +57,8 @@ def selected_dataset(recording, phase: str = "traction", observer_variant: str =
     selection = select(recording, phase)
     if selection.used == 0:
         raise RecordingError(no_samples_message(recording, selection))
+    if selection.mask.size < MIN_STRETCH_SAMPLES:  # too short for the smoother: the raw
+        creep = "raw"                              # difference (the fit names its minimum)
     if selection.complete:
         return build(recording, observer_variant, creep), selection
     parts = []
