@@ -30,6 +30,7 @@ COMMANDS = {
     "posterior": "Bayesian posterior of the Polach parameters (emcee)",
     "diagnose": "name the missing physics behind a Polach misfit",
     "sweep": "vectorised parameter sweep (scenarios × seeds × methods × …)",
+    "inspect": "what a recording holds: rate, gaps, ranges, segments, what it can identify",
     "online": "track Kiencke's optimum sample by sample (paper 000) on a recording",
 }
 

@@ -18,6 +18,7 @@ from pathlib import Path
 import jax
 import numpy as np
 
+from ..data.formats import MAT_SUFFIXES, PARQUET_SUFFIXES
 from ..data.recording import atomic_write
 from ..identify.batch_fit import fit_datasets
 from ..identify.kiencke_fit import fit_document, fit_kiencke
@@ -28,7 +29,7 @@ from ..plots.fit import fit_figure
 from ..status import status_of
 from .common import UserError, emit_json, require_at_least, table
 from .fit_program import fit_polach, to_dataset
-from .loading import load_from_args
+from .loading import load_dataset, load_from_args
 
 
 def _check_flags(args) -> None:
@@ -47,16 +48,20 @@ def _check_flags(args) -> None:
 
 # ---- which files ------------------------------------------------------------------------------
 
+RECORDING_SUFFIXES = (".csv",) + PARQUET_SUFFIXES + MAT_SUFFIXES
+
 def expand_files(names) -> tuple[list[Path], bool]:
-    """The CSV files named (a directory stands for its ``*.csv``, sorted) and whether the call is
-    a many-file one (more than one name, or a directory)."""
+    """The recordings named (a directory stands for its CSV, Parquet and MATLAB files, sorted) and
+    whether the call is a many-file one (more than one name, or a directory)."""
     paths, many = [], len(names) > 1
     for name in names:
         p = Path(name)
         if p.is_dir():
-            found = sorted(q for q in p.glob("*.csv") if q.is_file())
+            found = sorted(q for q in p.iterdir()
+                           if q.is_file() and q.suffix.lower() in RECORDING_SUFFIXES)
             if not found:
-                raise UserError(f"fit: {p}: directory holds no .csv file")
+                raise UserError(f"fit: {p}: directory holds no recording "
+                                f"({', '.join(RECORDING_SUFFIXES)})")
             paths += found
             many = True
         else:
@@ -65,14 +70,16 @@ def expand_files(names) -> tuple[list[Path], bool]:
 
 
 def _load(args, path):
+    """``(dataset, selection)`` of one file: :func:`.loading.load_dataset` after a row count
+    check (the creep smoother needs a few rows itself)."""
     recording = load_from_args(args, path)
     rows = min((len(c) for c in recording.columns.values()), default=0)
-    if rows < MIN_SAMPLES:  # before the creep smoother, which needs a few rows itself
+    if rows < MIN_SAMPLES:
         raise UserError(f"{path}: {rows} samples cannot identify the model "
                         f"(at least {MIN_SAMPLES} needed, {RECOMMENDED_SAMPLES} recommended)")
-    dataset = to_dataset(recording, creep=args.creep)
+    _, dataset, selection = load_dataset(args, path, to_dataset, recording=recording)
     require_samples(dataset, str(path))
-    return dataset
+    return dataset, selection
 
 
 # ---- fits -------------------------------------------------------------------------------------
@@ -191,10 +198,12 @@ def run(args) -> int:
     trust blocks."""
     _check_flags(args)
     paths, many = expand_files(args.file)
-    datasets = [_load(args, p) for p in paths]  # every file checked before any fit
+    loaded = [_load(args, p) for p in paths]  # every file checked before any fit
+    datasets = [d for d, _ in loaded]
     docs = _fit_all(args, datasets)
-    for doc in docs:
+    for doc, (_, selection) in zip(docs, loaded):
         doc["creep"] = args.creep
+        doc["selection"] = selection.document()
     if args.plot is not None and args.model == "polach":
         for path, dataset, doc in zip(paths, datasets, docs):
             _plot(args, path, dataset, doc, many)
@@ -206,5 +215,6 @@ def run(args) -> int:
     elif many:
         _print_many(args, paths, docs)
     else:
+        print(loaded[0][1].summary())
         _print_one(args, docs[0])
     return 0

@@ -8,8 +8,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ..data.dataset import to_dataset
-from ..data.observer import observe_adhesion
 from ..identify.ensemble import ChainTooShortWarning
 from ..identify.laplace import initial_spread, lm_optimum
 from ..identify.likelihood import recording_observer_terms
@@ -17,7 +15,7 @@ from ..identify.mcmc import sample_posterior
 from ..identify.polach_fit import require_samples
 from ..plots.posterior import corner_plot, predictive_plot
 from .common import Progress, UserError, emit_json, table
-from .loading import load_from_args
+from .loading import load_dataset
 
 
 def _choose_likelihood(recording, requested: str):
@@ -29,16 +27,8 @@ def _choose_likelihood(recording, requested: str):
             raise UserError(f"{recording.path}: --likelihood observer needs the columns time, "
                             f"vehicle_speed, wheel_speed and traction_torque")
         return "gauss", None, "auto: no raw signals (time, speeds, torque), i.i.d. Gaussian"
-    cols = recording.columns
-    if recording.has_adhesion:
-        mu = np.asarray(observe_adhesion(cols["time"], cols["wheel_speed"], cols["traction_torque"],
-                                         recording.vehicle))
-        if not np.allclose(mu, cols["adhesion"], rtol=1e-6, atol=1e-6):
-            if requested == "observer":
-                raise UserError(f"{recording.path}: column adhesion is not the paper observer's "
-                                f"output of the raw signals; --likelihood observer does not apply")
-            return "gauss", None, ("auto: the adhesion column is not the paper observer's output "
-                                   "of the raw signals, i.i.d. Gaussian")
+    # With the raw signals mu_hat is the observer's output (an adhesion column is ignored:
+    # jadhesion.data.dataset.adhesion_source), so the observer likelihood applies.
     try:
         obs = recording_observer_terms(recording)
     except ValueError as err:
@@ -75,10 +65,18 @@ def run(args) -> int:
         raise UserError(f"--walkers must be an even number >= 12, got {args.walkers}")
     if args.steps < 50:
         raise UserError(f"--steps must be at least 50, got {args.steps}")
-    recording = load_from_args(args, args.file)
-    data = to_dataset(recording, creep=args.creep)
+    recording, data, selection = load_dataset(args, args.file)
     require_samples(data, args.file)
-    likelihood, obs, note = _choose_likelihood(recording, args.likelihood)
+    if selection.complete:
+        likelihood, obs, note = _choose_likelihood(recording, args.likelihood)
+    elif args.likelihood == "observer":
+        raise UserError(f"{recording.path}: --likelihood observer needs one contiguous series, but "
+                        f"{selection.summary()}; use --likelihood gauss or --start/--end")
+    elif args.likelihood == "auto":  # the observer likelihood needs one contiguous series
+        likelihood, obs = "gauss", None
+        note = f"auto: samples excluded ({selection.summary()}), i.i.d. Gaussian"
+    else:
+        likelihood, obs, note = args.likelihood, None, "requested"
     theta0 = lm_optimum(data, obs=obs)
     spread = np.asarray(initial_spread(theta0, data, obs=obs))
     theta0 = np.asarray(theta0)
@@ -97,6 +95,7 @@ def run(args) -> int:
         corner_plot(result).savefig(out / "posterior_corner.png", dpi=90)
         predictive_plot(result, data).savefig(out / "posterior_predictive.png", dpi=110)
     doc = _document(result, theta0, note, "smoothed" if data.slip_sd is not None else "raw")
+    doc["selection"] = selection.document()
     if args.json:
         emit_json(doc)
         return 0

@@ -1,13 +1,18 @@
 """Options shared by every command that reads a recording: the column map (``--column``) and
-the axle of a multi-axle file (``--axle``), the time window (``--start/--end``).
+the axle of a multi-axle file (``--axle``), the time window (``--start/--end``) and the phase of
+the samples used (``--phase``).
 
 Arguments only (no JAX, so ``--help`` stays instant); :mod:`.loading` applies them."""
 
 from __future__ import annotations
 
+#: Phases offered (:data:`jadhesion.data.segments.PHASES`; literal so ``--help`` imports no data code).
+PHASES = ("traction", "braking", "both")
+
 
 def add_recording_options(parser) -> None:
-    """Add ``--column CANONICAL=SOURCE[UNIT]`` (repeatable) to a command's parser."""
+    """Add ``--column CANONICAL=SOURCE[UNIT]`` (repeatable), ``--axle``, ``--start``, ``--end``
+    and ``--phase`` to a command's parser."""
     parser.add_argument("--column", action="append", default=[], metavar="CANONICAL=SOURCE[UNIT]",
                         help="read a canonical column from the file's SOURCE column in UNIT, e.g. "
                              "vehicle_speed=v_Lok_kmh[km/h] (repeatable; overrides the sidecar's "
@@ -20,4 +25,7 @@ def add_recording_options(parser) -> None:
                         help="use the samples from this time on [s, as recorded]")
     parser.add_argument("--end", type=float, default=None, metavar="SECONDS",
                         help="use the samples up to this time [s, as recorded]")
-
+    parser.add_argument("--phase", choices=PHASES, default="traction",
+                        help="samples used: traction (default: moving, torque driving), braking "
+                             "(negative torque and creep) or both; standstill, coasting, direction "
+                             "changes and stretches between gaps too short are excluded and reported")

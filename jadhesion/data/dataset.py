@@ -5,6 +5,13 @@ the raw signals it estimates creep and slip as states (:mod:`.creep_state`, ``cr
 the default) and carries their standard deviations; ``creep="raw"`` keeps the plain difference of
 the recorded speeds.
 
+**The adhesion column (one rule, applied here by :func:`adhesion_source`).** When the four raw
+signals (``time``, ``vehicle_speed``, ``wheel_speed``, ``traction_torque``) are present, ``mu_hat``
+is always the observer's output and an ``adhesion`` column is ignored (the CLI's loading adds a
+note); only a fitting-dataset file without them supplies ``mu_hat`` through ``adhesion``. (Checked
+on simulated recordings, whose ``adhesion`` column is the observer's output: the datasets differ
+by < 2e-15.)
+
 **Default: smoothed.** On simulated 22E recordings (2 000 samples) with realistic sensors (1e-3
 m/s white + 5e-4 m/s AR(1) + 1 mm/s quantisation per speed) the smoothed creep's RMS error is 2.4×
 (dry) and 1.8× (sand) smaller than the raw difference's; on the historical clean sensors (5e-5
@@ -64,13 +71,13 @@ def to_dataset(recording: "Recording", observer_variant: str = "paper",
 
     ``creep="smoothed"`` (default): when the recording has the four raw signals (``time``, both
     speeds, ``traction_torque``), slip, creep and vehicle speed are the RTS-smoothed states of
-    :func:`jadhesion.data.creep_state.smooth_recording`; ``mu_hat`` stays the observer's (or the
-    file's ``adhesion`` column). Without raw signals, or with ``creep="raw"``, as follows.
+    :func:`jadhesion.data.creep_state.smooth_recording`; ``mu_hat`` stays the observer's. Without
+    raw signals, or with ``creep="raw"``, as follows.
 
-    With an ``adhesion`` column it is used directly: creepage from ``creepage``, else from
+    Without the raw signals the ``adhesion`` column is used directly: creepage from ``creepage``, else from
     ``slip_velocity`` (or ``wheel_speed − vehicle_speed``) through
     :func:`jadhesion.models.kinematics.creepage`; the slip velocity from ``slip_velocity``, else
-    ``creepage · max(|v|, floor)`` (the inverse of that creepage). Without it, the adhesion observer
+    ``creepage · max(|v|, floor)`` (the inverse of that creepage). With them, the adhesion observer
     (:func:`jadhesion.data.observer.observe_adhesion`, ``observer_variant``) runs on the raw
     signals and creep comes from the wheel and vehicle speeds. ``k_eps``: the vehicle's gradient
     constant when already known (default ``recording.vehicle.k_eps()``).
@@ -88,10 +95,16 @@ def to_dataset(recording: "Recording", observer_variant: str = "paper",
 RAW_SIGNALS = ("time", "vehicle_speed", "wheel_speed", "traction_torque")
 
 
+def adhesion_source(recording) -> str:
+    """``"observer"`` when the recording has the raw signals (an ``adhesion`` column is then
+    ignored), else ``"column"``: the module docstring's one rule for an ``adhesion`` column."""
+    return "observer" if all(c in recording.columns for c in RAW_SIGNALS) else "column"
+
+
 def _raw_dataset(recording, observer_variant: str, k_eps=None) -> PolachDataset:
     cols = recording.columns
     v = np.asarray(cols["vehicle_speed"])
-    if "adhesion" in cols:
+    if adhesion_source(recording) == "column":
         mu = np.asarray(cols["adhesion"])
         if "slip_velocity" in cols:
             w = np.asarray(cols["slip_velocity"])

@@ -38,6 +38,7 @@ from typing import Optional
 
 import numpy as np
 
+from .formats import is_binary, read_columns
 from .readers import _fast_parse, _parse_rows, _read_text
 from .sidecar import _load_sidecar
 from .units import ColumnSpec, parse_column_map, to_si
@@ -112,11 +113,23 @@ def _column_map(columns, sidecar: dict, sidecar_name: str, header, name: str, ax
     return specs
 
 
+def _check_finite(cols, name, shown):
+    """Binary formats: the first NaN or inf (a Parquet null is NaN) of a validated column."""
+    for col, values in cols.items():
+        bad = np.flatnonzero(~np.isfinite(values))
+        if bad.size:
+            i = int(bad[0])
+            raise _fail(name, f"column {shown.get(col, col)!r}, row {i + 1}: {values[i]} is not a "
+                              f"finite number (NaN, a missing value, and inf are not allowed)")
+
+
 def load_recording(path, *, columns=(), axle=None, max_speed: float = MAX_SPEED) -> Recording:
-    """Load and validate a recording CSV and its optional sidecar ``<same stem>.json``.
+    """Load and validate a recording (CSV, or by suffix Parquet ``.parquet``/``.pq`` and MATLAB
+    ``.mat`` v5/v7.3, :mod:`jadhesion.data.formats`) and its optional sidecar
+    ``<same stem>.json``; every format gets the same column map, units and validation.
 
     Args:
-        path: the CSV file.
+        path: the recording file.
         columns: ``CANONICAL=SOURCE[UNIT]`` strings (:mod:`jadhesion.data.units`), applied over the
             sidecar's ``columns`` map; values are converted to SI, errors name the source column.
         axle: pick this axle's wheel speed and torque from a multi-axle file
@@ -128,14 +141,19 @@ def load_recording(path, *, columns=(), axle=None, max_speed: float = MAX_SPEED)
     """
     path = Path(path)
     name = str(path)
-    text = _read_text(path, name)
-    fast = _fast_parse(text)
-    if fast is None:
-        header, rows, lines = _parse_rows(text, name)
-        cells = np.array(rows, dtype=str)
+    if is_binary(path):  # Parquet or .mat: numeric columns (None: not numeric), no line numbers
+        header, parsed, read_notes = read_columns(path, name)
+        fast, lines = True, None
     else:
-        header, parsed, lines = fast
+        text = _read_text(path, name)
+        fast, read_notes = _fast_parse(text), ()
+        if fast is None:
+            header, rows, lines = _parse_rows(text, name)
+            cells = np.array(rows, dtype=str)
+        else:
+            header, parsed, lines = fast
     sidecar_path, sidecar, vehicle, notes = _load_sidecar(path)
+    notes += read_notes
     specs = _column_map(columns, sidecar, str(sidecar_path), header, name, axle)
     by_source = {spec.source: spec for spec in specs.values()}
     shadowed = [c for c in header if c in specs and c not in by_source]
@@ -154,11 +172,15 @@ def load_recording(path, *, columns=(), axle=None, max_speed: float = MAX_SPEED)
             continue
         values = parsed[j] if fast is not None else _convert_column(
             cells[:, j], shown.get(col, col), lines, name, strict=col in required)
+        if values is None and lines is None and col in required:
+            raise _fail(name, f"column {shown.get(col, col)!r}: not numeric")
         if values is None:
             ignored.append(col)
         else:
             spec = specs.get(col)
             columns[col] = values if spec is None else values * to_si(spec, vehicle.wheel_radius_m)
+    if lines is None:
+        _check_finite({c: columns[c] for c in required if c in columns}, name, shown)
     if ignored:
         notes += (f"{name}: non-numeric column{'s' if len(ignored) > 1 else ''} "
                   f"{', '.join(map(repr, ignored))} ignored",)

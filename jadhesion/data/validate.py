@@ -84,7 +84,8 @@ def _convert_column(cells: np.ndarray, col: str, lines, name: str, strict: bool)
 
 def _check_values(cols, vehicle: Vehicle, lines, name: str, max_speed: float, shown: dict):
     def _where(col, i, lines):
-        return f"column {shown.get(col, col)!r}, row {i + 1} (line {lines[i]})"
+        line = "" if lines is None else f" (line {lines[i]})"  # no lines in Parquet or .mat
+        return f"column {shown.get(col, col)!r}, row {i + 1}{line}"
 
     if "time" in cols and len(cols["time"]) > 1:
         dt = np.diff(cols["time"])

@@ -30,8 +30,27 @@ def _creep(cols):
     return np.asarray(kinematics.creepage(w, v))
 
 
+#: Shading of the excluded stretches (``selection``), by reason.
+REASON_COLORS = {"standstill": "0.55", "coasting": "C9", "direction change": "C6",
+                 "torque and creep disagree": "C8", "short stretch": "C7", "braking": "C1",
+                 "traction": "C2"}
+
+
+def _shade(ax, selection, labels: bool = True):
+    seen = set()
+    for run in selection.excluded():
+        reason = run["reason"]
+        ax.axvspan(run["start"], run["end"], color=REASON_COLORS.get(reason, "0.8"), alpha=0.18,
+                   lw=0, label=None if reason in seen or not labels else f"excluded: {reason}")
+        seen.add(reason)
+    for a, b in selection.gaps:
+        ax.axvspan(a, b, facecolor="none", edgecolor="k", hatch="//", lw=0,
+                   label=None if "gap" in seen or not labels else "gap (not bridged)")
+        seen.add("gap")
+
+
 def recording_overview(recording_or_columns, mu_hat=None, truth_params=None,
-                       title: Optional[str] = None) -> Figure:
+                       title: Optional[str] = None, selection=None) -> Figure:
     """An overview of a recording.
 
     Left, against time (or sample index when there is no ``time`` column): vehicle and wheel speed
@@ -43,10 +62,13 @@ def recording_overview(recording_or_columns, mu_hat=None, truth_params=None,
     Args:
         recording_or_columns: a :class:`~jadhesion.data.recording.Recording` or a column mapping
             (then the 22E vehicle is assumed for k_eps).
-        mu_hat: observed adhesion per sample; default the ``adhesion`` column, else the recording's
-            observer output when it can be computed, else none.
+        mu_hat: observed adhesion per sample; default the recording's observer output when it has
+            the raw signals (the one rule of :mod:`jadhesion.data.dataset`), else the
+            ``adhesion`` column (also for a column mapping), else none.
         truth_params: true Polach parameters to overlay.
         title: figure title (default: the recording's file name).
+        selection: a :class:`~jadhesion.data.segments.Selection`: its excluded stretches and gaps
+            are shaded against time, and its excluded samples drawn grey in the cloud.
     """
     if isinstance(recording_or_columns, Mapping):
         cols, vehicle, name = recording_or_columns, LOCO_22E, None
@@ -55,7 +77,9 @@ def recording_overview(recording_or_columns, mu_hat=None, truth_params=None,
         cols, vehicle, name = rec.columns, rec.vehicle, rec.path.name
     cols = {k: np.asarray(v, dtype=np.float64) for k, v in cols.items()}
     n = len(next(iter(cols.values())))
-    if mu_hat is None and "adhesion" in cols:
+    raw = all(c in cols for c in ("time", "vehicle_speed", "wheel_speed", "traction_torque"))
+    if mu_hat is None and "adhesion" in cols and (not raw or isinstance(recording_or_columns,
+                                                                        Mapping)):
         mu_hat = cols["adhesion"]
     elif mu_hat is None and not isinstance(recording_or_columns, Mapping):
         try:
@@ -69,6 +93,13 @@ def recording_overview(recording_or_columns, mu_hat=None, truth_params=None,
     else:
         t, t_label = np.arange(n, dtype=float), "sample [-]"
 
+    # Lines break at the gaps between stretches (nothing is drawn across a gap).
+    cuts = [] if selection is None else [a for a, _ in selection.stretches[1:]]
+
+    def brk(y):
+        return np.insert(np.asarray(y, dtype=np.float64), cuts, np.nan)
+
+    tb = brk(t)
     panels = []
     if "vehicle_speed" in cols or "wheel_speed" in cols:
         panels.append("speed")
@@ -90,23 +121,27 @@ def recording_overview(recording_or_columns, mu_hat=None, truth_params=None,
         share = ax
         if panel == "speed":
             if "vehicle_speed" in cols:
-                ax.plot(t, cols["vehicle_speed"] * _KMH, color="C0", label="vehicle", **style)
+                ax.plot(tb, brk(cols["vehicle_speed"] * _KMH), color="C0", label="vehicle", **style)
             if "wheel_speed" in cols:
-                ax.plot(t, cols["wheel_speed"] * _KMH, color="C1", label="wheel (circumferential)",
+                ax.plot(tb, brk(cols["wheel_speed"] * _KMH), color="C1", label="wheel (circumferential)",
                         **style)
             ax.set_ylabel("speed [km/h]")
-            ax.legend(loc="upper left", fontsize="small", frameon=False)
+            if selection is not None and "time" in cols:
+                _shade(ax, selection)
+            ax.legend(loc="upper left", fontsize="x-small", frameon=False, ncol=3)
         elif panel == "torque":
-            ax.plot(t, cols["traction_torque"] / 1e3, color="C2", **style)
+            ax.plot(tb, brk(cols["traction_torque"] / 1e3), color="C2", **style)
             ax.set_ylabel("torque [kN·m]")
         elif panel == "creep":
-            ax.plot(t, creep, color="C3", **style)
+            ax.plot(tb, brk(creep), color="C3", **style)
             if np.all(creep > 0) and np.max(creep) > 100.0 * np.min(creep):
                 ax.set_yscale("log")  # a creep sweep spans decades
             ax.set_ylabel("creepage s [-]")
         else:
-            ax.plot(t, mu_hat, color="C4", **style)
+            ax.plot(tb, brk(mu_hat), color="C4", **style)
             ax.set_ylabel(r"adhesion $\hat\mu$ [-]")
+        if selection is not None and "time" in cols and panel != "speed":
+            _shade(ax, selection, labels=False)
         ax.grid(alpha=0.3)
         if row < len(panels) - 1:
             ax.tick_params(labelbottom=False)
@@ -116,8 +151,13 @@ def recording_overview(recording_or_columns, mu_hat=None, truth_params=None,
     if right:
         ax = fig.add_subplot(grid[:, 1])
         positive = bool(np.all(creep > 0))
-        ax.scatter(creep, mu_hat, s=4, alpha=0.35, color="C4", lw=0, rasterized=n > 5000,
-                   label=r"observed $\hat\mu$", zorder=3)
+        used = np.ones(n, bool) if selection is None else selection.mask
+        ax.scatter(creep[used], mu_hat[used], s=4, alpha=0.35, color="C4", lw=0,
+                   rasterized=n > 5000, label=r"observed $\hat\mu$" + ("" if selection is None
+                                                                      else " (selected)"), zorder=3)
+        if not used.all():
+            ax.scatter(creep[~used], mu_hat[~used], s=3, alpha=0.2, color="0.6", lw=0,
+                       rasterized=n > 5000, label="excluded", zorder=2)
         if positive:
             ax.set_xscale("log")
         else:

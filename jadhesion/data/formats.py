@@ -1,0 +1,117 @@
+"""Binary recording formats: Parquet (pyarrow, extra ``parquet``) and MATLAB ``.mat`` v5 (scipy)
+and v7.3 (HDF5, h5py; extra ``mat``). :func:`read_columns` gives ``(header, columns)`` — the
+names in file order and float64 arrays (``None`` for a column that is not numeric) — which
+:func:`jadhesion.data.recording.load_recording` maps, converts and validates like a CSV's.
+
+* **Parquet**: one column a signal; integer, float and boolean columns are numeric (a null is
+  NaN, reported as not finite by the validation), others are ignored.
+* **.mat**: one variable a signal, a numeric vector (``n×1`` or ``1×n``); the row count is the
+  length most variables share; scalars, matrices and vectors of another length are ignored (listed
+  in the notes); ``__header__``-style entries and v7.3's ``#refs#`` are skipped.
+
+The optional packages are imported only here, only when such a file is read; a missing one is a
+one-line error naming the extra to install.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+
+from .validate import _fail
+
+#: File suffixes read by this module (lower case).
+PARQUET_SUFFIXES = (".parquet", ".pq")
+MAT_SUFFIXES = (".mat",)
+
+
+def _missing(name: str, package: str, extra: str):
+    return _fail(name, f"reading this format needs {package}: install jadhesion[{extra}]")
+
+
+def _parquet(path: Path, name: str):
+    try:  # optional dependency (extra ``parquet``)
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+    except ImportError:
+        raise _missing(name, "pyarrow", "parquet") from None
+    try:
+        table = pq.read_table(path)
+    except (pa.ArrowException, OSError) as exc:
+        raise _fail(name, f"not a readable Parquet file ({str(exc).splitlines()[0]})") from None
+    header, columns = [], []
+    for field, column in zip(table.schema, table.columns, strict=True):
+        header.append(field.name)
+        t = field.type
+        if pa.types.is_integer(t) or pa.types.is_floating(t) or pa.types.is_boolean(t):
+            values = column.cast(pa.float64()).to_numpy(zero_copy_only=False)
+            columns.append(np.asarray(values, dtype=np.float64))
+        else:
+            columns.append(None)
+    return header, columns, ()
+
+
+def _mat_variables(path: Path, name: str) -> dict:
+    try:  # optional dependency (extra ``mat``)
+        import h5py
+    except ImportError:
+        h5py = None
+    if h5py is not None and h5py.is_hdf5(path):  # MATLAB v7.3
+        with h5py.File(path, "r") as f:
+            return {k: np.asarray(v) for k, v in f.items()
+                    if isinstance(v, h5py.Dataset) and not k.startswith("#")}
+    try:
+        import scipy.io
+    except ImportError:
+        raise _missing(name, "scipy", "mat") from None
+    try:
+        data = scipy.io.loadmat(path)
+    except NotImplementedError:  # v7.3 without h5py
+        raise _missing(name, "h5py (MATLAB v7.3 files)", "mat") from None
+    except (ValueError, OSError, TypeError) as exc:
+        raise _fail(name, f"not a readable MATLAB .mat file ({str(exc).splitlines()[0]})") from None
+    return {k: v for k, v in data.items() if not k.startswith("__")}
+
+
+def _mat(path: Path, name: str):
+    variables = _mat_variables(path, name)
+    vectors = {}
+    skipped = []
+    for key, value in variables.items():
+        arr = np.asarray(value)
+        if arr.dtype.kind in "iufb" and arr.ndim <= 2 and arr.size >= 2 and min(arr.shape) == 1:
+            vectors[key] = arr.reshape(-1).astype(np.float64)
+        else:
+            skipped.append(key)
+    if not vectors:
+        raise _fail(name, "no numeric vector variables in the .mat file (one variable a signal, "
+                          "n×1 or 1×n)")
+    n = Counter(v.size for v in vectors.values()).most_common(1)[0][0]
+    skipped += [k for k, v in vectors.items() if v.size != n]
+    header = [k for k in vectors if vectors[k].size == n]
+    notes = (f"{name}: variable{'s' if len(skipped) > 1 else ''} "
+             f"{', '.join(map(repr, skipped))} ignored (not a numeric vector of {n} values)",
+             ) if skipped else ()
+    return header, [vectors[k] for k in header], notes
+
+
+def is_binary(path: Path) -> bool:
+    """Whether ``path``'s suffix names a format of this module."""
+    return path.suffix.lower() in PARQUET_SUFFIXES + MAT_SUFFIXES
+
+
+def read_columns(path: Path, name: str):
+    """``(header, columns, notes)`` of a Parquet or .mat file (module docstring)."""
+    if not path.exists():
+        raise _fail(name, "file not found")
+    if path.is_dir():
+        raise _fail(name, "is a directory, not a file")
+    reader = _parquet if path.suffix.lower() in PARQUET_SUFFIXES else _mat
+    header, columns, notes = reader(path, name)
+    if not header:
+        raise _fail(name, "no columns")
+    if columns and all(c is not None and c.size == 0 for c in columns):
+        raise _fail(name, "no data rows")
+    return header, columns, notes

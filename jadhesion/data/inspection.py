@@ -1,0 +1,94 @@
+"""What a recording holds before any fit: sampling (duration, rate, jitter, gaps), ranges of speed,
+creep, slip and μ̂ over the selected samples, the selection, and what the data can identify.
+
+**Identifiability rules** (on the selected samples; 1st–99th percentiles of the magnitudes, so a
+few noisy samples do not count):
+
+* slip velocity below :data:`SLIP_FOR_AB` (0.5 m/s) throughout: Polach's ``A`` and ``B`` (the fall
+  of the friction coefficient with slip velocity, ``μ = μ0 [(1 − A) e^{−B w} + A]``) change μ̂ by
+  less than the noise over the range: "A and B will not be identified";
+* the adhesion peak not passed — μ̂ (median per creep bin, :data:`CREEP_BINS` bins) highest in
+  the largest-creep bin: "μ0 weakly identified" (only the rising branch is seen);
+* smallest creep above :data:`CREEP_FOR_SLOPE` (0.005): the initial slope (``kA``) weakly
+  identified;
+* fewer than :data:`FEW_SAMPLES` samples selected: the standard errors will be rough.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .segments import Selection
+
+SLIP_FOR_AB = 0.5
+CREEP_FOR_SLOPE = 0.005
+CREEP_BINS = 8
+FEW_SAMPLES = 200
+
+
+def sampling(time) -> dict:
+    """``duration_s``, ``rate_hz`` (1 / median step), ``step_s`` {median, min, max} and ``jitter``
+    (standard deviation of the steps within 5× the median, over the median) of sample times [s]."""
+    time = np.asarray(time, dtype=np.float64)
+    if time.size < 2:
+        return {"duration_s": 0.0, "rate_hz": None, "step_s": None, "jitter": None}
+    dt = np.diff(time)
+    med = float(np.median(dt))
+    regular = dt[dt <= 5.0 * med]
+    return {"duration_s": float(time[-1] - time[0]), "rate_hz": 1.0 / med,
+            "step_s": {"median": med, "min": float(dt.min()), "max": float(dt.max())},
+            "jitter": float(np.std(regular) / med)}
+
+
+def _range(x) -> list | None:
+    x = np.asarray(x, dtype=np.float64)
+    return [float(x.min()), float(x.max())] if x.size else None
+
+
+def identifiability(creep, slip, adhesion) -> list:
+    """Remarks ``{code, message}`` on what the selected samples can identify (module docstring)."""
+    creep, slip, mu = (np.abs(np.asarray(a, dtype=np.float64)) for a in (creep, slip, adhesion))
+    notes = []
+    if creep.size < FEW_SAMPLES:
+        notes.append({"code": "few_samples", "message": f"only {creep.size} samples selected (fewer "
+                      f"than {FEW_SAMPLES}): standard errors will be rough"})
+    if creep.size == 0:
+        return notes
+    w_hi = float(np.percentile(slip, 99))
+    if w_hi < SLIP_FOR_AB:
+        notes.append({"code": "slip_range", "message": f"slip velocity never exceeds "
+                      f"{SLIP_FOR_AB:g} m/s (99th percentile {w_hi:.3g} m/s): A and B will not be "
+                      f"identified"})
+    edges = np.quantile(creep, np.linspace(0.0, 1.0, CREEP_BINS + 1))
+    which = np.clip(np.searchsorted(edges, creep, side="right") - 1, 0, CREEP_BINS - 1)
+    medians = [np.median(mu[which == k]) if np.any(which == k) else -np.inf
+               for k in range(CREEP_BINS)]
+    if int(np.argmax(medians)) == CREEP_BINS - 1:
+        notes.append({"code": "no_peak", "message": f"creep never passes the adhesion peak (μ̂ "
+                      f"still rising at creep {float(np.percentile(creep, 99)):.3g}): μ0 weakly "
+                      f"identified, the falling branch not seen"})
+    s_lo = float(np.percentile(creep, 1))
+    if s_lo > CREEP_FOR_SLOPE:
+        notes.append({"code": "no_small_creep", "message": f"creep never below {s_lo:.3g} (1st "
+                      f"percentile): the initial slope (kA) weakly identified"})
+    return notes
+
+
+def inspect_document(recording, selection: Selection, dataset) -> dict:
+    """The inspection of ``recording`` as JSON: ``file``, ``samples``, ``columns``, ``sources``,
+    ``notes``, ``sampling`` (:func:`sampling`, with ``gaps``), ``ranges`` of the selected samples
+    (``vehicle_speed`` [m/s], ``creep`` [-], ``slip_velocity`` [m/s], ``adhesion`` μ̂ [-]) and
+    ``ranges_all`` of every sample's speeds, ``selection`` and ``identifiability``."""
+    cols = recording.columns
+    timing = sampling(cols["time"]) if "time" in cols else {"duration_s": None, "rate_hz": None,
+                                                          "step_s": None, "jitter": None}
+    timing["gaps"] = [list(g) for g in selection.gaps]
+    ranges = {"vehicle_speed": _range(dataset.vehicle_speed), "creep": _range(dataset.creep),
+              "slip_velocity": _range(dataset.slip), "adhesion": _range(dataset.adhesion)}
+    every = {c: _range(cols[c]) for c in ("vehicle_speed", "wheel_speed", "traction_torque")
+             if c in cols}
+    return {"file": str(recording.path), "samples": recording.n_samples,
+            "columns": sorted(cols), "sources": dict(recording.sources),
+            "notes": list(recording.notes), "sampling": timing, "ranges": ranges,
+            "ranges_all": every, "selection": selection.document(),
+            "identifiability": identifiability(dataset.creep, dataset.slip, dataset.adhesion)}

@@ -1,0 +1,134 @@
+"""Parquet and MATLAB .mat (v5, v7.3) recordings: the same column map, validation and dataset as the
+CSV; missing optional packages and bad files give one line naming the file, column and row."""
+
+import builtins
+import json
+
+import h5py
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+import pytest
+import scipy.io
+from logger_data import LOGGER_MAP, logger_columns, stretches_si, write_logger_file
+
+from jadhesion.cli import main
+from jadhesion.data.dataset import to_dataset
+from jadhesion.data.recording import load_recording
+from jadhesion.errors import RecordingError
+
+
+def _sidecar(csv, target):
+    target.with_suffix(".json").write_text(csv.with_suffix(".json").read_text())
+    return target
+
+
+def write_parquet(cols, path):
+    pq.write_table(pa.table({**cols, "driver": ["A"] * len(cols["t_ms"])}), path)
+    return path
+
+
+def write_mat5(cols, path):
+    scipy.io.savemat(path, {**{k: v.reshape(-1, 1) for k, v in cols.items()}, "rate_hz": 100.0})
+    return path
+
+
+def write_mat73(cols, path):
+    with h5py.File(path, "w") as f:  # MATLAB v7.3 stores an n×1 vector as a 1×n dataset
+        for k, v in cols.items():
+            f.create_dataset(k, data=v.reshape(1, -1))
+        f.create_dataset("rate_hz", data=np.array([[100.0]]))
+    return path
+
+
+WRITERS = {"parquet": (write_parquet, ".parquet"), "mat5": (write_mat5, ".mat"),
+           "mat73": (write_mat73, ".mat")}
+
+
+@pytest.fixture(scope="module")
+def csv(tmp_path_factory):
+    return write_logger_file(tmp_path_factory.mktemp("fmt") / "log.csv")
+
+
+@pytest.mark.parametrize("fmt", sorted(WRITERS))
+def test_round_trip_gives_the_csv_dataset(csv, tmp_path, fmt):
+    writer, suffix = WRITERS[fmt]
+    path = _sidecar(csv, writer(logger_columns(stretches_si()), tmp_path / f"log{suffix}"))
+    rec, ref = load_recording(path), load_recording(csv)
+    assert rec.sources == ref.sources and set(rec.columns) == set(ref.columns)
+    for k, v in ref.columns.items():
+        np.testing.assert_array_equal(rec.columns[k], v)
+    if fmt != "parquet":
+        assert any("'rate_hz' ignored" in n for n in rec.notes)
+    else:
+        assert any("'driver' ignored" in n for n in rec.notes)
+    for a, b in zip(to_dataset(rec, creep="raw"), to_dataset(ref, creep="raw"), strict=True):
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+
+
+def test_cli_inspect_reads_parquet_with_column_flags(csv, tmp_path, capsys):
+    path = write_parquet(logger_columns(stretches_si()), tmp_path / "log.parquet")  # no sidecar
+    argv = ["inspect", str(path), "--json"] + [x for c in LOGGER_MAP for x in ("--column", c)]
+    assert main(argv) == 0
+    assert json.loads(capsys.readouterr().out)["selection"]["used"] == 700
+
+
+def test_bad_values_name_file_column_row(tmp_path):
+    cols = logger_columns(stretches_si())
+    cols["v_Lok_kmh"] = cols["v_Lok_kmh"].copy()
+    cols["v_Lok_kmh"][16] = np.nan
+    path = write_parquet(cols, tmp_path / "nan.parquet")
+    with pytest.raises(RecordingError) as info:
+        load_recording(path, columns=LOGGER_MAP)
+    assert str(info.value) == (f"{path}: column 'v_Lok_kmh', row 17: nan is not a finite number "
+                               f"(NaN, a missing value, and inf are not allowed)")
+    cols = logger_columns(stretches_si())
+    path = write_mat5(cols, tmp_path / "kmh.mat")
+    with pytest.raises(RecordingError, match=r"kmh.mat: column 'v_Lok_kmh', row 101: median "
+                                             r".* --column vehicle_speed=v_Lok_kmh\[km/h\]$"):
+        load_recording(path, columns=["time=t_ms[ms]", "vehicle_speed=v_Lok_kmh",
+                                      "wheel_speed=n_Rad[rpm]", "traction_torque=M_Rad_kNm[kNm]"])
+    text = tmp_path / "text.parquet"
+    pq.write_table(pa.table({"time": ["a", "b"], "vehicle_speed": [1.0, 1.0],
+                             "wheel_speed": [1.0, 1.0], "traction_torque": [1.0, 1.0]}), text)
+    with pytest.raises(RecordingError, match="text.parquet: column 'time': not numeric"):
+        load_recording(text)
+    junk = tmp_path / "junk.mat"
+    junk.write_bytes(b"not a mat file at all" * 10)
+    with pytest.raises(RecordingError, match="junk.mat: not a readable MATLAB .mat file"):
+        load_recording(junk)
+    with pytest.raises(RecordingError, match="junk.parquet: not a readable Parquet file"):
+        load_recording(junk.rename(tmp_path / "junk.parquet"))
+
+
+@pytest.mark.parametrize("fmt,module,extra", [("parquet", "pyarrow", "parquet"),
+                                              ("mat5", "scipy", "mat")])
+def test_missing_optional_package_is_one_line(tmp_path, monkeypatch, fmt, module, extra):
+    writer, suffix = WRITERS[fmt]
+    path = writer(logger_columns(stretches_si()), tmp_path / f"log{suffix}")
+    real_import = builtins.__import__
+
+    def no_module(name, *args, **kwargs):
+        if name == module or name.startswith(module + "."):
+            raise ImportError(name)
+        return real_import(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", no_module)
+    if fmt == "mat5":
+        monkeypatch.setattr(h5py, "is_hdf5", lambda p: False)
+    with pytest.raises(RecordingError) as info:
+        load_recording(path, columns=LOGGER_MAP)
+    assert str(info.value).endswith(f"install jadhesion[{extra}]") and str(path) in str(info.value)
+
+
+def test_cli_bad_input_exits_2_one_line_nothing_written(tmp_path, capsys):
+    path = write_parquet(logger_columns(stretches_si()), tmp_path / "log.parquet")
+    before = set(tmp_path.iterdir())
+    for extra, expected in [(["--column", "vehicle_speed=nope"], "no column 'nope' in the file"),
+                            (LOGGER_MAP[:3], "missing column 'traction_torque'")]:
+        argv = ["inspect", str(path), "--json", "--plot", str(tmp_path / "plots")]
+        argv += [x for c in extra for x in ("--column", c)] if extra[0] != "--column" else extra
+        assert main(argv) == 2
+        out, err = capsys.readouterr()
+        assert out == "" and err.count("\n") == 1 and expected in err and str(path) in err
+    assert set(tmp_path.iterdir()) == before

@@ -1,0 +1,68 @@
+"""``jadhesion inspect``: sampling, gaps, ranges, selection and identifiability of a logger file."""
+
+import json
+
+import numpy as np
+import pytest
+from logger_data import write_logger_file
+
+from jadhesion.cli import main
+from jadhesion.data.inspection import identifiability, sampling
+
+
+@pytest.fixture(scope="module")
+def logger_file(tmp_path_factory):
+    return write_logger_file(tmp_path_factory.mktemp("inspect") / "log.csv")
+
+
+def test_inspect_json_values(logger_file, capsys, tmp_path):
+    assert main(["inspect", str(logger_file), "--json", "--plot", str(tmp_path / "plots")]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["samples"] == 1200 and doc["sources"]["vehicle_speed"] == "v_Lok_kmh[km/h]"
+    s = doc["sampling"]
+    assert s["duration_s"] == pytest.approx(13.99) and s["rate_hz"] == pytest.approx(100.0)
+    assert s["step_s"]["max"] == pytest.approx(2.01) and s["jitter"] < 1e-9
+    assert s["gaps"] == [[pytest.approx(8.99), pytest.approx(11.0)]]
+    r = doc["ranges"]  # over the 700 traction samples: speed 2..2.1 and 3..3.15 m/s, creep 1-2 %
+    assert r["vehicle_speed"] == pytest.approx([2.0, 3.15], abs=1e-3)
+    assert r["creep"] == pytest.approx([0.01, 0.02], abs=5e-4)
+    assert r["slip_velocity"][1] == pytest.approx(0.063, abs=1e-3)
+    sel = doc["selection"]
+    assert sel["used"] == 700 and [e["reason"] for e in sel["excluded"]] == [
+        "standstill", "coasting", "braking"]
+    codes = [n["code"] for n in doc["identifiability"]]
+    assert codes == ["slip_range", "no_small_creep"]
+    assert "slip velocity never exceeds 0.5 m/s" in doc["identifiability"][0]["message"]
+    assert (tmp_path / "plots" / "inspect.png").stat().st_size > 20_000
+
+
+def test_inspect_text_and_braking(logger_file, capsys):
+    assert main(["inspect", str(logger_file), "--phase", "braking"]) == 0
+    out = capsys.readouterr().out
+    assert "selected: 300 of 1200 samples (braking); 2 stretch(es)" in out
+    assert "excluded traction: 11–13.99 s, 300 samples" in out
+    assert "gap 8.99 s → 11 s" in out
+
+
+def test_identifiability_rules():
+    s = np.geomspace(1e-3, 0.3, 400)
+    rising = identifiability(s, s * 3.0, 0.4 * s / (0.01 + s))     # w up to 0.9 m/s, no peak
+    assert [n["code"] for n in rising] == ["no_peak"]
+    peaked = identifiability(s, s * 3.0, 0.4 * s / (0.01 + s) * np.exp(-3 * s))
+    assert peaked == []
+    few = identifiability(s[:50] + 0.01, s[:50], s[:50])
+    assert [n["code"] for n in few] == ["few_samples", "slip_range", "no_peak", "no_small_creep"]
+
+
+def test_sampling_jitter():
+    t = np.arange(1000) * 0.01 + np.random.default_rng(0).uniform(-1e-3, 1e-3, 1000)
+    doc = sampling(t)
+    assert doc["rate_hz"] == pytest.approx(100.0, rel=1e-2)
+    assert doc["jitter"] == pytest.approx(np.sqrt(2 / 3) * 0.1, rel=0.1)  # two uniforms of ±1e-3
+
+
+def test_inspect_bad_plot_dir(logger_file, tmp_path, capsys):
+    (tmp_path / "f").write_text("x")
+    assert main(["inspect", str(logger_file), "--plot", str(tmp_path / "f")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--plot" in err
