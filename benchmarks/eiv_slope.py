@@ -16,6 +16,8 @@ errors-in-variables residual ``E[mu_adh] − mu_hat`` over ``w ~ N(slip, slip_sd
   ``--foreign-duration`` s, written to CSV and read back by ``load_recording`` (what ``jadhesion
   fit`` sees).
 
+``eiv_sd2`` (``--residuals``) is an experiment: the EIV residual with the slip sd doubled.
+
 Recorded per fit: the initial slope ``(kA + kS)/2`` against the truth (within 25 %?), ``|μ0
 error|``, the MAE of the fitted curve to μ̂, and the wall time of the fit. The JSON records the git
 commit and every setting.
@@ -43,7 +45,18 @@ from jadhesion.data.simulator import simulate_many  # noqa: E402
 from jadhesion.identify import polach_fit  # noqa: E402
 from validation.foreign_generator import generate, write  # noqa: E402
 
-RESIDUALS = {"plain": polach_fit.polach_residual, "eiv": polach_fit.polach_eiv_residual}
+def _inflated(factor):
+    """The EIV residual with the smoother's slip sd multiplied by ``factor`` (an experiment: the
+    smoothed sd understates the error under coloured sensor noise)."""
+    def residual(theta, data):
+        if data.slip_sd is None:
+            return polach_fit.polach_residual(theta, data)
+        return polach_fit.polach_eiv_residual(theta, data._replace(slip_sd=factor * data.slip_sd))
+    return residual
+
+
+RESIDUALS = {"plain": polach_fit.polach_residual, "eiv": polach_fit.polach_eiv_residual,
+             "eiv_sd2": _inflated(2.0)}
 NAMES = ("kA", "kS", "mu0", "A", "B")
 
 
@@ -117,6 +130,7 @@ def main(argv=None):
     p.add_argument("--foreign-duration", type=float, default=30.0)
     p.add_argument("--foreign-sensors", default="realistic,mild")
     p.add_argument("--profiles", default="start")
+    p.add_argument("--residuals", default="plain,eiv", help=f"of {', '.join(RESIDUALS)}")
     p.add_argument("--save", default="benchmarks/results/eiv_slope.json")
     args = p.parse_args(argv)
     t_start = time.time()
@@ -131,7 +145,7 @@ def main(argv=None):
                     sets += list(foreign(args.foreign, args.foreign_rate, args.foreign_duration, s,
                                          prof, tmp))
     results, summary = {}, {}
-    for residual in RESIDUALS:
+    for residual in args.residuals.split(","):
         for key, datasets, truths in sets:
             fits, seconds = fit_with(residual, datasets)
             block = score(fits, seconds, truths)
