@@ -2,7 +2,9 @@
 
 Population methods minimise the paper's fitness (eq 15), the mean absolute error
 ``MAE = (1/N) Σ |mu_adh(theta; s_i, w_i) − mu_hat_i|`` over the box ``[0, 1]⁵``; LM minimises the
-sum of squares over the same box (projected LM, :func:`.lm.box_lm`), seeded by a random search on
+sum of squares over the same box — of :func:`polach_eiv_residual`, the expected curve over the
+smoothed slip's uncertainty when the dataset has ``slip_sd`` (errors in variables), else of
+:func:`polach_residual` — (projected LM, :func:`.lm.box_lm`), seeded by a random search on
 a subsample ("global LM", :data:`LM_POP`), and reports the MAE as well. Datasets are pytrees: :func:`fit_polach_batch` vmaps
 over a leading axis of stacked datasets and keys, compiled once per shape.
 """
