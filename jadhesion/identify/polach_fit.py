@@ -2,7 +2,9 @@
 
 Population methods minimise the paper's fitness (eq 15), the mean absolute error
 ``MAE = (1/N) Σ |mu_adh(theta; s_i, w_i) − mu_hat_i|`` over the box ``[0, 1]⁵``; LM minimises the
-sum of squares over the same box (projected LM, :func:`.lm.box_lm`), seeded by a random search on
+sum of squares over the same box — of :func:`polach_eiv_residual`, the expected curve over the
+smoothed slip's uncertainty when the dataset has ``slip_sd`` (errors in variables), else of
+:func:`polach_residual` — (projected LM, :func:`.lm.box_lm`), seeded by a random search on
 a subsample ("global LM", :data:`LM_POP`), and reports the MAE as well. Datasets are pytrees: :func:`fit_polach_batch` vmaps
 over a leading axis of stacked datasets and keys, compiled once per shape.
 """
@@ -54,6 +56,21 @@ def polach_residual(theta, data: PolachDataset):
     return r if data.weight is None else r * data.weight
 
 
+def polach_eiv_residual(theta, data: PolachDataset):
+    """LM's residual: ``E[mu_adh(theta; w)] − mu_hat`` per sample, shape (n,), the expectation over
+    the smoothed slip's posterior ``w ~ N(slip, slip_sd²)`` (errors in variables, regression
+    calibration: :func:`.likelihood.curve_moments`, 7-node Gauss–Hermite, 7× the plain cost).
+    Differencing noisy speeds scatters the slip around the truth, and fitting ``mu_adh`` at the
+    scattered slips flattens the identified initial slope; the expected curve is flatter than the
+    true one by the same smearing, so fitting it returns the steep one. Equal to
+    :func:`polach_residual` without ``slip_sd`` (raw creep, creepage files) and to within
+    ``O(slip_sd²)`` on clean sensors."""
+    if data.slip_sd is None:
+        return polach_residual(theta, data)
+    from .likelihood import curve_moments  # noqa: PLC0415 (likelihood imports the dataset only)
+    return curve_moments(theta, data)[0] - data.adhesion
+
+
 def mean_abs(r):
     """Mean of ``|r|`` over the last axis, written as ``|r| · (1/n)``: a matrix–vector product once
     a population is vmapped. XLA:CPU's fused abs-and-reduce runs a 50 × 1000 population evaluation
@@ -78,6 +95,8 @@ def _box(dtype):
     return jnp.zeros(5, dtype), jnp.ones(5, dtype)
 
 
+#: The residual LM minimises (population methods keep the paper's MAE of :func:`polach_residual`).
+LM_RESIDUAL = polach_eiv_residual
 #: Samples (at most) used by the global-LM seeding search and multi-start (strided subsample).
 SEED_SAMPLES = 128
 #: Work-queue lanes of a batched global LM: the subsample runs are small, so more of them step
@@ -99,15 +118,16 @@ def subsample(data: PolachDataset, n_max: int = SEED_SAMPLES) -> PolachDataset:
                              adhesion=data.adhesion[idx], vehicle_speed=data.vehicle_speed[idx],
                              weight=data.weight[idx])
     idx = np.linspace(0, n - 1, n_max).round().astype(np.int32)
+    sd = {k: getattr(data, k)[idx] for k in ("slip_sd", "creep_sd") if getattr(data, k) is not None}
     return data._replace(creep=data.creep[idx], slip=data.slip[idx], adhesion=data.adhesion[idx],
-                         vehicle_speed=data.vehicle_speed[idx])
+                         vehicle_speed=data.vehicle_speed[idx], **sd)
 
 
 def _fit(method, pop_size, max_iter, use_target, data, key, target):
     bounds = _box(data.adhesion.dtype)
     if method == "lm":
         seed_data = subsample(data)
-        out, n_pop = global_lm(polach_residual, bounds, key, data, n_starts=LM_STARTS,
+        out, n_pop = global_lm(LM_RESIDUAL, bounds, key, data, n_starts=LM_STARTS,
                                pop_size=LM_POP, search_iter=LM_SEARCH_ITER,
                                search_args=None if seed_data is data else seed_data,
                                max_steps=LM_MAX_STEPS)
@@ -144,14 +164,14 @@ def _global_lm_many(data, keys, target, use_target):
     bounds = _box(data.adhesion.dtype)
     seed_data = jax.vmap(subsample)(data)
     starts, n_pop = jax.vmap(lambda d, k: seed_starts(
-        polach_residual, bounds, k, d, n_starts=LM_STARTS, pop_size=LM_POP,
+        LM_RESIDUAL, bounds, k, d, n_starts=LM_STARTS, pop_size=LM_POP,
         search_iter=LM_SEARCH_ITER))(seed_data, keys)
     n = starts.shape[0]
     repeated = jax.tree.map(lambda a: jnp.repeat(a, LM_STARTS, axis=0), seed_data)
-    seeded = box_lm_queue(polach_residual, starts.reshape(n * LM_STARTS, -1), repeated, bounds,
+    seeded = box_lm_queue(LM_RESIDUAL, starts.reshape(n * LM_STARTS, -1), repeated, bounds,
                           max_steps=LM_MAX_STEPS, lanes=SEED_LANES)
     seeded = jax.vmap(best_of)(jax.tree.map(lambda a: a.reshape((n, LM_STARTS) + a.shape[1:]), seeded))
-    polish = box_lm_queue(polach_residual, seeded.params, data, bounds, max_steps=LM_MAX_STEPS)
+    polish = box_lm_queue(LM_RESIDUAL, seeded.params, data, bounds, max_steps=LM_MAX_STEPS)
     r = jax.vmap(polach_residual)(polish.params, data)
     mae = mean_abs(r) if data.weight is None else jax.vmap(dataset_mae)(r, data)
     steps = seeded.steps + polish.steps
