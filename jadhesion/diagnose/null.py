@@ -25,9 +25,11 @@ Bonferroni or Holm would need R ≥ 7/α − 1 = 139 replicas to be able to reje
 from __future__ import annotations
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 from scipy.signal import lfilter
 
+from ..data.creep_state import smooth_creep
 from ..data.observer import lowpass_foh
 from ..data.vehicle import GRAVITY, Vehicle
 from . import extensions as ext
@@ -42,8 +44,14 @@ ALPHA = 0.05
 HALF = 2
 #: Samples on a quantisation grid: at least this share of |x/q − round(x/q)| below 1e-6.
 GRID_SHARE = 0.9
+#: Tolerance [steps] of "on the grid" (CSV files keep a finite number of digits).
+GRID_TOL = 1e-3
 
-_fit_batch = jax.jit(jax.vmap(fitting.fit_candidates, in_axes=(None, None, None, 0, None)))
+@jax.jit
+def _fit_batch(starts, idx, actives, batch, n_valid):
+    """:func:`fitting.fit_candidates` of every replica in ``batch``, one after another."""
+    return jax.lax.map(lambda s: fitting.fit_candidates(starts, idx, actives, s, n_valid)._replace(
+        residual=jnp.zeros(0)), batch)
 
 
 def local_mean(x, half: int = HALF) -> np.ndarray:
@@ -95,18 +103,52 @@ def _noisy(clean, model, rng):
     return np.round(x / model["q"]) * model["q"] if model["q"] > 0 else x
 
 
+def _grid_step(x) -> float:
+    """Quantisation step of a signal (0 when its samples are not on a grid)."""
+    steps = np.abs(np.diff(x))
+    steps = steps[steps > 0]
+    q = float(np.min(steps)) if steps.size else 0.0
+    on_grid = q > 0 and np.mean(np.abs(x / q - np.round(x / q)) < GRID_TOL) >= GRID_SHARE
+    return q if on_grid else 0.0
+
+
+def residual_model(raw, latent, floor: float = 0.0, q=None) -> dict:
+    """``{"sigma", "rho", "q"}`` of a speed sensor's noise from its residual about the smoothed
+    latent speed: lag-1 autocorrelation ρ (clipped to [0, 0.98]), the level σ with the
+    quantisation's share q²/12 taken out (it is put back by rounding the replica to the grid)."""
+    e = np.asarray(raw, float) - np.asarray(latent, float)
+    e = e - e.mean()
+    q = _grid_step(np.asarray(raw, float)) if q is None else q
+    rho = float(np.clip(np.dot(e[1:], e[:-1]) / max(np.dot(e, e), 1e-300), 0.0, 0.98))
+    sigma = float(np.sqrt(max(np.mean(e * e) - q * q / 12.0, 0.25 * np.mean(e * e), floor ** 2)))
+    return {"sigma": sigma, "rho": rho, "q": q}
+
+
 def replicas(columns: dict, vehicle: Vehicle, p_base, n_replicas: int, seed: int) -> tuple:
     """``(list of replica column dicts, noise models per signal)`` (module docstring)."""
     t = np.asarray(columns["time"], float)
     raw = {k: np.asarray(columns[k], float) for k in RAW}
-    models = {k: noise_model(raw[k]) for k in RAW[1:]}
-    slow = from_columns({"time": t, **{k: local_mean(raw[k]) for k in RAW[1:]}}, vehicle)
-    _, mu = ext.predict(np.asarray(p_base), np.zeros(ext.N_EXTRA, bool), slow)
-    measured = from_columns(raw, vehicle)
+    est = smooth_creep(t, raw["wheel_speed"], raw["vehicle_speed"], raw["traction_torque"],
+                       vehicle.wheelset_inertia_kgm2, vehicle.wheel_radius_m,
+                       vehicle.axle_load_kg)
+    v_lat = np.asarray(est.vehicle_speed)
+    w_lat = v_lat + np.asarray(est.slip)
+    floor_w, floor_v = (float(x) for x in np.asarray(est.measurement_sd))
+    models = {"vehicle_speed": residual_model(raw["vehicle_speed"], v_lat, floor_v),
+              "wheel_speed": residual_model(raw["wheel_speed"], w_lat, floor_w)}
     scale = vehicle.axle_load_kg * GRAVITY * vehicle.wheel_radius_m
-    clean_torque = (np.asarray(mu) + np.asarray(measured.deriv_mu)) * scale
+    none = np.zeros(ext.N_EXTRA, bool)
+    latent = from_columns({"time": t, "vehicle_speed": v_lat, "wheel_speed": w_lat,
+                           "traction_torque": raw["traction_torque"]}, vehicle)
+    _, mu = ext.predict(np.asarray(p_base), none, latent)
+    clean_torque = (np.asarray(mu) + np.asarray(latent.deriv_mu)) * scale
+    models["traction_torque"] = residual_model(raw["traction_torque"], clean_torque,
+                                               q=_grid_step(raw["traction_torque"]))
     rng = np.random.default_rng(seed)
-    out = [{**raw, "traction_torque": _noisy(clean_torque, models["traction_torque"], rng)}
+    out = [{"time": t,
+            "vehicle_speed": _noisy(v_lat, models["vehicle_speed"], rng),
+            "wheel_speed": _noisy(w_lat, models["wheel_speed"], rng),
+            "traction_torque": _noisy(clean_torque, models["traction_torque"], rng)}
            for _ in range(n_replicas)]
     return out, models
 
@@ -117,7 +159,8 @@ def null_gains(columns, vehicle, p_base, tau_heat, rows, merge, n_valid: int,
 
     ``rows = (starts, idx, actives)`` are the observed recording's round-1 rows (base first) and
     ``merge(table) -> table`` the same post-processing (best radius start); ``tau_heat`` the
-    thermal lag picked on the recording.
+    thermal lag picked on the recording. Replicas are fitted one after another
+    (:func:`jax.lax.map` inside one compiled program), so memory does not grow with R.
     """
     cols, models = replicas(columns, vehicle, p_base, n_replicas, seed)
     sigs = []
@@ -129,7 +172,7 @@ def null_gains(columns, vehicle, p_base, tau_heat, rows, merge, n_valid: int,
     tables = _fit_batch(*rows, batch, n_valid)
     gains = []
     for r in range(n_replicas):
-        table = merge({k: np.array(v[r]) for k, v in tables._asdict().items()})
+        table = merge({k: np.array(v[r]) for k, v in tables._asdict().items() if k != "residual"})
         held = table["heldout_mae"]
         ok = (table["status"] == 0) & (table["fold_status"] == 0)
         g = np.where(ok[1:], 1.0 - held[1:] / held[0], -np.inf)
