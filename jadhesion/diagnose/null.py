@@ -14,8 +14,9 @@ it, so the errors-in-variables bias of the base fit is present in the null too (
 the speed noise that the local average removes; the wheel speed's noise cannot be told from the
 stiff wheelset's slip dynamics by differences, so it is not re-drawn).
 
-**Test.** Every replica runs the same round-1 candidate fits (one compiled program, vmapped over
-replicas × candidates × cross-validation folds). With ``G_r = max_c gain_{r,c}`` the largest gain
+**Test.** Every replica runs the same round-1 candidate fits (one compiled program: vmapped over
+candidates × cross-validation folds, replicas one after another by ``lax.map`` so the Jacobian
+memory does not grow with R). With ``G_r = max_c gain_{r,c}`` the largest gain
 among the replica's candidates, candidate c's p-value is ``(1 + #{r: G_r ≥ gain_c})/(R + 1)``
 (single-step max-T, Westfall & Young 1993): rejecting at ``p ≤ α`` holds the family-wise false
 alarm rate over all candidates at α by construction (up to the re-synthesis being faithful).
