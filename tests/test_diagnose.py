@@ -207,3 +207,16 @@ def test_max_t_pvalues_hold_their_level():
         g = rng.standard_normal((20, 7))
         rejections += np.min(null.max_t_pvalues(g[0], g[1:])) <= 0.05
     assert rejections / 2000 <= 0.05 + 3 * np.sqrt(0.05 * 0.95 / 2000)
+
+
+def test_residual_model_and_grid_from_csv_digits():
+    """The speed-noise model of the latent re-synthesis: AR(1) level/colour about a known latent,
+    and a quantisation grid still found when values carry only ~9 significant digits."""
+    rng = np.random.default_rng(3)
+    latent = np.linspace(2.0, 4.0, 20000)
+    noise = null._noisy(np.zeros(latent.size), {"sigma": 2e-3, "rho": 0.6, "q": 0.0}, rng)
+    m = null.residual_model(latent + noise, latent)
+    assert abs(m["sigma"] / 2e-3 - 1) < 0.05 and abs(m["rho"] - 0.6) < 0.03 and m["q"] == 0.0
+    q = 4.3239e-3
+    x = np.array([float(f"{v:.9g}") for v in np.round((latent + noise) / q) * q])
+    assert abs(null._grid_step(x) / q - 1) < 1e-6
