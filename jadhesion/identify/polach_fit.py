@@ -22,6 +22,7 @@ from ..data.dataset import PolachDataset
 from ..models.polach import polach_adhesion
 from ..errors import InputError
 from .driver import STALL_FTOL, run_until
+from .likelihood import curve_moments
 from .lm import best_of, box_lm_queue, global_lm, seed_starts
 from .methods import NAMES as METHODS
 from .methods import POPULATION as ALGORITHMS
@@ -67,8 +68,8 @@ def polach_eiv_residual(theta, data: PolachDataset):
     ``O(slip_sd²)`` on clean sensors."""
     if data.slip_sd is None:
         return polach_residual(theta, data)
-    from .likelihood import curve_moments  # noqa: PLC0415 (likelihood imports the dataset only)
-    return curve_moments(theta, data)[0] - data.adhesion
+    r = curve_moments(theta, data)[0] - data.adhesion
+    return r if data.weight is None else r * data.weight
 
 
 def mean_abs(r):

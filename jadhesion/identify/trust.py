@@ -4,7 +4,9 @@
 returns the JSON-ready block of ``jadhesion fit``: ``uncertainty`` {param: {``stderr``, ``ci95``}},
 ``correlation`` (5 × 5, order kA, kS, mu0, A, B), ``warnings`` [{``code``, ``params``,
 ``message``}] and ``hac_lags``. Standard errors are the HAC sandwich of :mod:`.uncertainty` (the
-observer colours the noise); ``ci95 = θ ± 1.96·stderr`` clipped to the box [0, 1].
+observer colours the noise) of LM's residual :data:`.polach_fit.LM_RESIDUAL` (the expected curve
+over the smoothed slip's uncertainty, the plain one without it); ``ci95 = θ ± 1.96·stderr``
+clipped to the box [0, 1].
 
 Warning codes:
 
@@ -25,7 +27,7 @@ import numpy as np
 
 from ..models.polach import PARAM_NAMES
 from ..status import status_of
-from .polach_fit import RECOMMENDED_SAMPLES, polach_residual
+from .polach_fit import LM_RESIDUAL, RECOMMENDED_SAMPLES
 from .uncertainty import Z95, correlation, covariance
 
 #: Distance from a face of the unit box at which a parameter counts as on its bound.
@@ -41,8 +43,8 @@ def _warning(code, params, message):
 def fit_report(data, fit) -> dict:
     """The trust block of a fit of ``data`` (see the module docstring)."""
     theta = np.asarray(fit.params, float)
-    r = polach_residual(fit.params, data)
-    jac = jax.jacfwd(polach_residual)(fit.params, data)
+    r = LM_RESIDUAL(fit.params, data)
+    jac = jax.jacfwd(LM_RESIDUAL)(fit.params, data)
     fixed = (theta <= BOUND_TOL) | (theta >= 1 - BOUND_TOL)
     cov, lags = covariance(jac, r, np.asarray(fixed))
     cov = np.asarray(cov)
