@@ -37,8 +37,9 @@ def _write(path: Path, rows: int) -> None:
     t = np.arange(rows) * 0.01 + rng.uniform(-1e-4, 1e-4, rows)  # 100 Hz with jitter
     v = 5.0 + 2.0 * np.sin(t / 60.0)
     torque = 0.25 * LOCO_22E.axle_weight_n * LOCO_22E.wheel_radius_m * np.ones(rows)
-    save_recording({"time": t, "vehicle_speed": v, "wheel_speed": v * 1.01,
-                    "traction_torque": torque}, LOCO_22E, path)
+    save_recording(
+        {"time": t, "vehicle_speed": v, "wheel_speed": v * 1.01, "traction_torque": torque}, LOCO_22E, path
+    )
 
 
 def main(argv=None) -> dict:
@@ -50,8 +51,9 @@ def main(argv=None) -> dict:
         _write(path, args.rows)
         results = {}
         for name, imp in READERS.items():
-            proc = subprocess.run([sys.executable, "-c", _CHILD.format(imp=imp), str(path)],
-                                  capture_output=True, text=True)
+            proc = subprocess.run(
+                [sys.executable, "-c", _CHILD.format(imp=imp), str(path)], capture_output=True, text=True
+            )
             if proc.returncode != 0:
                 results[name] = {"skipped": proc.stderr.strip().splitlines()[-1]}
                 continue

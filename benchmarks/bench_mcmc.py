@@ -39,15 +39,26 @@ jax.config.update("jax_enable_x64", True)
 
 from jadhesion.cli.common import emit_json, table  # noqa: E402
 from jadhesion.data.scenarios import SCENARIOS  # noqa: E402
-from validation.calibration import (QUANTITIES, binomial_band, coverage_study,  # noqa: E402
-                                            synthetic_dataset)
+from jadhesion.data.simulator import (
+    result_dataset,
+    simulate_batch,
+    simulate_dataset,  # noqa: E402
+    simulate_many,
+)
 from jadhesion.identify.ensemble import ChainTooShortWarning, run_ensemble  # noqa: E402
 from jadhesion.identify.laplace import initial_spread, lm_optimum  # noqa: E402
-from jadhesion.identify.likelihood import (LOG_SCALE_BOUNDS, ensemble_log_prob,  # noqa: E402
-                                           recording_observer_terms)
-from jadhesion.data.simulator import (result_dataset, simulate_batch, simulate_dataset,  # noqa: E402
-                                      simulate_many)
+from jadhesion.identify.likelihood import (
+    LOG_SCALE_BOUNDS,
+    ensemble_log_prob,  # noqa: E402
+    recording_observer_terms,
+)
 from jadhesion.identify.mcmc import initial_ball  # noqa: E402
+from validation.calibration import (
+    QUANTITIES,
+    binomial_band,
+    coverage_study,  # noqa: E402
+    synthetic_dataset,
+)
 
 TRUTH_LO, TRUTH_HI = np.array([0.3, 0.2, 0.25, 0.2, 0.4]), np.array([0.9, 0.8, 0.45, 0.6, 1.0])
 
@@ -58,7 +69,7 @@ def numpy_log_prob(data):
     k_eps, n = float(data.k_eps), s.shape[1]
 
     def log_prob(phi):
-        ka, ks, mu0, a, b, ls = (phi[:, i:i + 1] for i in range(6))
+        ka, ks, mu0, a, b, ls = (phi[:, i : i + 1] for i in range(6))
         mu = np.maximum(mu0 * ((1 - a) * np.exp(-b * np.abs(w)) + a), 1e-12)
         eps = np.clip(k_eps * s / mu, -1e8, 1e8)
         model = (2 * mu / np.pi) * (ka * eps / (1 + (ka * eps) ** 2) + np.arctan(ks * eps))
@@ -88,16 +99,21 @@ def bench_speed(walkers, steps, n_points, seed=0, nuts=False):
     data = simulate_dataset("dry", seed, n_samples=n_points)
     theta0 = lm_optimum(data)
     rng = np.random.default_rng(seed)
-    p0 = initial_ball(np.asarray(theta0), np.log(0.01), walkers, rng, (np.zeros(5), np.ones(5)),
-                      np.asarray(initial_spread(theta0, data)))
-    out = {"walkers": walkers, "steps": steps, "n_points": int(data.creep.shape[0]),
-           "likelihood": "gauss"}
+    p0 = initial_ball(
+        np.asarray(theta0),
+        np.log(0.01),
+        walkers,
+        rng,
+        (np.zeros(5), np.ones(5)),
+        np.asarray(initial_spread(theta0, data)),
+    )
+    out = {"walkers": walkers, "steps": steps, "n_points": int(data.creep.shape[0]), "likelihood": "gauss"}
     for name, make in (("jax", lambda: ensemble_log_prob(data)), ("numpy", lambda: numpy_log_prob(data))):
         lp = make()
         t0 = time.perf_counter()
         lp(p0)
         lp(p0[: walkers // 2])
-        out[f"{name}_compile_s"] = time.perf_counter() - t0        # first calls (JAX: tracing + XLA)
+        out[f"{name}_compile_s"] = time.perf_counter() - t0  # first calls (JAX: tracing + XLA)
         np.testing.assert_allclose(lp(p0), ensemble_log_prob(data)(p0), rtol=1e-9)
         out[f"{name}_call_ms"] = 1e3 * _per_call(lp, p0[: walkers // 2])
         with warnings.catch_warnings():
@@ -117,7 +133,7 @@ def bench_speed(walkers, steps, n_points, seed=0, nuts=False):
     tiny = jax.jit(lambda p: p[:, 0])
     out["jit_dispatch_us"] = 1e6 * _per_call(lambda p: np.asarray(tiny(p)), p0[: walkers // 2], 2000)
     # the observer likelihood on the same recording length (JAX only; no NumPy peer)
-    (odata, obs), = recording_datasets("dry", [seed], n_points)
+    ((odata, obs),) = recording_datasets("dry", [seed], n_points)
     lp = ensemble_log_prob(odata, "observer", obs=obs)
     p_obs = np.column_stack([p0, np.full(walkers, 0.8)])
     t0 = time.perf_counter()
@@ -129,20 +145,29 @@ def bench_speed(walkers, steps, n_points, seed=0, nuts=False):
         from jadhesion.identify.mcmc import sample_nuts
 
         res = sample_nuts(data, np.asarray(theta0), warmup=500, samples=1000, seed=seed)
-        out["nuts"] = {"warmup": 500, "samples": 1000, "seconds": res.seconds,
-                       "compile_s": res.compile_seconds, "ess_min": float(np.min(res.ess[:5])),
-                       "tau": res.tau.tolist(), "integration_steps": res.integration_steps,
-                       "step_size": res.step_size,
-                       "ess_per_s": float(np.min(res.ess[:5]) / res.seconds)}
+        out["nuts"] = {
+            "warmup": 500,
+            "samples": 1000,
+            "seconds": res.seconds,
+            "compile_s": res.compile_seconds,
+            "ess_min": float(np.min(res.ess[:5])),
+            "tau": res.tau.tolist(),
+            "integration_steps": res.integration_steps,
+            "step_size": res.step_size,
+            "ess_per_s": float(np.min(res.ess[:5]) / res.seconds),
+        }
         out["emcee_ess_per_s"] = out["jax_ess_min"] / out["jax_s"]
         out["nuts_over_emcee_ess_per_s"] = out["nuts"]["ess_per_s"] / out["emcee_ess_per_s"]
     return out
 
 
 def _row(label, report):
-    return {"set": label, "n": report.n_datasets,
-            **{q: report.coverage[0.9][q] for q in QUANTITIES},
-            "s/dataset": report.seconds}
+    return {
+        "set": label,
+        "n": report.n_datasets,
+        **{q: report.coverage[0.9][q] for q in QUANTITIES},
+        "s/dataset": report.seconds,
+    }
 
 
 def bench_coverage(n, steps, walkers, seed=0, progress=True):
@@ -165,8 +190,10 @@ def bench_coverage(n, steps, walkers, seed=0, progress=True):
 def recording_datasets(name, seeds, n_points):
     """Simulated recordings of a scenario: (datasets, observer terms), the dataset as the recording's
     columns give it (recorded creep, slip, speed, observer output)."""
-    return [(result_dataset(r), recording_observer_terms(r))
-            for r in simulate_many(name, seeds, n_samples=n_points)]
+    return [
+        (result_dataset(r), recording_observer_terms(r))
+        for r in simulate_many(name, seeds, n_samples=n_points)
+    ]
 
 
 def bench_recordings(m, likelihoods, steps, walkers, n_points, seed=0, save=None, progress=True):
@@ -175,12 +202,22 @@ def bench_recordings(m, likelihoods, steps, walkers, n_points, seed=0, save=None
 
     per = max(m // len(SCENARIOS), 1)
     opts = dict(walkers=walkers, steps=steps, burn=steps // 3, max_derived=1000)
-    doc = {"recordings": per * len(SCENARIOS), "per_scenario": per, "n_points": n_points,
-           "walkers": walkers, "steps": steps, "burn": steps // 3, "seeds": [1000 + seed, 1000 + seed + per],
-           "band99_90": binomial_band(per * len(SCENARIOS), 0.9), "band99_90_scenario": binomial_band(per, 0.9),
-           "results": {}}
-    sets = {name: recording_datasets(name, list(range(1000 + seed, 1000 + seed + per)), n_points)
-            for name in SCENARIOS}
+    doc = {
+        "recordings": per * len(SCENARIOS),
+        "per_scenario": per,
+        "n_points": n_points,
+        "walkers": walkers,
+        "steps": steps,
+        "burn": steps // 3,
+        "seeds": [1000 + seed, 1000 + seed + per],
+        "band99_90": binomial_band(per * len(SCENARIOS), 0.9),
+        "band99_90_scenario": binomial_band(per, 0.9),
+        "results": {},
+    }
+    sets = {
+        name: recording_datasets(name, list(range(1000 + seed, 1000 + seed + per)), n_points)
+        for name in SCENARIOS
+    }
     t_start = time.perf_counter()
     total = len(likelihoods) * per * len(SCENARIOS)
     done = [0]
@@ -195,24 +232,39 @@ def bench_recordings(m, likelihoods, steps, walkers, n_points, seed=0, save=None
                 done[0] += 1
                 if progress:
                     el = time.perf_counter() - t_start
-                    sys.stderr.write(f"\r  [{lik}] {name} {i + 1}/{per}   total {done[0]}/{total}, "
-                                     f"{el:.0f} s, ~{el / done[0] * (total - done[0]):.0f} s left   ")
+                    sys.stderr.write(
+                        f"\r  [{lik}] {name} {i + 1}/{per}   total {done[0]}/{total}, "
+                        f"{el:.0f} s, ~{el / done[0] * (total - done[0]):.0f} s left   "
+                    )
                     sys.stderr.flush()
 
             datasets, observers = zip(*sets[name])
-            report = coverage_study(list(datasets), [np.asarray(sc.params)] * per, seed=seed,
-                                    observers=list(observers) if lik == "observer" else None,
-                                    on_result=note, likelihood=lik, **opts)
+            report = coverage_study(
+                list(datasets),
+                [np.asarray(sc.params)] * per,
+                seed=seed,
+                observers=list(observers) if lik == "observer" else None,
+                on_result=note,
+                likelihood=lik,
+                **opts,
+            )
             doc["results"][lik][name] = {
-                "n": report.n_datasets, "coverage90": report.coverage[0.9],
-                "coverage50": report.coverage[0.5], "width90": report.width90,
+                "n": report.n_datasets,
+                "coverage90": report.coverage[0.9],
+                "coverage50": report.coverage[0.5],
+                "width90": report.width90,
                 "hits90": report.hits[0.9].astype(int).tolist(),
-                "tau_max_median": float(np.median(taus)), "tau_max_max": float(np.max(taus)),
+                "tau_max_median": float(np.median(taus)),
+                "tau_max_max": float(np.max(taus)),
                 "kept_steps_over_tau_median": float((steps - steps // 3) / np.median(taus)),
-                "acceptance_median": float(np.median(accs)), "seconds_per_recording": report.seconds}
+                "acceptance_median": float(np.median(accs)),
+                "seconds_per_recording": report.seconds,
+            }
         hits = np.concatenate([np.array(doc["results"][lik][n]["hits90"]) for n in SCENARIOS])
-        doc["results"][lik]["all"] = {"n": int(hits.shape[0]),
-                                      "coverage90": dict(zip(QUANTITIES, hits.mean(axis=0).tolist()))}
+        doc["results"][lik]["all"] = {
+            "n": int(hits.shape[0]),
+            "coverage90": dict(zip(QUANTITIES, hits.mean(axis=0).tolist())),
+        }
         if save:
             doc["wall_seconds"] = time.perf_counter() - t_start
             with open(save, "w") as fh:
@@ -227,18 +279,31 @@ def bench_recordings(m, likelihoods, steps, walkers, n_points, seed=0, save=None
 
 
 def print_recordings(doc):
-    print(f"\n90 % coverage on {doc['recordings']} simulated recordings ({doc['n_points']} points, "
-          f"{doc['walkers']} walkers x {doc['steps']} steps); 99 % band per scenario "
-          f"{doc['band99_90_scenario']}, overall {doc['band99_90']}:")
+    print(
+        f"\n90 % coverage on {doc['recordings']} simulated recordings ({doc['n_points']} points, "
+        f"{doc['walkers']} walkers x {doc['steps']} steps); 99 % band per scenario "
+        f"{doc['band99_90_scenario']}, overall {doc['band99_90']}:"
+    )
     rows = []
     for lik, per in doc["results"].items():
         for name, r in per.items():
-            rows.append({"likelihood": lik, "set": name, "n": r["n"], **r["coverage90"],
-                         "tau": r.get("tau_max_median", float("nan"))})
+            rows.append(
+                {
+                    "likelihood": lik,
+                    "set": name,
+                    "n": r["n"],
+                    **r["coverage90"],
+                    "tau": r.get("tau_max_median", float("nan")),
+                }
+            )
     print(table(rows, ["likelihood", "set", "n", *QUANTITIES, "tau"]))
     print("\nmedian 90 % interval width (identified: < 0.25 for the box parameters):")
-    rows = [{"likelihood": lik, "set": name, **r["width90"]}
-            for lik, per in doc["results"].items() for name, r in per.items() if "width90" in r]
+    rows = [
+        {"likelihood": lik, "set": name, **r["width90"]}
+        for lik, per in doc["results"].items()
+        for name, r in per.items()
+        if "width90" in r
+    ]
     print(table(rows, ["likelihood", "set", *QUANTITIES]))
 
 
@@ -249,8 +314,13 @@ def main(argv=None):
     parser.add_argument("--points", type=int, default=1000)
     parser.add_argument("--coverage", type=int, default=0, metavar="N", help="synthetic datasets")
     parser.add_argument("--coverage-steps", type=int, default=1500)
-    parser.add_argument("--recordings", type=int, default=0, metavar="M",
-                        help="simulated recordings for the likelihood coverage study")
+    parser.add_argument(
+        "--recordings",
+        type=int,
+        default=0,
+        metavar="M",
+        help="simulated recordings for the likelihood coverage study",
+    )
     parser.add_argument("--likelihoods", default="observer,ar1,gauss")
     parser.add_argument("--recording-points", type=int, default=500)
     parser.add_argument("--save", default=None, help="write the recordings study JSON here")
@@ -258,17 +328,31 @@ def main(argv=None):
     parser.add_argument("--json", action="store_true")
     parser.add_argument("--nuts", action="store_true", help="also NUTS (needs blackjax)")
     args = parser.parse_args(argv)
-    doc = {} if args.no_speed else {"speed": bench_speed(args.walkers, args.steps, args.points,
-                                                         nuts=args.nuts)}
+    doc = (
+        {} if args.no_speed else {"speed": bench_speed(args.walkers, args.steps, args.points, nuts=args.nuts)}
+    )
     if args.recordings:
-        doc["recordings"] = bench_recordings(args.recordings, args.likelihoods.split(","),
-                                             args.coverage_steps, args.walkers, args.recording_points,
-                                             save=args.save, progress=True)
+        doc["recordings"] = bench_recordings(
+            args.recordings,
+            args.likelihoods.split(","),
+            args.coverage_steps,
+            args.walkers,
+            args.recording_points,
+            save=args.save,
+            progress=True,
+        )
     if args.coverage:
         reports = bench_coverage(args.coverage, args.coverage_steps, args.walkers, progress=not args.json)
-        doc["coverage"] = {k: {"n": r.n_datasets, "coverage90": r.coverage[0.9],
-                               "coverage50": r.coverage[0.5], "width90": r.width90,
-                               "seconds_per_dataset": r.seconds} for k, r in reports.items()}
+        doc["coverage"] = {
+            k: {
+                "n": r.n_datasets,
+                "coverage90": r.coverage[0.9],
+                "coverage50": r.coverage[0.5],
+                "width90": r.width90,
+                "seconds_per_dataset": r.seconds,
+            }
+            for k, r in reports.items()
+        }
         doc["band99"] = {k: binomial_band(r.n_datasets, 0.9) for k, r in reports.items()}
     if args.json:
         emit_json(doc)
@@ -278,19 +362,29 @@ def main(argv=None):
     if args.no_speed:
         return
     s = doc["speed"]
-    print(f"{s['walkers']} walkers x {s['steps']} steps, {s['n_points']} points (warm; 2 shared cores, noisy):")
-    print(f"  JAX   {s['jax_s']:7.2f} s warm  (compile {s['jax_compile_s']:.2f} s; "
-          f"{s['jax_call_ms']:.3f} ms/call, log-prob share {100 * s['jax_logprob_share']:.0f} %)")
-    print(f"  NumPy {s['numpy_s']:7.2f} s       ({s['numpy_call_ms']:.3f} ms/call, log-prob share "
-          f"{100 * s['numpy_logprob_share']:.0f} %)   ratio NumPy/JAX = {s['speedup_numpy_over_jax']:.2f}")
-    print(f"  emcee alone (trivial log-prob) {s['emcee_overhead_s']:.2f} s; jit dispatch "
-          f"{s['jit_dispatch_us']:.0f} us/call; observer likelihood {s['observer_call_ms']:.3f} ms/call "
-          f"(compile {s['observer_compile_s']:.2f} s)")
+    print(
+        f"{s['walkers']} walkers x {s['steps']} steps, {s['n_points']} points (warm; 2 shared cores, noisy):"
+    )
+    print(
+        f"  JAX   {s['jax_s']:7.2f} s warm  (compile {s['jax_compile_s']:.2f} s; "
+        f"{s['jax_call_ms']:.3f} ms/call, log-prob share {100 * s['jax_logprob_share']:.0f} %)"
+    )
+    print(
+        f"  NumPy {s['numpy_s']:7.2f} s       ({s['numpy_call_ms']:.3f} ms/call, log-prob share "
+        f"{100 * s['numpy_logprob_share']:.0f} %)   ratio NumPy/JAX = {s['speedup_numpy_over_jax']:.2f}"
+    )
+    print(
+        f"  emcee alone (trivial log-prob) {s['emcee_overhead_s']:.2f} s; jit dispatch "
+        f"{s['jit_dispatch_us']:.0f} us/call; observer likelihood {s['observer_call_ms']:.3f} ms/call "
+        f"(compile {s['observer_compile_s']:.2f} s)"
+    )
     if "nuts" in s:
         n = s["nuts"]
-        print(f"  NUTS (blackjax): {n['seconds']:.2f} s warm for {n['warmup']} warm-up + {n['samples']} "
-              f"draws (compile {n['compile_s']:.1f} s), min ESS {n['ess_min']:.0f} -> {n['ess_per_s']:.0f}"
-              f"/s; emcee {s['emcee_ess_per_s']:.0f}/s; NUTS/emcee = {s['nuts_over_emcee_ess_per_s']:.2f}")
+        print(
+            f"  NUTS (blackjax): {n['seconds']:.2f} s warm for {n['warmup']} warm-up + {n['samples']} "
+            f"draws (compile {n['compile_s']:.1f} s), min ESS {n['ess_min']:.0f} -> {n['ess_per_s']:.0f}"
+            f"/s; emcee {s['emcee_ess_per_s']:.0f}/s; NUTS/emcee = {s['nuts_over_emcee_ess_per_s']:.2f}"
+        )
     if args.coverage:
         print("\n90 % interval coverage (one-sided for truths on a box face):")
         print(table([_row(k, r) for k, r in reports.items()], ["set", "n", *QUANTITIES, "s/dataset"]))
@@ -298,8 +392,10 @@ def main(argv=None):
         print(table([{"set": k, **r.width90} for k, r in reports.items()], ["set", *QUANTITIES]))
         for k, r in reports.items():
             ident = [q for q in QUANTITIES[:5] if r.width90[q] < 0.25]
-            print(f"  {k}: identifies {', '.join(ident) or 'nothing'}; 99 % band for n={r.n_datasets}: "
-                  f"{binomial_band(r.n_datasets, 0.9)}")
+            print(
+                f"  {k}: identifies {', '.join(ident) or 'nothing'}; 99 % band for n={r.n_datasets}: "
+                f"{binomial_band(r.n_datasets, 0.9)}"
+            )
 
 
 if __name__ == "__main__":

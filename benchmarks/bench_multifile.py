@@ -50,9 +50,24 @@ def _simulate(folder: Path, count: int, noise: float) -> list[Path]:
         path = folder / f"rec{i:03d}.csv"
         duration = 20.0 + 19.98 * ((i * 7) % 11) / 10
         with contextlib.redirect_stdout(io.StringIO()):
-            assert main(["simulate", "--scenario", SCENARIOS[i % 3], "--seed", str(i),
-                         "--duration", f"{duration:.2f}", "--sensor-noise", str(noise),
-                         "--out", str(path)]) == 0
+            assert (
+                main(
+                    [
+                        "simulate",
+                        "--scenario",
+                        SCENARIOS[i % 3],
+                        "--seed",
+                        str(i),
+                        "--duration",
+                        f"{duration:.2f}",
+                        "--sensor-noise",
+                        str(noise),
+                        "--out",
+                        str(path),
+                    ]
+                )
+                == 0
+            )
         paths.append(path)
     return paths
 
@@ -76,8 +91,10 @@ def _library(paths, method) -> dict:
     datasets = [to_dataset(load_recording(p)) for p in paths]
     key = jax.random.key(0)
     out = {}
-    for name, call in (("one_at_a_time", lambda: fit_datasets(datasets, method, key)),
-                       ("vmapped", lambda: fit_datasets_vmapped(datasets, method, key))):
+    for name, call in (
+        ("one_at_a_time", lambda: fit_datasets(datasets, method, key)),
+        ("vmapped", lambda: fit_datasets_vmapped(datasets, method, key)),
+    ):
         call()  # compile
         start = time.perf_counter()
         call()
@@ -116,11 +133,18 @@ def main(argv=None) -> int:
     med = {k: statistics.median(v) for k, v in times.items()}
     result = {
         "commit": _commit(),
-        "settings": {"method": args.method, "repeats": args.repeats, "interleaved": True,
-                     "count": args.count, "noise": args.noise,
-                     "samples": "1000-2000 (buckets 1024, 2048)",
-                     "python": platform.python_version(), "machine": platform.platform(),
-                     "cpus": os.cpu_count(), "load_average": list(os.getloadavg())},
+        "settings": {
+            "method": args.method,
+            "repeats": args.repeats,
+            "interleaved": True,
+            "count": args.count,
+            "noise": args.noise,
+            "samples": "1000-2000 (buckets 1024, 2048)",
+            "python": platform.python_version(),
+            "machine": platform.platform(),
+            "cpus": os.cpu_count(),
+            "load_average": list(os.getloadavg()),
+        },
         "seconds": times,
         "median": med,
         "one_call_over_six_calls": med["one_call"] / med["six_calls"],

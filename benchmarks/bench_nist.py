@@ -20,7 +20,8 @@ import numpy as np
 jax.config.update("jax_enable_x64", True)
 
 from jadhesion.identify.lm import lm_solve  # noqa: E402
-from validation.nist import DATA_DIR as DATA, MODELS, load_problem, log_relative_error  # noqa: E402
+from validation.nist import DATA_DIR as DATA  # noqa: E402
+from validation.nist import MODELS, load_problem, log_relative_error
 
 
 def bench(problem):
@@ -38,23 +39,34 @@ def bench(problem):
         start = time.perf_counter()
         out = jax.block_until_ready(lm_solve(res, p0, data))
         warm = time.perf_counter() - start
-        rows.append(dict(problem=problem.name, start=k + 1,
-                         lre=float(log_relative_error(out.params, problem.certified).min()),
-                         steps=int(out.steps), ms=1e3 * warm, compile_s=first - warm,
-                         **scipy_lm(fun, jac, p0, problem)))
+        rows.append(
+            dict(
+                problem=problem.name,
+                start=k + 1,
+                lre=float(log_relative_error(out.params, problem.certified).min()),
+                steps=int(out.steps),
+                ms=1e3 * warm,
+                compile_s=first - warm,
+                **scipy_lm(fun, jac, p0, problem),
+            )
+        )
     return rows
 
 
 def scipy_lm(fun, jac, p0, problem):
     from scipy.optimize import least_squares
+
     f = lambda b: np.asarray(fun(jnp.asarray(b)))  # noqa: E731
     j = lambda b: np.asarray(jac(jnp.asarray(b)))  # noqa: E731
     f(p0), j(p0)
     start = time.perf_counter()
-    out = least_squares(f, np.asarray(p0), jac=j, method="lm", xtol=1e-15, ftol=1e-15, gtol=1e-15,
-                        max_nfev=10000)
-    return dict(scipy_lre=float(log_relative_error(out.x, problem.certified).min()),
-                scipy_ms=1e3 * (time.perf_counter() - start))
+    out = least_squares(
+        f, np.asarray(p0), jac=j, method="lm", xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=10000
+    )
+    return dict(
+        scipy_lre=float(log_relative_error(out.x, problem.certified).min()),
+        scipy_ms=1e3 * (time.perf_counter() - start),
+    )
 
 
 def main():

@@ -48,16 +48,34 @@ def main(argv=None) -> int:
     sc = ex.scenario(jax.random.key(0), args.runs)
     compile_s, warm = _time(lambda: ex.run_batch(params, sc), args.repeat)
     steps = args.runs * sc.lam.shape[0]
-    rows = [{"case": "reproduce", "algorithm": args.algorithm, "runs": args.runs,
-             "steps": int(sc.lam.shape[0]), "compile_s": compile_s, "warm_s": warm,
-             "steps_per_s": steps / warm, "goal_met": warm <= 1.0}]
+    rows = [
+        {
+            "case": "reproduce",
+            "algorithm": args.algorithm,
+            "runs": args.runs,
+            "steps": int(sc.lam.shape[0]),
+            "compile_s": compile_s,
+            "warm_s": warm,
+            "steps_per_s": steps / warm,
+            "goal_met": warm <= 1.0,
+        }
+    ]
     data = simulate_dataset("dry", 0)
     key = jax.random.key(0)
-    compile_s, warm = _time(lambda: ol.track_dataset(data, args.algorithm, None, key).trace,
-                            args.repeat)
+    compile_s, warm = _time(lambda: ol.track_dataset(data, args.algorithm, None, key).trace, args.repeat)
     n = int(data.creep.shape[0])
-    rows.append({"case": "recording", "algorithm": args.algorithm, "runs": 1, "steps": n,
-                 "compile_s": compile_s, "warm_s": warm, "steps_per_s": n / warm, "goal_met": ""})
+    rows.append(
+        {
+            "case": "recording",
+            "algorithm": args.algorithm,
+            "runs": 1,
+            "steps": n,
+            "compile_s": compile_s,
+            "warm_s": warm,
+            "steps_per_s": n / warm,
+            "goal_met": "",
+        }
+    )
     for row in rows:
         row.update(device=str(jax.devices()[0]), dtype=str(sc.mu.dtype))
     if args.json:

@@ -62,6 +62,7 @@ def numpy_residual(ds):
         mu = np.maximum(mu0 * ((1 - a) * np.exp(-b * np.abs(w)) + a), 1e-12)
         eps = k * s / mu
         return 2 * mu / np.pi * (ka * eps / (1 + (ka * eps) ** 2) + np.arctan(ks * eps)) - mu_hat
+
     return res
 
 
@@ -77,29 +78,66 @@ def main():
     iters = 100
 
     warm, comp = timed(lambda: run(ITLBO, polach_mae, box, key, 50, iters, args=ds).best_f)
-    rows.append(dict(name="itlbo ms/iteration (pop 50, n 1000)", value=1e3 * warm / iters,
-                     unit="ms", goal="<= 0.6", compile_s=comp))
+    rows.append(
+        dict(
+            name="itlbo ms/iteration (pop 50, n 1000)",
+            value=1e3 * warm / iters,
+            unit="ms",
+            goal="<= 0.6",
+            compile_s=comp,
+        )
+    )
     rows += external_baselines(ds)
 
     truth_mae = float(polach_mae(jnp.asarray(THETA), ds))
     target = 1.02 * truth_mae
     fit = fit_polach(ds, "itlbo", key, target=target, max_iter=1000)
     warm, comp = timed(lambda: fit_polach(ds, "itlbo", key, target=target, max_iter=1000).params)
-    rows.append(dict(name=f"itlbo identification to MAE {target:.4g}", value=1e3 * warm, unit="ms",
-                     goal="<= 20", compile_s=comp, iterations=int(fit.iterations),
-                     evaluations=int(fit.evaluations)))
+    rows.append(
+        dict(
+            name=f"itlbo identification to MAE {target:.4g}",
+            value=1e3 * warm,
+            unit="ms",
+            goal="<= 20",
+            compile_s=comp,
+            iterations=int(fit.iterations),
+            evaluations=int(fit.evaluations),
+        )
+    )
 
     warm, comp = timed(lambda: fit_polach(ds, "lm", key).params)
     fit = fit_polach(ds, "lm", key)
-    rows.append(dict(name="global LM (64 random + 4 LM on 128 pts, polish)", value=1e3 * warm,
-                     unit="ms", goal="<= 3", compile_s=comp, steps=int(fit.iterations)))
+    rows.append(
+        dict(
+            name="global LM (64 random + 4 LM on 128 pts, polish)",
+            value=1e3 * warm,
+            unit="ms",
+            goal="<= 3",
+            compile_s=comp,
+            steps=int(fit.iterations),
+        )
+    )
     p0 = jnp.full(5, 0.5)
     warm, comp = timed(lambda: box_lm(polach_residual, p0, ds, box).params)
-    rows.append(dict(name="projected LM single start (0.5,...)", value=1e3 * warm, unit="ms",
-                     compile_s=comp, steps=int(box_lm(polach_residual, p0, ds, box).steps)))
+    rows.append(
+        dict(
+            name="projected LM single start (0.5,...)",
+            value=1e3 * warm,
+            unit="ms",
+            compile_s=comp,
+            steps=int(box_lm(polach_residual, p0, ds, box).steps),
+        )
+    )
     warm, comp = timed(lambda: lm_solve(polach_residual, p0, ds, box, rtol=1e-8, atol=1e-8).params)
-    rows.append(dict(name="optimistix LM, sine map, single start", value=1e3 * warm, unit="ms",
-                     compile_s=comp, steps=int(lm_solve(polach_residual, p0, ds, box).steps)))
+    rows.append(
+        dict(
+            name="optimistix LM, sine map, single start",
+            value=1e3 * warm,
+            unit="ms",
+            compile_s=comp,
+            steps=int(lm_solve(polach_residual, p0, ds, box).steps),
+        )
+    )
     rows += scipy_rows(ds, args.trials)
     rows.append(success_rate(args.trials))
     rows += batched(64)
@@ -118,37 +156,73 @@ def external_baselines(ds):
     try:
         from mealpy import FloatVar
         from mealpy.human_based import TLO
-        problem = dict(obj_func=lambda t: float(np.mean(np.abs(f(t)))), minmax="min", log_to=None,
-                       bounds=FloatVar(lb=[0.0] * 5, ub=[1.0] * 5))
+
+        problem = dict(
+            obj_func=lambda t: float(np.mean(np.abs(f(t)))),
+            minmax="min",
+            log_to=None,
+            bounds=FloatVar(lb=[0.0] * 5, ub=[1.0] * 5),
+        )
         start = time.perf_counter()
         TLO.OriginalTLO(epoch=20, pop_size=50).solve(problem)
-        rows.append(dict(name="mealpy OriginalTLO (TLBO) ms/iteration", value=1e3 * (time.perf_counter() - start) / 20,
-                         unit="ms"))
+        rows.append(
+            dict(
+                name="mealpy OriginalTLO (TLBO) ms/iteration",
+                value=1e3 * (time.perf_counter() - start) / 20,
+                unit="ms",
+            )
+        )
     except ImportError:
-        rows.append(dict(name="mealpy OriginalTLO (TLBO) ms/iteration", value=float("nan"), unit="ms",
-                         note="mealpy not installed"))
+        rows.append(
+            dict(
+                name="mealpy OriginalTLO (TLBO) ms/iteration",
+                value=float("nan"),
+                unit="ms",
+                note="mealpy not installed",
+            )
+        )
     try:
         import pyswarms
-        opt = pyswarms.single.GlobalBestPSO(50, 5, dict(c1=1.49618, c2=1.49618, w=0.7298),
-                                            bounds=(np.zeros(5), np.ones(5)))
+
+        opt = pyswarms.single.GlobalBestPSO(
+            50, 5, dict(c1=1.49618, c2=1.49618, w=0.7298), bounds=(np.zeros(5), np.ones(5))
+        )
         start = time.perf_counter()
         opt.optimize(lambda x: np.array([np.mean(np.abs(f(t))) for t in x]), iters=20, verbose=False)
-        rows.append(dict(name="pyswarms GlobalBestPSO ms/iteration", value=1e3 * (time.perf_counter() - start) / 20,
-                         unit="ms"))
+        rows.append(
+            dict(
+                name="pyswarms GlobalBestPSO ms/iteration",
+                value=1e3 * (time.perf_counter() - start) / 20,
+                unit="ms",
+            )
+        )
     except ImportError:
-        rows.append(dict(name="pyswarms GlobalBestPSO ms/iteration", value=float("nan"), unit="ms",
-                         note="pyswarms not installed"))
+        rows.append(
+            dict(
+                name="pyswarms GlobalBestPSO ms/iteration",
+                value=float("nan"),
+                unit="ms",
+                note="pyswarms not installed",
+            )
+        )
     return rows
 
 
 def scipy_rows(ds, trials):
     from scipy.optimize import least_squares
+
     f = numpy_residual(ds)
     start = time.perf_counter()
     for _ in range(trials):
         out = least_squares(f, np.full(5, 0.5), bounds=(0, 1), xtol=1e-12, ftol=1e-12)
-    return [dict(name="scipy least_squares (trf, 2-point jac)", value=1e3 * (time.perf_counter() - start) / trials,
-                 unit="ms", nfev=int(out.nfev))]
+    return [
+        dict(
+            name="scipy least_squares (trf, 2-point jac)",
+            value=1e3 * (time.perf_counter() - start) / trials,
+            unit="ms",
+            nfev=int(out.nfev),
+        )
+    ]
 
 
 def success_rate(trials, points=1000):
@@ -156,6 +230,7 @@ def success_rate(trials, points=1000):
     (global LM, scipy from a random start, box LM started at the truth). One global-LM run and one
     scipy run per dataset, ``trials`` datasets (different noise), all fits of ours in one call."""
     from scipy.optimize import least_squares
+
     stack = jax.tree.map(lambda *a: jnp.stack(a), *[dataset(1000 + i, points) for i in range(trials)])
     ours = np.asarray(fit_polach_batch(stack, "lm", jax.random.split(jax.random.key(1), trials)).mae)
     box = (jnp.zeros(5), jnp.ones(5))
@@ -168,8 +243,13 @@ def success_rate(trials, points=1000):
         theirs.append(float(np.mean(np.abs(f(least_squares(f, rng.uniform(0, 1, 5), bounds=(0, 1)).x)))))
     best = np.minimum(np.minimum(ours, np.asarray(theirs)), truth_basin)
     ok = lambda m: np.mean(np.asarray(m) <= 1.001 * best)  # noqa: E731
-    return dict(name=f"global basin reached: global LM / scipy random start ({trials} datasets)",
-                value=float(ok(ours)), unit="", goal=">= 0.99", scipy=float(ok(theirs)))
+    return dict(
+        name=f"global basin reached: global LM / scipy random start ({trials} datasets)",
+        value=float(ok(ours)),
+        unit="",
+        goal=">= 0.99",
+        scipy=float(ok(theirs)),
+    )
 
 
 @jax.jit
@@ -193,20 +273,37 @@ def batched(n, points=1000):
     steps = _plain_lm_batch(stack).steps
     for name, fn in (("vmap", _plain_lm_batch), ("work queue", _plain_lm_queue)):
         warm, comp = timed(lambda: fn(stack).params, repeat=3)
-        rows.append(dict(name=f"batched plain LM, {name}, fits/s {label})", value=n / warm,
-                         unit="fits/s", goal=">= 2000", compile_s=comp,
-                         median_steps=float(jnp.median(steps)), max_steps=int(jnp.max(steps))))
+        rows.append(
+            dict(
+                name=f"batched plain LM, {name}, fits/s {label})",
+                value=n / warm,
+                unit="fits/s",
+                goal=">= 2000",
+                compile_s=comp,
+                median_steps=float(jnp.median(steps)),
+                max_steps=int(jnp.max(steps)),
+            )
+        )
     truth = jax.vmap(lambda d: polach_mae(jnp.asarray(THETA), d))(stack)
-    for method, name, kw in (("lm", "global lm (queue polish)", {}),
-                             ("itlbo", "itlbo, stall test (cap 300)", {}),
-                             ("itlbo", "itlbo to 1.02 x truth MAE", dict(target=1.02 * truth))):
+    for method, name, kw in (
+        ("lm", "global lm (queue polish)", {}),
+        ("itlbo", "itlbo, stall test (cap 300)", {}),
+        ("itlbo", "itlbo to 1.02 x truth MAE", dict(target=1.02 * truth)),
+    ):
         warm, comp = timed(lambda: fit_polach_batch(stack, method, keys, **kw).params, repeat=3)
         fit = fit_polach_batch(stack, method, keys, **kw)
-        rows.append(dict(name=f"batched {name} fits/s {label})", value=n / warm, unit="fits/s",
-                         goal=">= 50" if method == "itlbo" else "-", compile_s=comp,
-                         max_iterations=int(jnp.max(fit.iterations)),
-                         reached=float(jnp.mean(fit.reached)),
-                         converged=float(jnp.mean(fit.status == int(Status.CONVERGED)))))
+        rows.append(
+            dict(
+                name=f"batched {name} fits/s {label})",
+                value=n / warm,
+                unit="fits/s",
+                goal=">= 50" if method == "itlbo" else "-",
+                compile_s=comp,
+                max_iterations=int(jnp.max(fit.iterations)),
+                reached=float(jnp.mean(fit.reached)),
+                converged=float(jnp.mean(fit.status == int(Status.CONVERGED))),
+            )
+        )
     return rows
 
 

@@ -42,10 +42,12 @@ def _timed(argv, env) -> float:
 
 def _commit() -> str:
     try:
-        out = subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True,
-                             check=True)
-        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=ROOT,
-                               capture_output=True, text=True).stdout.strip()
+        out = subprocess.run(
+            ["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True, check=True
+        )
+        dirty = subprocess.run(
+            ["git", "status", "--porcelain", "--untracked-files=no"], cwd=ROOT, capture_output=True, text=True
+        ).stdout.strip()
         return out.stdout.strip() + ("-dirty" if dirty else "")
     except (OSError, subprocess.CalledProcessError):
         return "unknown"
@@ -59,13 +61,19 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
 
     work = Path(tempfile.mkdtemp(prefix="jadhesion-bench-startup-"))
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in (str(ROOT), os.environ.get("PYTHONPATH"))
-                                                       if p)}
+    env = {
+        **os.environ,
+        "PYTHONPATH": os.pathsep.join(p for p in (str(ROOT), os.environ.get("PYTHONPATH")) if p),
+    }
     jad = [sys.executable, "-m", "jadhesion"]
     rec = work / "rec.csv"
-    subprocess.run([*jad, "simulate", "--out", str(rec), "--json"],
-                   env={**env, "JADHESION_CACHE": str(work / "sim")}, check=True,
-                   stdout=subprocess.DEVNULL, timeout=900)
+    subprocess.run(
+        [*jad, "simulate", "--out", str(rec), "--json"],
+        env={**env, "JADHESION_CACHE": str(work / "sim")},
+        check=True,
+        stdout=subprocess.DEVNULL,
+        timeout=900,
+    )
     fit = [*jad, "fit", str(rec), "--method", args.method, "--json"]
     warm_cache = work / "warm"
     warm = {**env, "JADHESION_CACHE": str(warm_cache)}
@@ -87,22 +95,32 @@ def main(argv=None) -> int:
     base = medians["import_jax"]
     doc = {
         "commit": _commit(),
-        "settings": {"method": args.method, "samples": 2000, "repeats": args.repeats, "interleaved": True,
-                     "python": sys.version.split()[0], "machine": platform.platform(),
-                     "cpus": os.cpu_count(), "load_average": os.getloadavg()},
+        "settings": {
+            "method": args.method,
+            "samples": 2000,
+            "repeats": args.repeats,
+            "interleaved": True,
+            "python": sys.version.split()[0],
+            "machine": platform.platform(),
+            "cpus": os.cpu_count(),
+            "load_average": os.getloadavg(),
+        },
         "seconds": times,
         "median_s": medians,
         "ratio_to_import_jax": {k: v / base for k, v in medians.items()},
         # Each round's own ratio (a busy machine slows a round's processes alike), then the median.
-        "paired_ratio_median": {k: statistics.median(t / b for t, b in zip(v, times["import_jax"],
-                                                                            strict=True))
-                                for k, v in times.items()},
+        "paired_ratio_median": {
+            k: statistics.median(t / b for t, b in zip(v, times["import_jax"], strict=True))
+            for k, v in times.items()
+        },
     }
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(doc, indent=2) + "\n")
     for k, v in medians.items():
-        print(f"{k:>14}: median {v:6.2f} s  ({v / base:4.1f}x import jax; paired "
-              f"{doc['paired_ratio_median'][k]:4.2f}x)")
+        print(
+            f"{k:>14}: median {v:6.2f} s  ({v / base:4.1f}x import jax; paired "
+            f"{doc['paired_ratio_median'][k]:4.2f}x)"
+        )
     shutil.rmtree(work, ignore_errors=True)
     return 0
 

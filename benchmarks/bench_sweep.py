@@ -50,8 +50,18 @@ def sweep_rate(args, chunk: int) -> float:
 
 def device_rate(args, devices: int, chunk: int) -> float:
     env = dict(os.environ, XLA_FLAGS=f"--xla_force_host_platform_device_count={devices}")
-    cmd = [sys.executable, __file__, "--worker-chunk", str(chunk), "--method", args.method,
-           "--seeds", str(args.seeds), "--samples", str(args.samples)]
+    cmd = [
+        sys.executable,
+        __file__,
+        "--worker-chunk",
+        str(chunk),
+        "--method",
+        args.method,
+        "--seeds",
+        str(args.seeds),
+        "--samples",
+        str(args.samples),
+    ]
     out = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=1800)
     if out.returncode != 0:
         raise RuntimeError(f"{devices}-device run failed:\n{out.stderr[-2000:]}")
@@ -85,8 +95,13 @@ def loop_rates(args) -> dict:
     jac(np.full(5, 0.5), data[0]).block_until_ready()
     t0 = time.perf_counter()
     for d in data:
-        least_squares(lambda th, d=d: np.asarray(residual(th, d)), np.full(5, 0.5),
-                      jac=lambda th, d=d: np.asarray(jac(th, d)), bounds=(0.0, 1.0), method="trf")
+        least_squares(
+            lambda th, d=d: np.asarray(residual(th, d)),
+            np.full(5, 0.5),
+            jac=lambda th, d=d: np.asarray(jac(th, d)),
+            bounds=(0.0, 1.0),
+            method="trf",
+        )
     rates["scipy"] = args.seeds / (time.perf_counter() - t0)
     return rates
 
@@ -109,15 +124,23 @@ def main() -> None:
         print(sweep_rate(args, args.worker_chunk))
         return
     chunks = [int(c) for c in args.chunks.split(",")]
-    result = {"method": args.method, "seeds": args.seeds, "samples": args.samples,
-              "cpu_count": os.cpu_count(),
-              "sweep_fits_per_s": {c: sweep_rate(args, c) for c in chunks},
-              "devices_fits_per_s": {int(n): device_rate(args, int(n), max(chunks))
-                                     for n in args.devices.split(",")}}
+    result = {
+        "method": args.method,
+        "seeds": args.seeds,
+        "samples": args.samples,
+        "cpu_count": os.cpu_count(),
+        "sweep_fits_per_s": {c: sweep_rate(args, c) for c in chunks},
+        "devices_fits_per_s": {
+            int(n): device_rate(args, int(n), max(chunks)) for n in args.devices.split(",")
+        },
+    }
     result.update({f"{k}_fits_per_s": v for k, v in loop_rates(args).items()})
     best = result["sweep_fits_per_s"][max(chunks)]
-    result["ratios"] = {f"sweep/{k}": best / result[f"{k}_fits_per_s"] for k in ("loop", "scipy")
-                        if f"{k}_fits_per_s" in result}
+    result["ratios"] = {
+        f"sweep/{k}": best / result[f"{k}_fits_per_s"]
+        for k in ("loop", "scipy")
+        if f"{k}_fits_per_s" in result
+    }
     if args.json:
         print(json.dumps(result, indent=2))
         return

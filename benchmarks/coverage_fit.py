@@ -72,12 +72,20 @@ def coverage(scenario="sand", n=100, samples=None, chunk=25):
                     ratios[p].append(u["stderr"] / iid_sd[j])
                 if u["stderr"] is not None and np.isfinite(u["stderr"]):
                     zs[p].append((float(f.params[j]) - truth[j]) / u["stderr"])
-    return {p: {"coverage_hac": hits[p]["hac"] / n, "coverage_iid": hits[p]["iid"] / n,
-                "median_stderr_ratio_hac_over_iid": (float(np.median(ratios[p])) if ratios[p]
-                                                     else None),
+    return (
+        {
+            p: {
+                "coverage_hac": hits[p]["hac"] / n,
+                "coverage_iid": hits[p]["iid"] / n,
+                "median_stderr_ratio_hac_over_iid": (float(np.median(ratios[p])) if ratios[p] else None),
                 "z_mean": float(np.mean(zs[p])) if zs[p] else None,
-                "z_sd": float(np.std(zs[p])) if zs[p] else None}
-            for p in CHECKED}, statuses, lags
+                "z_sd": float(np.std(zs[p])) if zs[p] else None,
+            }
+            for p in CHECKED
+        },
+        statuses,
+        lags,
+    )
 
 
 def main():
@@ -88,13 +96,23 @@ def main():
     args = parser.parse_args()
     t0 = time.perf_counter()
     result, statuses, lags = coverage(args.scenario, args.n, args.samples)
-    commit = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True,
-                            cwd=Path(__file__).parent).stdout.strip()
-    doc = {"commit": commit, "settings": {"scenario": args.scenario, "n": args.n,
-                                          "samples": args.samples, "method": "lm",
-                                          "interval": "95 %, HAC Newey-West, Andrews AR(1) lags"},
-           "coverage": result, "converged": float(np.mean(np.asarray(statuses) == 0)),
-           "hac_lags_median": float(np.median(lags)), "seconds": time.perf_counter() - t0}
+    commit = subprocess.run(
+        ["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=Path(__file__).parent
+    ).stdout.strip()
+    doc = {
+        "commit": commit,
+        "settings": {
+            "scenario": args.scenario,
+            "n": args.n,
+            "samples": args.samples,
+            "method": "lm",
+            "interval": "95 %, HAC Newey-West, Andrews AR(1) lags",
+        },
+        "coverage": result,
+        "converged": float(np.mean(np.asarray(statuses) == 0)),
+        "hac_lags_median": float(np.median(lags)),
+        "seconds": time.perf_counter() - t0,
+    }
     RESULT.parent.mkdir(exist_ok=True)
     RESULT.write_text(json.dumps(doc, indent=2) + "\n")
     print(json.dumps(doc, indent=2))

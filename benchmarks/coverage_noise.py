@@ -70,19 +70,31 @@ def run_level(level, per, points, steps, walkers, seed, likelihood="observer"):
             lm = [np.asarray(fit_polach(d, "lm", jax.random.key(0)).params) for d in datasets]
             slope = np.array([(p[0] + p[1]) / 2 for p in lm])
             true_slope = (truth[0] + truth[1]) / 2
-            report = coverage_study(datasets, [truth] * per, seed=seed,
-                                    observers=obs if likelihood == "observer" else None,
-                                    likelihood=likelihood, walkers=walkers, steps=steps,
-                                    burn=steps // 3, max_derived=1000)
+            report = coverage_study(
+                datasets,
+                [truth] * per,
+                seed=seed,
+                observers=obs if likelihood == "observer" else None,
+                likelihood=likelihood,
+                walkers=walkers,
+                steps=steps,
+                burn=steps // 3,
+                max_derived=1000,
+            )
             out[f"{name}/{creep}"] = {
-                "lm_slope": slope.tolist(), "true_slope": true_slope,
+                "lm_slope": slope.tolist(),
+                "true_slope": true_slope,
                 "lm_slope_within25": (np.abs(slope / true_slope - 1) <= 0.25).tolist(),
                 "lm_mu0_abs_error": np.abs(np.array([p[2] for p in lm]) - truth[2]).tolist(),
                 "hits90": report.hits[0.9].astype(int).tolist(),
-                "coverage90": report.coverage[0.9], "width90": report.width90}
-            sys.stderr.write(f"  level {level} {name} {creep}: slope ok "
-                             f"{np.mean(out[f'{name}/{creep}']['lm_slope_within25']):.2f}, cov90 "
-                             f"{ {k: round(report.coverage[0.9][k], 2) for k in COVERED} }\n")
+                "coverage90": report.coverage[0.9],
+                "width90": report.width90,
+            }
+            sys.stderr.write(
+                f"  level {level} {name} {creep}: slope ok "
+                f"{np.mean(out[f'{name}/{creep}']['lm_slope_within25']):.2f}, cov90 "
+                f"{ {k: round(report.coverage[0.9][k], 2) for k in COVERED} }\n"
+            )
     return out
 
 
@@ -97,11 +109,14 @@ def summarise(results):
             table[f"{level}/{creep}"] = {
                 "n": int(hits.shape[0]),
                 "lm_slope_within25": float(np.mean(sum((r["lm_slope_within25"] for r in rows), []))),
-                "lm_slope_rel_error_median": float(np.median(np.concatenate(
-                    [np.abs(np.array(r["lm_slope"]) / r["true_slope"] - 1) for r in rows]))),
-                "lm_mu0_abs_error_median": float(np.median(sum((r["lm_mu0_abs_error"] for r in rows),
-                                                               []))),
-                "coverage90": dict(zip(QUANTITIES, hits.mean(axis=0).tolist()))}
+                "lm_slope_rel_error_median": float(
+                    np.median(
+                        np.concatenate([np.abs(np.array(r["lm_slope"]) / r["true_slope"] - 1) for r in rows])
+                    )
+                ),
+                "lm_mu0_abs_error_median": float(np.median(sum((r["lm_mu0_abs_error"] for r in rows), []))),
+                "coverage90": dict(zip(QUANTITIES, hits.mean(axis=0).tolist())),
+            }
     return table
 
 
@@ -114,12 +129,14 @@ def figure(summary, levels, path):
         axes[0].plot(x, [r["lm_slope_rel_error_median"] for r in rows], style, label=f"LM, {creep}")
         axes[1].plot(x, [r["lm_mu0_abs_error_median"] for r in rows], style, label=f"LM, {creep}")
         for i, q in enumerate(COVERED):
-            axes[2].plot(x, [r["coverage90"][q] for r in rows], style, color=f"C{i}",
-                         label=f"{q}, {creep}")
+            axes[2].plot(x, [r["coverage90"][q] for r in rows], style, color=f"C{i}", label=f"{q}, {creep}")
     axes[0].axhline(0.25, color="k", lw=0.6)
     axes[2].axhspan(0.85, 0.95, color="0.85")
-    titles = ("LM |slope error| / slope (median)", "LM |μ0 error| (median)",
-              "posterior 90 % coverage (observer lik.)")
+    titles = (
+        "LM |slope error| / slope (median)",
+        "LM |μ0 error| (median)",
+        "posterior 90 % coverage (observer lik.)",
+    )
     for ax, title in zip(axes, titles):
         ax.set_xscale("log")
         ax.set_xlabel("speed-sensor noise sd [m/s]")
@@ -147,12 +164,18 @@ def main(argv=None):
         with open(args.save) as fh:
             figure(json.load(fh)["summary"], levels, args.figure)
         return
-    doc = {"commit": _commit(), "settings": vars(args), "realistic_sensors": REALISTIC.as_dict(),
-           "band99_90": binomial_band(args.per * len(SCENARIOS), 0.9), "results": {}}
+    doc = {
+        "commit": _commit(),
+        "settings": vars(args),
+        "realistic_sensors": REALISTIC.as_dict(),
+        "band99_90": binomial_band(args.per * len(SCENARIOS), 0.9),
+        "results": {},
+    }
     start = time.perf_counter()
     for level in levels:
-        doc["results"][level] = run_level(level, args.per, args.points, args.steps, args.walkers,
-                                          args.seed, args.likelihood)
+        doc["results"][level] = run_level(
+            level, args.per, args.points, args.steps, args.walkers, args.seed, args.likelihood
+        )
         doc["summary"] = summarise(doc["results"])
         doc["wall_seconds"] = time.perf_counter() - start
         with open(args.save, "w") as fh:

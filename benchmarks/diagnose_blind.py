@@ -73,8 +73,7 @@ def clopper_pearson(k: int, n: int, level: float = 0.95) -> list:
 
 def _rate(hits) -> dict:
     k, n = int(sum(hits)), len(hits)
-    return {"k": k, "n": n, "rate": k / n if n else None,
-            "ci95": clopper_pearson(k, n) if n else None}
+    return {"k": k, "n": n, "rate": k / n if n else None, "ci95": clopper_pearson(k, n) if n else None}
 
 
 def reported_set(d) -> set:
@@ -102,10 +101,14 @@ def summarise(cases) -> dict:
     clean = [c for c in cases if not c["effects"]]
     alarms = {
         "all_clean": _rate([c["diagnosis"]["verdict"] != "none" for c in clean]),
-        "null_set": _rate([c["diagnosis"]["verdict"] != "none" for c in clean
-                           if c.get("set") == "null"]),
-        "varied_vehicle_or_profile": _rate([c["diagnosis"]["verdict"] != "none" for c in clean
-                                            if c["vehicle_varied"] or c.get("profile_varied")]),
+        "null_set": _rate([c["diagnosis"]["verdict"] != "none" for c in clean if c.get("set") == "null"]),
+        "varied_vehicle_or_profile": _rate(
+            [
+                c["diagnosis"]["verdict"] != "none"
+                for c in clean
+                if c["vehicle_varied"] or c.get("profile_varied")
+            ]
+        ),
         "generic_term_used": _rate([c["diagnosis"]["generic"]["used"] for c in clean]),
     }
     per_effect = {}
@@ -119,9 +122,14 @@ def summarise(cases) -> dict:
         bins = []
         for a, b in zip(edges[:-1], edges[1:]):
             sel = [i for i, m in enumerate(mags) if a <= m <= b]
-            bins.append({"range": [float(a), float(b)], "n": len(sel),
-                         "top1": float(np.mean([hits[i] for i in sel])) if sel else None,
-                         "in_set": float(np.mean([in_set[i] for i in sel])) if sel else None})
+            bins.append(
+                {
+                    "range": [float(a), float(b)],
+                    "n": len(sel),
+                    "top1": float(np.mean([hits[i] for i in sel])) if sel else None,
+                    "in_set": float(np.mean([in_set[i] for i in sel])) if sel else None,
+                }
+            )
         documented = DETECTION_THRESHOLDS.get(name, {}).get("magnitude")
         above = [i for i, m in enumerate(mags) if documented is not None and m >= documented]
         errors = []
@@ -138,8 +146,10 @@ def summarise(cases) -> dict:
         default = [i for i, c in enumerate(single) if not c.get("profile_varied")]
         varied = [i for i, c in enumerate(single) if c.get("profile_varied")]
         per_effect[name] = {
-            "n": len(single), "bins": bins,
-            "top1": _rate(hits), "in_set": _rate(in_set),
+            "n": len(single),
+            "bins": bins,
+            "top1": _rate(hits),
+            "in_set": _rate(in_set),
             "top1_default_profile": _rate([hits[i] for i in default]),
             "top1_varied_profile": _rate([hits[i] for i in varied]),
             "measured_threshold": measured_threshold(mags, hits),
@@ -163,26 +173,31 @@ def summarise(cases) -> dict:
     single_all = [c for c in main if len(c["effects"]) == 1]
     seconds = [c["diagnosis"]["seconds"] for c in cases]
     return {
-        "n": len(cases), "n_main": len(main), "n_clean": len(clean),
-        "confusion": confusion, "false_alarms": alarms,
+        "n": len(cases),
+        "n_main": len(main),
+        "n_clean": len(clean),
+        "confusion": confusion,
+        "false_alarms": alarms,
         "false_alarm_rate": alarms["all_clean"]["rate"],
         "per_effect": per_effect,
-        "single_effect": {"top1": _rate([c["diagnosis"]["verdict"] == c["effects"][0][0]
-                                         for c in single_all]),
-                          "in_set": _rate([c["effects"][0][0] in reported_set(c["diagnosis"])
-                                           for c in single_all]),
-                          "missed": _rate([c["diagnosis"]["verdict"] == "none"
-                                           for c in single_all])},
-        "pairs": {"n": len(pairs),
-                  "both_named": _rate([set(c["diagnosis"]["effects"]) == t
-                                       for c, t in zip(pairs, truth_sets)]),
-                  "one_named": _rate([bool(set(c["diagnosis"]["effects"]) & t)
-                                      for c, t in zip(pairs, truth_sets)])},
-        "base_params_clean_median_abs_error": {k: float(np.median(v)) if v else None
-                                               for k, v in base_err.items()},
-        "seconds_per_diagnosis": {"median": float(np.median(seconds)),
-                                  "p90": float(np.quantile(seconds, 0.9)),
-                                  "max": float(np.max(seconds))},
+        "single_effect": {
+            "top1": _rate([c["diagnosis"]["verdict"] == c["effects"][0][0] for c in single_all]),
+            "in_set": _rate([c["effects"][0][0] in reported_set(c["diagnosis"]) for c in single_all]),
+            "missed": _rate([c["diagnosis"]["verdict"] == "none" for c in single_all]),
+        },
+        "pairs": {
+            "n": len(pairs),
+            "both_named": _rate([set(c["diagnosis"]["effects"]) == t for c, t in zip(pairs, truth_sets)]),
+            "one_named": _rate([bool(set(c["diagnosis"]["effects"]) & t) for c, t in zip(pairs, truth_sets)]),
+        },
+        "base_params_clean_median_abs_error": {
+            k: float(np.median(v)) if v else None for k, v in base_err.items()
+        },
+        "seconds_per_diagnosis": {
+            "median": float(np.median(seconds)),
+            "p90": float(np.quantile(seconds, 0.9)),
+            "max": float(np.max(seconds)),
+        },
     }
 
 
@@ -190,18 +205,29 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=int, default=220, help="main recordings (default 220)")
     parser.add_argument("--null", type=int, default=80, help="extra clean recordings (default 80)")
-    parser.add_argument("--p-varied", type=float, default=0.3,
-                        help="probability of a varied driving profile (default 0.3)")
+    parser.add_argument(
+        "--p-varied", type=float, default=0.3, help="probability of a varied driving profile (default 0.3)"
+    )
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--samples", type=int, default=None, help="samples per default recording")
     parser.add_argument("--json", action="store_true", help="one JSON document on stdout")
-    parser.add_argument("--out", default=str(RESULTS / "diagnose_blind.json"),
-                        help="summary JSON (default benchmarks/results/diagnose_blind.json)")
-    parser.add_argument("--cases", metavar="FILE", default=str(RESULTS / "diagnose_blind_cases.json"),
-                        help="all cases, rewritten after every case (summarise early with "
-                             "--from-cases)")
-    parser.add_argument("--from-cases", metavar="FILE", default=None,
-                        help="summarise stored cases (re-deciding at the current threshold)")
+    parser.add_argument(
+        "--out",
+        default=str(RESULTS / "diagnose_blind.json"),
+        help="summary JSON (default benchmarks/results/diagnose_blind.json)",
+    )
+    parser.add_argument(
+        "--cases",
+        metavar="FILE",
+        default=str(RESULTS / "diagnose_blind_cases.json"),
+        help="all cases, rewritten after every case (summarise early with --from-cases)",
+    )
+    parser.add_argument(
+        "--from-cases",
+        metavar="FILE",
+        default=None,
+        help="summarise stored cases (re-deciding at the current threshold)",
+    )
     args = parser.parse_args(argv)
     if args.from_cases:
         with open(args.from_cases) as fh:
@@ -220,17 +246,23 @@ def main(argv=None) -> int:
     with tempfile.TemporaryDirectory() as tmp:
         for i in range(total):  # null cases spread evenly, so a cut-short run has both kinds
             is_main = (i + 1) * args.null // total == i * args.null // total
-            case = run_case(draw(rng) if is_main else [], rng, tmp, args.samples,
-                            p_varied_profile=args.p_varied)
+            case = run_case(
+                draw(rng) if is_main else [], rng, tmp, args.samples, p_varied_profile=args.p_varied
+            )
             case["set"] = "main" if is_main else "null"
             cases.append(case)
             progress.update()
             with open(args.cases, "w") as fh:
                 json.dump(cases, fh, default=float)
     summary = summarise(cases)
-    summary["settings"] = {"n": args.n, "null": args.null, "p_varied": args.p_varied,
-                           "seed": args.seed, "samples": args.samples,
-                           "gain_threshold": GAIN_THRESHOLD}
+    summary["settings"] = {
+        "n": args.n,
+        "null": args.null,
+        "p_varied": args.p_varied,
+        "seed": args.seed,
+        "samples": args.samples,
+        "gain_threshold": GAIN_THRESHOLD,
+    }
     return report(summary, args.json, args.out)
 
 
@@ -246,26 +278,33 @@ def report(summary, as_json: bool, out) -> int:
     print(table(rows, ["truth", *[p[:8] for p in labels]]))
     for key, r in summary["false_alarms"].items():
         if r["n"]:
-            print(f"false alarms, {key}: {r['k']}/{r['n']} = {r['rate']:.1%} "
-                  f"(95 % CI {r['ci95'][0]:.1%}–{r['ci95'][1]:.1%})")
+            print(
+                f"false alarms, {key}: {r['k']}/{r['n']} = {r['rate']:.1%} "
+                f"(95 % CI {r['ci95'][0]:.1%}–{r['ci95'][1]:.1%})"
+            )
     for name, s in summary["per_effect"].items():
-        bins = ", ".join(f"[{b['range'][0]:.3g}, {b['range'][1]:.3g}]: "
-                         + (f"{b['top1']:.0%}/{b['in_set']:.0%} of {b['n']}" if b["n"] else "-")
-                         for b in s["bins"])
+        bins = ", ".join(
+            f"[{b['range'][0]:.3g}, {b['range'][1]:.3g}]: "
+            + (f"{b['top1']:.0%}/{b['in_set']:.0%} of {b['n']}" if b["n"] else "-")
+            for b in s["bins"]
+        )
         err = s["median_rel_error"]
         above = s["top1_above_documented"]
-        print(f"{name:20s} top-1/in-set by |magnitude|: {bins}; measured 90 % threshold "
-              f"{s['measured_threshold']} (in set {s['measured_threshold_in_set']}); above the "
-              f"documented {s['documented_threshold']}: "
-              + (f"{above['k']}/{above['n']}" if above["n"] else "-")
-              + f"; above / below the recording's min_detectable: "
-              + " / ".join(f"{r['k']}/{r['n']}" if r["n"] else "-"
-                           for r in (s["top1_above_min_detectable"], s["top1_below_min_detectable"]))
-              + f"; median rel. error {'-' if err is None else f'{err:.3f}'}")
+        print(
+            f"{name:20s} top-1/in-set by |magnitude|: {bins}; measured 90 % threshold "
+            f"{s['measured_threshold']} (in set {s['measured_threshold_in_set']}); above the "
+            f"documented {s['documented_threshold']}: "
+            + (f"{above['k']}/{above['n']}" if above["n"] else "-")
+            + "; above / below the recording's min_detectable: "
+            + " / ".join(
+                f"{r['k']}/{r['n']}" if r["n"] else "-"
+                for r in (s["top1_above_min_detectable"], s["top1_below_min_detectable"])
+            )
+            + f"; median rel. error {'-' if err is None else f'{err:.3f}'}"
+        )
     print(f"single effects: {summary['single_effect']}")
     print(f"pairs: {summary['pairs']}")
-    print(f"base params on clean recordings, median |error|: "
-          f"{summary['base_params_clean_median_abs_error']}")
+    print(f"base params on clean recordings, median |error|: {summary['base_params_clean_median_abs_error']}")
     print(f"seconds per diagnosis: {summary['seconds_per_diagnosis']}")
     return 0
 

@@ -45,25 +45,32 @@ from jadhesion.data.simulator import simulate_many  # noqa: E402
 from jadhesion.identify import polach_fit  # noqa: E402
 from validation.foreign_generator import generate, write  # noqa: E402
 
+
 def _inflated(factor):
     """The EIV residual with the smoother's slip sd multiplied by ``factor`` (an experiment: the
     smoothed sd understates the error under coloured sensor noise)."""
+
     def residual(theta, data):
         if data.slip_sd is None:
             return polach_fit.polach_residual(theta, data)
         return polach_fit.polach_eiv_residual(theta, data._replace(slip_sd=factor * data.slip_sd))
+
     return residual
 
 
-RESIDUALS = {"plain": polach_fit.polach_residual, "eiv": polach_fit.polach_eiv_residual,
-             "eiv_sd2": _inflated(2.0)}
+RESIDUALS = {
+    "plain": polach_fit.polach_residual,
+    "eiv": polach_fit.polach_eiv_residual,
+    "eiv_sd2": _inflated(2.0),
+}
 NAMES = ("kA", "kS", "mu0", "A", "B")
 
 
 def _commit() -> str:
     out = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True)
-    dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
-                           capture_output=True, text=True).stdout.strip()
+    dirty = subprocess.run(
+        ["git", "status", "--porcelain", "--untracked-files=no"], capture_output=True, text=True
+    ).stdout.strip()
     return out.stdout.strip() + ("-dirty" if dirty else "")
 
 
@@ -85,11 +92,16 @@ def score(fits, seconds, truths):
     slope = np.array([(p[0] + p[1]) / 2 for p, _ in fits])
     true_slope = np.array([(t[0] + t[1]) / 2 for t in truths])
     rel = slope / true_slope - 1
-    return {"slope": slope.tolist(), "true_slope": true_slope.tolist(),
-            "slope_rel_error": rel.tolist(), "slope_within25": (np.abs(rel) <= 0.25).tolist(),
-            "mu0_abs_error": [abs(p[2] - t[2]) for (p, _), t in zip(fits, truths)],
-            "mae": [m for _, m in fits], "params": [p.tolist() for p, _ in fits],
-            "seconds": seconds}
+    return {
+        "slope": slope.tolist(),
+        "true_slope": true_slope.tolist(),
+        "slope_rel_error": rel.tolist(),
+        "slope_within25": (np.abs(rel) <= 0.25).tolist(),
+        "mu0_abs_error": [abs(p[2] - t[2]) for (p, _), t in zip(fits, truths)],
+        "mae": [m for _, m in fits],
+        "params": [p.tolist() for p, _ in fits],
+        "seconds": seconds,
+    }
 
 
 def ours(per, points, sensors):
@@ -102,8 +114,7 @@ def ours(per, points, sensors):
 def foreign(n, rate, duration, sensor, profile, tmp):
     datasets, truths = [], []
     for seed in range(n):
-        rec = generate(seed, effect="none", sensor=sensor, profile=profile, rate_hz=rate,
-                       duration_s=duration)
+        rec = generate(seed, effect="none", sensor=sensor, profile=profile, rate_hz=rate, duration_s=duration)
         path = write(rec, Path(tmp) / f"{profile}_{sensor}_{seed}.csv")
         datasets.append(to_dataset(load_recording(path)))
         truths.append(np.array([rec.truth["params"][k] for k in NAMES]))
@@ -111,13 +122,15 @@ def foreign(n, rate, duration, sensor, profile, tmp):
 
 
 def summarise(block):
-    return {"n": len(block["slope"]),
-            "slope_within25": float(np.mean(block["slope_within25"])),
-            "slope_rel_error_median": float(np.median(block["slope_rel_error"])),
-            "slope_abs_rel_error_median": float(np.median(np.abs(block["slope_rel_error"]))),
-            "mu0_abs_error_median": float(np.median(block["mu0_abs_error"])),
-            "mae_median": float(np.median(block["mae"])),
-            "seconds_median": float(np.median(block["seconds"][1:] or block["seconds"]))}
+    return {
+        "n": len(block["slope"]),
+        "slope_within25": float(np.mean(block["slope_within25"])),
+        "slope_rel_error_median": float(np.median(block["slope_rel_error"])),
+        "slope_abs_rel_error_median": float(np.median(np.abs(block["slope_rel_error"]))),
+        "mu0_abs_error_median": float(np.median(block["mu0_abs_error"])),
+        "mae_median": float(np.median(block["mae"])),
+        "seconds_median": float(np.median(block["seconds"][1:] or block["seconds"])),
+    }
 
 
 def main(argv=None):
@@ -142,8 +155,9 @@ def main(argv=None):
         for prof in args.profiles.split(","):
             for s in args.foreign_sensors.split(","):
                 if args.foreign:
-                    sets += list(foreign(args.foreign, args.foreign_rate, args.foreign_duration, s,
-                                         prof, tmp))
+                    sets += list(
+                        foreign(args.foreign, args.foreign_rate, args.foreign_duration, s, prof, tmp)
+                    )
     results, summary = {}, {}
     for residual in args.residuals.split(","):
         for key, datasets, truths in sets:
@@ -153,8 +167,13 @@ def main(argv=None):
             summary[f"{key}/{residual}"] = summarise(block)
             sys.stderr.write(f"{key}/{residual}: {summary[f'{key}/{residual}']}\n")
     polach_fit.LM_RESIDUAL = RESIDUALS["eiv"]
-    doc = {"commit": _commit(), "settings": vars(args), "summary": summary, "results": results,
-           "wall_seconds": time.time() - t_start}
+    doc = {
+        "commit": _commit(),
+        "settings": vars(args),
+        "summary": summary,
+        "results": results,
+        "wall_seconds": time.time() - t_start,
+    }
     Path(args.save).parent.mkdir(parents=True, exist_ok=True)
     Path(args.save).write_text(json.dumps(doc, indent=1))
     print(json.dumps(summary, indent=1))

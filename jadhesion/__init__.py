@@ -10,8 +10,18 @@ __version__ = "0.1.0"
 
 #: Public name → the module that defines it.
 _EXPORTS = {
-    **dict.fromkeys(("PARAM_NAMES", "adhesion_peak", "hertz_semi_axes", "kalker_c11", "kiencke_adhesion",
-                     "kiencke_optimum", "polach_adhesion"), "jadhesion.models"),
+    **dict.fromkeys(
+        (
+            "PARAM_NAMES",
+            "adhesion_peak",
+            "hertz_semi_axes",
+            "kalker_c11",
+            "kiencke_adhesion",
+            "kiencke_optimum",
+            "polach_adhesion",
+        ),
+        "jadhesion.models",
+    ),
     **dict.fromkeys(("LOCO_22E", "Vehicle"), "jadhesion.data.vehicle"),
     "curve_fit": "jadhesion.identify.curve_fit",
 }

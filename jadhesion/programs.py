@@ -67,8 +67,12 @@ def _leaf_spec(x) -> list:
 
 
 def _environment() -> dict:
-    return {"jax": jax.__version__, "jaxlib": jaxlib.__version__,
-            "x64": bool(jax.config.jax_enable_x64), "platform": export.default_export_platform()}
+    return {
+        "jax": jax.__version__,
+        "jaxlib": jaxlib.__version__,
+        "x64": bool(jax.config.jax_enable_x64),
+        "platform": export.default_export_platform(),
+    }
 
 
 def _atomic_write(path: Path, data: bytes) -> None:
@@ -110,16 +114,24 @@ class ProgramCache:
     def key(self, name: str, args: tuple, *, static: Optional[dict] = None, code: str = "") -> dict:
         """The key of program ``name`` for ``args`` (a tuple of pytrees of arrays)."""
         leaves, tree = jax.tree.flatten(args)
-        return {"format": FORMAT, "name": name, "static": dict(static or {}), "code": code,
-                **_environment(), "tree": str(tree), "args": [_leaf_spec(x) for x in leaves]}
+        return {
+            "format": FORMAT,
+            "name": name,
+            "static": dict(static or {}),
+            "code": code,
+            **_environment(),
+            "tree": str(tree),
+            "args": [_leaf_spec(x) for x in leaves],
+        }
 
     def path(self, key: dict) -> Path:
         """The file that holds the program of ``key``."""
         digest = hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:24]
         return self.directory / f"{key['name']}-{digest}{_SUFFIX}"
 
-    def load(self, name: str, args: tuple, *, static: Optional[dict] = None,
-             code: str = "") -> Optional[Program]:
+    def load(
+        self, name: str, args: tuple, *, static: Optional[dict] = None, code: str = ""
+    ) -> Optional[Program]:
         """The kept program for these arguments, or ``None`` (missing, unreadable, corrupt, or kept
         under another key)."""
         key = self.key(name, args, static=static, code=code)
@@ -145,8 +157,9 @@ class ProgramCache:
         self.last_miss = None
         return Program(exported, jax.tree.structure(args))
 
-    def export(self, name: str, fn: Callable, args: tuple, *, static: Optional[dict] = None,
-               code: str = "") -> Program:
+    def export(
+        self, name: str, fn: Callable, args: tuple, *, static: Optional[dict] = None, code: str = ""
+    ) -> Program:
         """Trace and export ``fn(*args)`` (``fn`` closes over the static options), keep it, and
         return it. A program that cannot be serialised (e.g. ``flatbuffers`` missing) is returned
         unkept."""
@@ -170,8 +183,15 @@ class ProgramCache:
             self.last_miss = f"not kept ({exc})"
         return Program(exported, tree)
 
-    def get_or_export(self, name: str, make_fn: Callable[[], Callable], args: tuple, *,
-                      static: Optional[dict] = None, code: str = "") -> Program:
+    def get_or_export(
+        self,
+        name: str,
+        make_fn: Callable[[], Callable],
+        args: tuple,
+        *,
+        static: Optional[dict] = None,
+        code: str = "",
+    ) -> Program:
         """The kept program, else ``make_fn()``'s function exported (and kept) now."""
         program = self.load(name, args, static=static, code=code)
         if program is None:

@@ -23,8 +23,14 @@ def toy_grid():
     """The tiny grid every sweep test runs: 2 scenarios × 3 seeds × 2 noise × 2 creep ranges."""
     from jadhesion.sweeps import Grid
 
-    return Grid(scenarios=("dry", "sand"), seeds=(0, 1, 5), methods=("pso",), noise_scale=(0.5, 2.0),
-                creep_max=(0.05, float("inf")), fit_options={"pop_size": 12, "max_iter": 15})
+    return Grid(
+        scenarios=("dry", "sand"),
+        seeds=(0, 1, 5),
+        methods=("pso",),
+        noise_scale=(0.5, 2.0),
+        creep_max=(0.05, float("inf")),
+        fit_options={"pop_size": 12, "max_iter": 15},
+    )
 
 
 @jax.jit

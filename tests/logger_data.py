@@ -10,12 +10,20 @@ from jadhesion.data.vehicle import LOCO_22E
 
 R = LOCO_22E.wheel_radius_m
 SCALE = LOCO_22E.axle_weight_n * R  # N·m for mu = 1
-LOGGER_MAP = ["time=t_ms[ms]", "vehicle_speed=v_Lok_kmh[km/h]", "wheel_speed=n_Rad[rpm]",
-              "traction_torque=M_Rad_kNm[kNm]"]
+LOGGER_MAP = [
+    "time=t_ms[ms]",
+    "vehicle_speed=v_Lok_kmh[km/h]",
+    "wheel_speed=n_Rad[rpm]",
+    "traction_torque=M_Rad_kNm[kNm]",
+]
 #: (label, samples, vehicle speed [m/s], creep [-], mu [-]) at 100 Hz; a 2 s gap before the last.
-PIECES = [("standstill", 100, 0.0, 0.0, 0.0), ("traction", 400, 2.0, 0.01, 0.3),
-          ("coasting", 100, 2.0, 0.0, 0.0), ("braking", 300, 2.0, -0.01, -0.3),
-          ("traction", 300, 3.0, 0.01, 0.3)]
+PIECES = [
+    ("standstill", 100, 0.0, 0.0, 0.0),
+    ("traction", 400, 2.0, 0.01, 0.3),
+    ("coasting", 100, 2.0, 0.0, 0.0),
+    ("braking", 300, 2.0, -0.01, -0.3),
+    ("traction", 300, 3.0, 0.01, 0.3),
+]
 GAP_SAMPLES = 200
 
 
@@ -33,19 +41,29 @@ def stretches_si(seed=0):
         mu.append(np.full(m, adhesion))
     t, v, s, mu = map(np.concatenate, (t, v, s, mu))
     n = t.size
-    return {"time": t, "vehicle_speed": v + 1e-4 * rng.standard_normal(n) * (v != 0),
-            "wheel_speed": v * (1 + s) + 1e-4 * rng.standard_normal(n) * (v != 0),
-            "traction_torque": (mu + 1e-3 * rng.standard_normal(n) * (mu != 0)) * SCALE}
+    return {
+        "time": t,
+        "vehicle_speed": v + 1e-4 * rng.standard_normal(n) * (v != 0),
+        "wheel_speed": v * (1 + s) + 1e-4 * rng.standard_normal(n) * (v != 0),
+        "traction_torque": (mu + 1e-3 * rng.standard_normal(n) * (mu != 0)) * SCALE,
+    }
 
 
 def logger_columns(cols):
     """The same columns as a logger names and scales them."""
-    return {"t_ms": cols["time"] * 1e3, "v_Lok_kmh": cols["vehicle_speed"] * 3.6,
-            "n_Rad": cols["wheel_speed"] / R * 60 / (2 * math.pi),
-            "M_Rad_kNm": cols["traction_torque"] / 1e3}
+    return {
+        "t_ms": cols["time"] * 1e3,
+        "v_Lok_kmh": cols["vehicle_speed"] * 3.6,
+        "n_Rad": cols["wheel_speed"] / R * 60 / (2 * math.pi),
+        "M_Rad_kNm": cols["traction_torque"] / 1e3,
+    }
 
 
 def write_logger_file(path, seed=0):
     """A logger CSV of :func:`stretches_si` with its sidecar (22E, column map); returns the path."""
-    return save_recording(logger_columns(stretches_si(seed)), LOCO_22E, path,
-                          extra_sidecar={"columns": dict(s.split("=") for s in LOGGER_MAP)})
+    return save_recording(
+        logger_columns(stretches_si(seed)),
+        LOCO_22E,
+        path,
+        extra_sidecar={"columns": dict(s.split("=") for s in LOGGER_MAP)},
+    )

@@ -31,30 +31,51 @@ CREEP_HEADER = "creepage,vehicle_speed,adhesion"
 FILES = {
     "empty.csv": ("", None, ["empty.csv"]),
     "header_only.csv": (csv(), None, ["header_only.csv"]),
-    "missing_torque.csv": (csv(*(",".join(r.split(",")[:3]) for r in ROWS),
-                               header="time,vehicle_speed,wheel_speed"), None,
-                           ["missing_torque.csv", "traction_torque"]),
-    "text_cell.csv": (csv(*ROWS[:5], "0.1,fast,0.6,30000", *ROWS[6:]), None,
-                      ["text_cell.csv", "vehicle_speed", "row"]),
-    "nan_cell.csv": (csv(*ROWS[:7], "0.14,0.6,nan,30000", *ROWS[8:]), None,
-                     ["nan_cell.csv", "wheel_speed", "row"]),
-    "inf_torque.csv": (csv(*ROWS[:3], "0.06,0.6,0.63,inf", *ROWS[4:]), None,
-                       ["inf_torque.csv", "traction_torque", "row"]),
+    "missing_torque.csv": (
+        csv(*(",".join(r.split(",")[:3]) for r in ROWS), header="time,vehicle_speed,wheel_speed"),
+        None,
+        ["missing_torque.csv", "traction_torque"],
+    ),
+    "text_cell.csv": (
+        csv(*ROWS[:5], "0.1,fast,0.6,30000", *ROWS[6:]),
+        None,
+        ["text_cell.csv", "vehicle_speed", "row"],
+    ),
+    "nan_cell.csv": (
+        csv(*ROWS[:7], "0.14,0.6,nan,30000", *ROWS[8:]),
+        None,
+        ["nan_cell.csv", "wheel_speed", "row"],
+    ),
+    "inf_torque.csv": (
+        csv(*ROWS[:3], "0.06,0.6,0.63,inf", *ROWS[4:]),
+        None,
+        ["inf_torque.csv", "traction_torque", "row"],
+    ),
     "ragged.csv": (csv(*ROWS[:4], "0.08,0.6", *ROWS[5:]), None, ["ragged.csv", "row"]),
-    "time_backwards.csv": (csv(*ROWS[:10], ROWS[3], *ROWS[11:]), None,
-                           ["time_backwards.csv", "time"]),
+    "time_backwards.csv": (csv(*ROWS[:10], ROWS[3], *ROWS[11:]), None, ["time_backwards.csv", "time"]),
     "binary.csv": ("\x00\x01\x02garbage\xff", None, ["binary.csv"]),
     "bad_sidecar.csv": (csv(*ROWS), "{not json", ["bad_sidecar.json"]),
-    "sidecar_type.csv": (csv(*ROWS), json.dumps({"axle_load_kg": "heavy"}),
-                         ["sidecar_type.json", "axle_load_kg"]),
-    "sidecar_negative.csv": (csv(*ROWS), json.dumps({"wheel_radius_m": -0.6}),
-                             ["sidecar_negative.json", "wheel_radius_m"]),
+    "sidecar_type.csv": (
+        csv(*ROWS),
+        json.dumps({"axle_load_kg": "heavy"}),
+        ["sidecar_type.json", "axle_load_kg"],
+    ),
+    "sidecar_negative.csv": (
+        csv(*ROWS),
+        json.dumps({"wheel_radius_m": -0.6}),
+        ["sidecar_negative.json", "wheel_radius_m"],
+    ),
     "three_rows.csv": (csv(*ROWS[:3]), None, ["three_rows.csv", "samples"]),
-    "creep_too_few.csv": (csv("0.01,0.6,0.2", "0.02,0.6,0.25", header=CREEP_HEADER), None,
-                          ["creep_too_few.csv", "samples"]),
-    "creep_bad_adhesion.csv": (csv(*[f"{0.01 * (i + 1)},0.6,{'x' if i == 4 else 0.2}"
-                                     for i in range(20)], header=CREEP_HEADER), None,
-                               ["creep_bad_adhesion.csv", "adhesion", "row"]),
+    "creep_too_few.csv": (
+        csv("0.01,0.6,0.2", "0.02,0.6,0.25", header=CREEP_HEADER),
+        None,
+        ["creep_too_few.csv", "samples"],
+    ),
+    "creep_bad_adhesion.csv": (
+        csv(*[f"{0.01 * (i + 1)},0.6,{'x' if i == 4 else 0.2}" for i in range(20)], header=CREEP_HEADER),
+        None,
+        ["creep_bad_adhesion.csv", "adhesion", "row"],
+    ),
 }
 
 
@@ -142,9 +163,12 @@ def test_subprocess_bad_flag_and_file(tmp_path, recording):
     env = dict(os.environ)
     bad = tmp_path / "binary.csv"
     bad.write_bytes(b"\x00\x01garbage")
-    for argv, word in ((["fit", str(recording), "--max-iter", "0", "--json"], "--max-iter"),
-                       (["fit", str(bad), "--json"], "binary.csv")):
-        proc = subprocess.run([sys.executable, "-m", "jadhesion", *argv], env=env,
-                              capture_output=True, text=True, timeout=300)
+    for argv, word in (
+        (["fit", str(recording), "--max-iter", "0", "--json"], "--max-iter"),
+        (["fit", str(bad), "--json"], "binary.csv"),
+    ):
+        proc = subprocess.run(
+            [sys.executable, "-m", "jadhesion", *argv], env=env, capture_output=True, text=True, timeout=300
+        )
         assert proc.returncode == 2 and proc.stdout == ""
         assert len(proc.stderr.strip().splitlines()) == 1 and word in proc.stderr

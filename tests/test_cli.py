@@ -20,8 +20,13 @@ def env(tmp_path_factory):
 
 
 def jadhesion(env, *args, check=True):
-    proc = subprocess.run([sys.executable, "-m", "jadhesion", *map(str, args)], env=env,
-                          capture_output=True, text=True, timeout=600)
+    proc = subprocess.run(
+        [sys.executable, "-m", "jadhesion", *map(str, args)],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     if check and proc.returncode != 0:
         raise AssertionError(f"exit {proc.returncode}: {proc.stderr}")
     return proc
@@ -32,8 +37,7 @@ def recording(env, tmp_path_factory):
     out = tmp_path_factory.mktemp("rec") / "dry.csv"
     # 0.05 × the realistic sensors ≈ the historical clean level (5e-5 m/s): the contract and
     # accuracy checks below; at realistic noise LM's mu0 is off by ~0.02 (benchmarks/coverage_noise).
-    jadhesion(env, "simulate", "--scenario", "dry", "--seed", "3", "--sensor-noise", "0.05",
-              "--out", out)
+    jadhesion(env, "simulate", "--scenario", "dry", "--seed", "3", "--sensor-noise", "0.05", "--out", out)
     return out
 
 
@@ -77,8 +81,9 @@ def test_fit_json_contract_and_accuracy(env, recording):
 
 
 def test_fit_human_output_says_whether_it_converged(env, recording, tmp_path):
-    proc = jadhesion(env, "fit", recording, "--method", "itlbo", "--max-iter", "3",
-                     "--plot", tmp_path / "plots")
+    proc = jadhesion(
+        env, "fit", recording, "--method", "itlbo", "--max-iter", "3", "--plot", tmp_path / "plots"
+    )
     assert "NOT CONVERGED" in proc.stdout and "max_steps" in proc.stdout
     assert "warning [not_converged]" in proc.stdout
     assert (tmp_path / "plots" / "fit.png").stat().st_size > 10_000
@@ -144,7 +149,10 @@ def test_reproduce_table2_json_rows_include_mcmc(env):
     for row in (r for r in doc["rows"] if r["method"] == "mcmc"):
         assert row["likelihood"] == doc["mcmc"]["likelihood"] and row["paper"] is None
         assert set(row["width90"]) >= {"kA", "kS", "mu0", "A", "B", "mu_max", "creep_opt"}
-        assert row["iterations"] >= row["steps_run"] // 3 and row["evaluations"] == row["iterations"] * row["walkers"]
+        assert (
+            row["iterations"] >= row["steps_run"] // 3
+            and row["evaluations"] == row["iterations"] * row["walkers"]
+        )
         assert 0.005 < row["error"] < 0.05 and row["seconds"] > 0
 
 
@@ -161,12 +169,14 @@ def test_fit_warns_few_samples_in_process(tmp_path, capsys):
     rng = np.random.default_rng(0)
     creep = np.geomspace(1e-3, 0.3, 50)
     speed = np.full(50, 0.6)
-    mu = np.asarray(polach_adhesion(np.array([0.43, 0.6, 0.36, 0.36, 0.13]), creep, creep * speed,
-                                    LOCO_22E.k_eps()))
+    mu = np.asarray(
+        polach_adhesion(np.array([0.43, 0.6, 0.36, 0.36, 0.13]), creep, creep * speed, LOCO_22E.k_eps())
+    )
     mu = mu + 0.005 * rng.standard_normal(50)
     path = tmp_path / "few.csv"
-    path.write_text("creepage,vehicle_speed,adhesion\n"
-                    + "".join(f"{c},{v},{m}\n" for c, v, m in zip(creep, speed, mu)))
+    path.write_text(
+        "creepage,vehicle_speed,adhesion\n" + "".join(f"{c},{v},{m}\n" for c, v, m in zip(creep, speed, mu))
+    )
     assert main(["fit", str(path), "--method", "lm", "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert "few_samples" in {w["code"] for w in doc["warnings"]}

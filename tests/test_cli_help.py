@@ -31,8 +31,9 @@ sys.stderr.write(f"exit={code} jax={'jax' in sys.modules}\\n")
 
 def _help(*argv):
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")]))
-    proc = subprocess.run([sys.executable, "-c", _PROBE, *argv], cwd=REPO, env=env, capture_output=True,
-                          text=True, timeout=120)
+    proc = subprocess.run(
+        [sys.executable, "-c", _PROBE, *argv], cwd=REPO, env=env, capture_output=True, text=True, timeout=120
+    )
     return proc.stdout, proc.stderr.strip().splitlines()[-1]
 
 

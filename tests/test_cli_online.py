@@ -15,7 +15,7 @@ from jadhesion.data.simulator import simulate
 from jadhesion.experiments import online as ex
 from jadhesion.identify import online as ol
 
-TRUE = (80.0, 100.0, 35.0)   # p1, p2, a_s
+TRUE = (80.0, 100.0, 35.0)  # p1, p2, a_s
 KEYS = {"algorithm", "a_s", "final", "track", "status"}
 
 
@@ -32,8 +32,8 @@ def sweep_csv(tmp_path_factory):
     sc = ex.scenario(jax.random.key(7), n_steps=200, changes=(), rails=("normal",), noise=0.001)
     lam, mu = np.array(sc.lam), np.array(sc.mu)
     v = np.full(200, 1.5)
-    v[50:80] = 0.0                      # standstill: creep undefined
-    mu[120:150] = 0.0                   # coasting: no information
+    v[50:80] = 0.0  # standstill: creep undefined
+    mu[120:150] = 0.0  # coasting: no information
     path = tmp_path_factory.mktemp("sweep") / "sweep.csv"
     save_recording({"creepage": lam, "vehicle_speed": v, "adhesion": mu}, path=path)
     return path, lam, mu, v
@@ -44,8 +44,7 @@ def test_shares_the_reproduce_code_path_exactly(capsys, sweep_csv):
     code, doc, _ = _run(capsys, "online", path, "--algorithm", "2", "--a-s", 35)
     assert code == 0 and KEYS <= set(doc) and doc["status"] == "converged"
     used = (v >= 0.1) & (np.abs(mu) >= 0.02)
-    state, trace = ol.run(ol.algorithm2_params(), jnp.asarray(lam), jnp.asarray(mu),
-                          jnp.asarray(used))
+    state, trace = ol.run(ol.algorithm2_params(), jnp.asarray(lam), jnp.asarray(mu), jnp.asarray(used))
     np.testing.assert_allclose(doc["track"]["p1"], trace.p1, rtol=1e-12)
     np.testing.assert_allclose(doc["track"]["eta"], trace.eta, rtol=1e-12)
     assert doc["track"]["used"] == used.tolist() and doc["n_used"] == 140
@@ -68,9 +67,8 @@ def test_estimates_a_s_and_tracks_the_optimum(capsys, sweep_csv, alg):
 
 def test_raw_recording_with_standstill_never_nan(capsys, tmp_path):
     sim = simulate("wet", seed=1, n_samples=300)
-    cols = {k: np.array(sim.columns[k]) for k in ("time", "vehicle_speed", "wheel_speed",
-                                                  "traction_torque")}
-    cols["vehicle_speed"][:40] = cols["wheel_speed"][:40] = 0.0      # a standstill start
+    cols = {k: np.array(sim.columns[k]) for k in ("time", "vehicle_speed", "wheel_speed", "traction_torque")}
+    cols["vehicle_speed"][:40] = cols["wheel_speed"][:40] = 0.0  # a standstill start
     path = save_recording(cols, sim.vehicle, tmp_path / "raw.csv")
     code, doc, _ = _run(capsys, "online", path, "--plot", tmp_path / "fig")
     assert code == 0 and doc["n_used"] <= 260 and not any(doc["track"]["used"][:40])
@@ -79,12 +77,13 @@ def test_raw_recording_with_standstill_never_nan(capsys, tmp_path):
     assert (tmp_path / "fig" / "raw_online.png").stat().st_size > 20_000
 
 
-@pytest.mark.parametrize("argv, needle", [
-    (["--a-s", "-3"], "--a-s"), (["--a-s", "nan"], "--a-s"), (["--algorithm", "3"], None)])
+@pytest.mark.parametrize(
+    "argv, needle", [(["--a-s", "-3"], "--a-s"), (["--a-s", "nan"], "--a-s"), (["--algorithm", "3"], None)]
+)
 def test_bad_options_exit_2_and_write_nothing(capsys, sweep_csv, tmp_path, argv, needle):
     try:
         code = main(["online", str(sweep_csv[0]), *argv, "--plot", str(tmp_path / "p")])
-    except SystemExit as exc:          # argparse's choices
+    except SystemExit as exc:  # argparse's choices
         code = exc.code
     err = capsys.readouterr().err
     assert code == 2 and not (tmp_path / "p").exists()
@@ -93,8 +92,10 @@ def test_bad_options_exit_2_and_write_nothing(capsys, sweep_csv, tmp_path, argv,
 
 
 def test_no_informative_sample_is_a_clear_error(capsys, tmp_path):
-    path = save_recording({"creepage": np.full(50, 0.01), "vehicle_speed": np.zeros(50),
-                           "adhesion": np.full(50, 0.3)}, path=tmp_path / "still.csv")
+    path = save_recording(
+        {"creepage": np.full(50, 0.01), "vehicle_speed": np.zeros(50), "adhesion": np.full(50, 0.3)},
+        path=tmp_path / "still.csv",
+    )
     code, _, err = _run(capsys, "online", path)
     assert code == 2 and "informative samples" in err
 

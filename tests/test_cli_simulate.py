@@ -24,9 +24,26 @@ def pair(tmp_path_factory):
     (d / "loco.json").write_text(json.dumps({"axle_load_kg": 20000.0, "name": "light"}))
     out = {}
     for test in ("traction", "braking"):
-        argv = ["simulate", "--scenario", "wet", "--params", "kA=0.3,mu0=0.3", "--duration", "10",
-                "--rate", "100", "--vehicle", d / "loco.json", "--test", test, "--seed", "4",
-                "--out", d / f"{test}.csv", "--json"]
+        argv = [
+            "simulate",
+            "--scenario",
+            "wet",
+            "--params",
+            "kA=0.3,mu0=0.3",
+            "--duration",
+            "10",
+            "--rate",
+            "100",
+            "--vehicle",
+            d / "loco.json",
+            "--test",
+            test,
+            "--seed",
+            "4",
+            "--out",
+            d / f"{test}.csv",
+            "--json",
+        ]
         assert main(list(map(str, argv))) == 0
         out[test] = d / f"{test}.csv"
     return out
@@ -52,8 +69,10 @@ def test_given_parameters_generate_the_data(pair):
         data = to_dataset(load_recording(path))
         truth = json.loads(path.with_suffix(".truth.json").read_text())
         mae = {}
-        for label, theta in (("given", [truth["params"][k] for k in PARAM_NAMES]),
-                             ("scenario", [1.0, 1.0, 0.2610, 0.6858, 0.2251])):
+        for label, theta in (
+            ("given", [truth["params"][k] for k in PARAM_NAMES]),
+            ("scenario", [1.0, 1.0, 0.2610, 0.6858, 0.2251]),
+        ):
             model = polach_adhesion(np.asarray(theta), data.creep, data.slip, truth["k_eps"])
             mae[label] = float(np.mean(np.abs(np.asarray(model) - np.asarray(data.adhesion))))
         # realistic sensors: the true parameters' floor on smoothed creep is ~0.018 (wet scenario)
@@ -65,20 +84,29 @@ def test_braking_mirrors_traction(pair):
     assert np.all(t["traction_torque"] > 0) and np.all(b["traction_torque"] < 0)
     # recorded (raw) creep: realistic speed noise flips the sign of the smallest values only
     assert np.mean(t["creepage"][100:] > 0) > 0.95 and np.mean(b["creepage"][100:] < 0) > 0.95
-    assert np.all(b["vehicle_speed"] > 0)                       # still running forwards
+    assert np.all(b["vehicle_speed"] > 0)  # still running forwards
     # odd model, same profile and noise seed: |mu_hat| agrees up to the (even) running resistance
     np.testing.assert_allclose(np.mean(-b["adhesion"]), np.mean(t["adhesion"]), rtol=0.02)
 
 
-@pytest.mark.parametrize("argv, flag", [
-    (["--params", "kA=2"], "--params"), (["--params", "kA"], "--params"),
-    (["--params", "mu0=x"], "--params"), (["--params", "foo=1"], "--params"),
-    (["--duration", "-1"], "--duration"), (["--duration", "1"], "--duration"),
-    (["--rate", "0"], "--rate"), (["--rate", "nan"], "--rate"),
-    (["--vehicle", "missing.json"], "--vehicle"), (["--vehicle", "BAD"], "--vehicle")])
+@pytest.mark.parametrize(
+    "argv, flag",
+    [
+        (["--params", "kA=2"], "--params"),
+        (["--params", "kA"], "--params"),
+        (["--params", "mu0=x"], "--params"),
+        (["--params", "foo=1"], "--params"),
+        (["--duration", "-1"], "--duration"),
+        (["--duration", "1"], "--duration"),
+        (["--rate", "0"], "--rate"),
+        (["--rate", "nan"], "--rate"),
+        (["--vehicle", "missing.json"], "--vehicle"),
+        (["--vehicle", "BAD"], "--vehicle"),
+    ],
+)
 def test_bad_values_exit_2_naming_the_flag(capsys, tmp_path, argv, flag):
     (tmp_path / "BAD.json").write_text('{"axle_load_kg": -1}')
     argv = [a.replace("BAD", str(tmp_path / "BAD.json")) for a in argv]
     code, _, err = _simulate(capsys, tmp_path / "x.csv", *argv)
     assert code == 2 and err.count("\n") == 1 and flag in err
-    assert list(tmp_path.iterdir()) == [tmp_path / "BAD.json"]     # nothing written
+    assert list(tmp_path.iterdir()) == [tmp_path / "BAD.json"]  # nothing written

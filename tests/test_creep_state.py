@@ -25,7 +25,7 @@ def _errors(result):
 def test_smoothed_creep_beats_the_raw_difference_with_calibrated_sd():
     for scenario in ("dry", "sand"):
         est, smooth_err, raw_err = _errors(simulate(scenario, 0, sensors=WHITE))
-        rms = lambda e: float(np.sqrt(np.mean(e ** 2)))  # noqa: E731
+        rms = lambda e: float(np.sqrt(np.mean(e**2)))  # noqa: E731
         assert rms(smooth_err) < 0.6 * rms(raw_err), scenario
         z = smooth_err / np.asarray(est.creep_sd)
         # errors are correlated over ~10 samples: ~200 effective samples, var(z) within ±30 %
@@ -36,7 +36,7 @@ def test_smoothed_creep_beats_the_raw_difference_with_calibrated_sd():
 def test_realistic_and_clean_sensors_smoothing_does_no_harm():
     for sensors in ("realistic", "clean"):
         _, smooth_err, raw_err = _errors(simulate("wet", 1, sensors=sensors))
-        assert np.sqrt(np.mean(smooth_err ** 2)) < np.sqrt(np.mean(raw_err ** 2)), sensors
+        assert np.sqrt(np.mean(smooth_err**2)) < np.sqrt(np.mean(raw_err**2)), sensors
 
 
 def test_difference_sd_recovers_white_noise_on_a_smooth_signal():
@@ -51,8 +51,12 @@ def _signals(n, key, standstill=False, jitter=False):
     t = jnp.concatenate([jnp.zeros(1), jnp.cumsum(dt)])
     v = jnp.zeros(n) if standstill else 1.0 + 0.01 * t
     w = 0.005 + 0.002 * jnp.sin(t)
-    return (t, v + w + 1e-3 * jax.random.normal(k1, (n,)), v + 1e-3 * jax.random.normal(k2, (n,)),
-            4e4 * jnp.ones(n))
+    return (
+        t,
+        v + w + 1e-3 * jax.random.normal(k1, (n,)),
+        v + 1e-3 * jax.random.normal(k2, (n,)),
+        4e4 * jnp.ones(n),
+    )
 
 
 def _smooth(sig):

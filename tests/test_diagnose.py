@@ -10,11 +10,10 @@ import pytest
 
 from jadhesion.cli import main
 from jadhesion.data.recording import save_recording
-from jadhesion.data.simulator import simulate
-from jadhesion.diagnose import DETECTION_THRESHOLDS, EFFECT_NAMES, diagnose
-from jadhesion.diagnose import extensions as ext
-from jadhesion.diagnose import features, fitting, null, select
 from jadhesion.data.scenarios import SCENARIOS
+from jadhesion.data.simulator import simulate
+from jadhesion.diagnose import DETECTION_THRESHOLDS, EFFECT_NAMES, diagnose, features, fitting, null, select
+from jadhesion.diagnose import extensions as ext
 from jadhesion.diagnose.signals import from_columns
 from jadhesion.models.effects import EFFECTS
 from jadhesion.models.polach import polach_adhesion
@@ -47,9 +46,12 @@ def test_zero_extras_equal_base_exactly(clean):
     sig = from_columns(_raw(clean), clean.vehicle)
     theta = jnp.array([0.43, 0.9, 0.35, 0.36, 0.13])
     params = jnp.concatenate([theta, ext.NEUTRAL])
-    base = polach_adhesion(theta, (sig.wheel_speed - sig.speed) / jnp.maximum(jnp.abs(sig.speed),
-                                                                              0.01),
-                           sig.wheel_speed - sig.speed, sig.k_eps)
+    base = polach_adhesion(
+        theta,
+        (sig.wheel_speed - sig.speed) / jnp.maximum(jnp.abs(sig.speed), 0.01),
+        sig.wheel_speed - sig.speed,
+        sig.k_eps,
+    )
     for name in ext.NAMES:
         target, pred = ext.predict(params, ext.active_mask([name]), sig)
         np.testing.assert_array_equal(np.asarray(pred), np.asarray(base), err_msg=name)
@@ -143,8 +145,10 @@ def test_heat_filter_starts_at_first_sample(clean):
 
 
 def test_unconverged_candidate_is_never_ranked():
-    rows = [{"name": "rail_change", "gain": 0.5, "delta_bic": -100.0, "status": "max_steps"},
-            {"name": "speed_dependence", "gain": 0.1, "delta_bic": -50.0, "status": "converged"}]
+    rows = [
+        {"name": "rail_change", "gain": 0.5, "delta_bic": -100.0, "status": "max_steps"},
+        {"name": "speed_dependence", "gain": 0.1, "delta_bic": -50.0, "status": "converged"},
+    ]
     assert select.effects_from(rows, None) == (["speed_dependence"], [])
     rows[1]["status"] = "stalled"
     assert select.effects_from(rows, None) == ([], [])

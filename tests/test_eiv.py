@@ -25,9 +25,15 @@ def _dataset(sd, n=400, seed=0):
     k_eps = LOCO_22E.k_eps()
     mu = np.asarray(polach_adhesion(TRUTH, jnp.asarray(true / v), jnp.asarray(true), k_eps))
     mu = mu + 0.003 * rng.standard_normal(n)
-    return PolachDataset(creep=jnp.asarray(slip / v), slip=jnp.asarray(slip), adhesion=jnp.asarray(mu),
-                         vehicle_speed=jnp.asarray(v), k_eps=jnp.asarray(k_eps),
-                         slip_sd=jnp.full(n, sd), creep_sd=jnp.full(n, sd / SPEED))
+    return PolachDataset(
+        creep=jnp.asarray(slip / v),
+        slip=jnp.asarray(slip),
+        adhesion=jnp.asarray(mu),
+        vehicle_speed=jnp.asarray(v),
+        k_eps=jnp.asarray(k_eps),
+        slip_sd=jnp.full(n, sd),
+        creep_sd=jnp.full(n, sd / SPEED),
+    )
 
 
 def _slope(theta):
@@ -40,12 +46,11 @@ def test_eiv_fit_recovers_the_slope_the_plain_fit_attenuates():
     eiv = fit_polach(data, "lm", jax.random.key(0)).params
     plain = fit_polach(data._replace(slip_sd=None, creep_sd=None), "lm", jax.random.key(0)).params
     assert _slope(plain) < 0.75 * true_slope, _slope(plain)  # measured −33 %
-    assert abs(_slope(eiv) / true_slope - 1) < 0.2, _slope(eiv)      # measured +14 %
+    assert abs(_slope(eiv) / true_slope - 1) < 0.2, _slope(eiv)  # measured +14 %
 
 
 def test_eiv_residual_vanishes_without_slip_uncertainty():
     data = _dataset(sd=1e-7)
-    np.testing.assert_allclose(polach_eiv_residual(TRUTH, data), polach_residual(TRUTH, data),
-                               atol=1e-9)
+    np.testing.assert_allclose(polach_eiv_residual(TRUTH, data), polach_residual(TRUTH, data), atol=1e-9)
     raw = data._replace(slip_sd=None, creep_sd=None)
     np.testing.assert_array_equal(polach_eiv_residual(TRUTH, raw), polach_residual(TRUTH, raw))

@@ -19,10 +19,15 @@ def sweep():
     """Creep sweeps at walking pace (1–3.3 m/s, creep up to ~0.34, slip up to ~1 m/s): a heavy
     train on a grade. (At 4–12 m/s the same sweeps reach only ~3 % creep, and even the noise-free
     curve leaves mu0 traded against kA, kS, A, B: LM then finds mu0 ≈ 0.44 at MAE 5e-4.)"""
-    plan = dataclasses.replace(dynamics.make_plan("sweep", np.random.default_rng(2), 40.0), v0=1.0,
-                               trailing_mass_kg=2500e3, grade=0.004)
-    return generate(3, params=DRY, vehicle="coco_22e", profile=plan, rate_hz=50.0,
-                    duration_s=40.0, sensor="mild")
+    plan = dataclasses.replace(
+        dynamics.make_plan("sweep", np.random.default_rng(2), 40.0),
+        v0=1.0,
+        trailing_mass_kg=2500e3,
+        grade=0.004,
+    )
+    return generate(
+        3, params=DRY, vehicle="coco_22e", profile=plan, rate_hz=50.0, duration_s=40.0, sensor="mild"
+    )
 
 
 def test_deterministic_per_seed():
@@ -63,16 +68,18 @@ def test_wheelset_and_train_balance(sweep):
 
 
 def test_sensor_noise_matches_settings():
-    sensor = {"vehicle_speed": {"white": 4e-3, "ar": 2e-3, "ar_tau_s": 0.5, "quantum": 2e-3},
-              "wheel_speed": {"white": 0.0, "ar": 3e-3, "ar_tau_s": 1.0, "quantum": 0.0},
-              "traction_torque": {"white": 80.0, "ar": 0.0, "ar_tau_s": 1.0, "quantum": 50.0},
-              "jitter_s": 0.0, "time_quantum_s": 1e-4}
+    sensor = {
+        "vehicle_speed": {"white": 4e-3, "ar": 2e-3, "ar_tau_s": 0.5, "quantum": 2e-3},
+        "wheel_speed": {"white": 0.0, "ar": 3e-3, "ar_tau_s": 1.0, "quantum": 0.0},
+        "traction_torque": {"white": 80.0, "ar": 0.0, "ar_tau_s": 1.0, "quantum": 50.0},
+        "jitter_s": 0.0,
+        "time_quantum_s": 1e-4,
+    }
     rec = generate(5, profile="steady", rate_hz=200.0, duration_s=60.0, sensor=sensor)
     lat, col = rec.latent, rec.columns
     res_v = col["vehicle_speed"] - lat["vehicle_speed"]
     assert np.std(res_v) == pytest.approx(np.sqrt(4e-3**2 + 2e-3**2 + 2e-3**2 / 12), rel=0.1)
-    np.testing.assert_allclose(col["vehicle_speed"] / 2e-3, np.round(col["vehicle_speed"] / 2e-3),
-                               atol=1e-6)
+    np.testing.assert_allclose(col["vehicle_speed"] / 2e-3, np.round(col["vehicle_speed"] / 2e-3), atol=1e-6)
     res_w = col["wheel_speed"] - lat["wheel_speed"]  # pure AR(1): lag-1 correlation φ
     phi = np.exp(-1.0 / (200.0 * 1.0))
     assert np.corrcoef(res_w[1:], res_w[:-1])[0, 1] == pytest.approx(phi, abs=0.01)
@@ -83,8 +90,23 @@ def test_sensor_noise_matches_settings():
 
 
 def test_blind_set_cli(tmp_path):
-    assert main(["--n", "2", "--out", str(tmp_path), "--seed", "4", "--effects",
-                 "torque_offset,none", "--duration", "5"]) == 0
+    assert (
+        main(
+            [
+                "--n",
+                "2",
+                "--out",
+                str(tmp_path),
+                "--seed",
+                "4",
+                "--effects",
+                "torque_offset,none",
+                "--duration",
+                "5",
+            ]
+        )
+        == 0
+    )
     key = json.loads((tmp_path / "answer_key.json").read_text())
     assert sorted(t["effect"] for t in key["files"].values()) == ["none", "torque_offset"]
     assert sorted(p.name for p in tmp_path.glob("*.csv")) == ["rec_000.csv", "rec_001.csv"]

@@ -41,8 +41,11 @@ def write_mat73(cols, path):
     return path
 
 
-WRITERS = {"parquet": (write_parquet, ".parquet"), "mat5": (write_mat5, ".mat"),
-           "mat73": (write_mat73, ".mat")}
+WRITERS = {
+    "parquet": (write_parquet, ".parquet"),
+    "mat5": (write_mat5, ".mat"),
+    "mat73": (write_mat73, ".mat"),
+}
 
 
 @pytest.fixture(scope="module")
@@ -80,17 +83,38 @@ def test_bad_values_name_file_column_row(tmp_path):
     path = write_parquet(cols, tmp_path / "nan.parquet")
     with pytest.raises(RecordingError) as info:
         load_recording(path, columns=LOGGER_MAP)
-    assert str(info.value) == (f"{path}: column 'v_Lok_kmh', row 17: nan is not a finite number "
-                               f"(NaN, a missing value, and inf are not allowed)")
+    assert str(info.value) == (
+        f"{path}: column 'v_Lok_kmh', row 17: nan is not a finite number "
+        f"(NaN, a missing value, and inf are not allowed)"
+    )
     cols = logger_columns(stretches_si())
     path = write_mat5(cols, tmp_path / "kmh.mat")
-    with pytest.raises(RecordingError, match=r"kmh.mat: column 'v_Lok_kmh', row 101: median "
-                                             r".* --column vehicle_speed=v_Lok_kmh\[km/h\]$"):
-        load_recording(path, columns=["time=t_ms[ms]", "vehicle_speed=v_Lok_kmh",
-                                      "wheel_speed=n_Rad[rpm]", "traction_torque=M_Rad_kNm[kNm]"])
+    with pytest.raises(
+        RecordingError,
+        match=r"kmh.mat: column 'v_Lok_kmh', row 101: median "
+        r".* --column vehicle_speed=v_Lok_kmh\[km/h\]$",
+    ):
+        load_recording(
+            path,
+            columns=[
+                "time=t_ms[ms]",
+                "vehicle_speed=v_Lok_kmh",
+                "wheel_speed=n_Rad[rpm]",
+                "traction_torque=M_Rad_kNm[kNm]",
+            ],
+        )
     text = tmp_path / "text.parquet"
-    pq.write_table(pa.table({"time": ["a", "b"], "vehicle_speed": [1.0, 1.0],
-                             "wheel_speed": [1.0, 1.0], "traction_torque": [1.0, 1.0]}), text)
+    pq.write_table(
+        pa.table(
+            {
+                "time": ["a", "b"],
+                "vehicle_speed": [1.0, 1.0],
+                "wheel_speed": [1.0, 1.0],
+                "traction_torque": [1.0, 1.0],
+            }
+        ),
+        text,
+    )
     with pytest.raises(RecordingError, match="text.parquet: column 'time': not numeric"):
         load_recording(text)
     junk = tmp_path / "junk.mat"
@@ -101,8 +125,7 @@ def test_bad_values_name_file_column_row(tmp_path):
         load_recording(junk.rename(tmp_path / "junk.parquet"))
 
 
-@pytest.mark.parametrize("fmt,module,extra", [("parquet", "pyarrow", "parquet"),
-                                              ("mat5", "scipy", "mat")])
+@pytest.mark.parametrize("fmt,module,extra", [("parquet", "pyarrow", "parquet"), ("mat5", "scipy", "mat")])
 def test_missing_optional_package_is_one_line(tmp_path, monkeypatch, fmt, module, extra):
     writer, suffix = WRITERS[fmt]
     path = writer(logger_columns(stretches_si()), tmp_path / f"log{suffix}")
@@ -124,8 +147,10 @@ def test_missing_optional_package_is_one_line(tmp_path, monkeypatch, fmt, module
 def test_cli_bad_input_exits_2_one_line_nothing_written(tmp_path, capsys):
     path = write_parquet(logger_columns(stretches_si()), tmp_path / "log.parquet")
     before = set(tmp_path.iterdir())
-    for extra, expected in [(["--column", "vehicle_speed=nope"], "no column 'nope' in the file"),
-                            (LOGGER_MAP[:3], "missing column 'traction_torque'")]:
+    for extra, expected in [
+        (["--column", "vehicle_speed=nope"], "no column 'nope' in the file"),
+        (LOGGER_MAP[:3], "missing column 'traction_torque'"),
+    ]:
         argv = ["inspect", str(path), "--json", "--plot", str(tmp_path / "plots")]
         argv += [x for c in extra for x in ("--column", c)] if extra[0] != "--column" else extra
         assert main(argv) == 2

@@ -29,7 +29,10 @@ def test_inspect_json_values(logger_file, capsys, tmp_path):
     assert r["slip_velocity"][1] == pytest.approx(0.063, abs=1e-3)
     sel = doc["selection"]
     assert sel["used"] == 700 and [e["reason"] for e in sel["excluded"]] == [
-        "standstill", "coasting", "braking"]
+        "standstill",
+        "coasting",
+        "braking",
+    ]
     codes = [n["code"] for n in doc["identifiability"]]
     assert codes == ["slip_range", "no_small_creep"]
     assert "slip velocity never exceeds 0.5 m/s" in doc["identifiability"][0]["message"]
@@ -46,7 +49,7 @@ def test_inspect_text_and_braking(logger_file, capsys):
 
 def test_identifiability_rules():
     s = np.geomspace(1e-3, 0.3, 400)
-    rising = identifiability(s, s * 3.0, 0.4 * s / (0.01 + s))     # w up to 0.9 m/s, no peak
+    rising = identifiability(s, s * 3.0, 0.4 * s / (0.01 + s))  # w up to 0.9 m/s, no peak
     assert [n["code"] for n in rising] == ["no_peak"]
     peaked = identifiability(s, s * 3.0, 0.4 * s / (0.01 + s) * np.exp(-3 * s))
     assert peaked == []

@@ -9,13 +9,13 @@ from jadhesion.data.dataset import PolachDataset
 from jadhesion.identify import kiencke_fit as kf
 from jadhesion.models.kiencke import kiencke_adhesion
 
-TRUE = np.array([80.0, 100.0, 35.0])    # the paper's "normal" rail, a_s = 35
+TRUE = np.array([80.0, 100.0, 35.0])  # the paper's "normal" rail, a_s = 35
 SIGMA = 0.002
 N = 300
 
 
 def _dataset(n=N, sigma=SIGMA, seed=1, speed=2.0):
-    lam = jnp.linspace(0.005, 0.25, n)            # both sides of λ_m = 0.1
+    lam = jnp.linspace(0.005, 0.25, n)  # both sides of λ_m = 0.1
     mu = kiencke_adhesion(lam, *TRUE) + sigma * jax.random.normal(jax.random.key(seed), (n,))
     v = jnp.full(n, speed)
     return PolachDataset(lam, lam * v, mu, v, jnp.asarray(130.0))
@@ -37,12 +37,12 @@ def test_search_coordinates_round_trip():
 
 @pytest.mark.parametrize("method", kf.METHODS)
 def test_recovers_known_parameters_within_noise(method, stderr):
-    assert np.all(stderr / TRUE < 0.05)               # the test has power: errors of a few %
+    assert np.all(stderr / TRUE < 0.05)  # the test has power: errors of a few %
     fit = kf.fit_kiencke(_dataset(), method, jax.random.key(0), pop_size=30, max_iter=200)
     # LM is the least-squares estimate (z-score ~ N(0,1)); the population methods minimise the
     # MAE, whose estimate is ~√(π/2) noisier: 5 standard errors covers both.
     assert np.all(np.abs(np.asarray(fit.params) - TRUE) < 5.0 * stderr), (fit.params, stderr)
-    assert fit.status == 0                             # converged
+    assert fit.status == 0  # converged
     assert SIGMA * 0.6 < float(fit.mae) < SIGMA * 1.0  # MAE of N(0, σ) noise is 0.80 σ
     np.testing.assert_allclose([fit.creep_opt, fit.mu_max], [0.1, 0.35], rtol=0.03)
 
@@ -58,10 +58,17 @@ def test_standstill_and_coasting_samples_are_ignored():
     bad = clean._replace(
         creep=clean.creep.at[:40].set(1e3).at[40:60].set(jnp.nan),
         adhesion=clean.adhesion.at[60:80].set(0.0),
-        vehicle_speed=clean.vehicle_speed.at[:40].set(0.0))
-    ref = kf.fit_kiencke(clean._replace(creep=clean.creep[80:], slip=clean.slip[80:],
-                                        adhesion=clean.adhesion[80:],
-                                        vehicle_speed=clean.vehicle_speed[80:]), "lm")
+        vehicle_speed=clean.vehicle_speed.at[:40].set(0.0),
+    )
+    ref = kf.fit_kiencke(
+        clean._replace(
+            creep=clean.creep[80:],
+            slip=clean.slip[80:],
+            adhesion=clean.adhesion[80:],
+            vehicle_speed=clean.vehicle_speed[80:],
+        ),
+        "lm",
+    )
     fit = kf.fit_kiencke(bad, "lm")
     assert int(fit.n_used) == N - 80
     np.testing.assert_allclose(fit.params, ref.params, rtol=1e-6)
@@ -80,8 +87,7 @@ def test_vmap_over_datasets_matches_single_fits():
     keys = jax.random.split(jax.random.key(0), 2)
     batch = jax.vmap(lambda d, k: kf.fit_kiencke(d, "lm", k))(stacked, keys)
     for i, d in enumerate(data):
-        np.testing.assert_allclose(batch.params[i], kf.fit_kiencke(d, "lm", keys[i]).params,
-                                   rtol=1e-9)
+        np.testing.assert_allclose(batch.params[i], kf.fit_kiencke(d, "lm", keys[i]).params, rtol=1e-9)
 
 
 def test_unknown_method():

@@ -20,7 +20,8 @@ def test_the_contract_catches_an_upward_import(tmp_path, capsys):
     text = PYPROJECT.read_text(encoding="utf-8")
     assert '    "cli",\n' in text
     flipped = text.replace('    "cli",\n', '    "models",\n    "cli",\n', 1).replace(
-        '    "models",\n    "report', '    "report', 1)
+        '    "models",\n    "report', '    "report', 1
+    )
     config = tmp_path / "pyproject.toml"
     config.write_text(flipped, encoding="utf-8")
     code = importlinter_cli.lint_imports(config_filename=str(config), no_cache=True, no_logo=True)

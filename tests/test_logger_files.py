@@ -20,8 +20,12 @@ from jadhesion.models.polach import polach_adhesion
 
 DRY = np.array([0.4288, 1.0, 0.3555, 0.3575, 0.1316])
 R = LOCO_22E.wheel_radius_m
-LOGGER_MAP = ["time=t_ms[ms]", "vehicle_speed=v_Lok_kmh[km/h]", "wheel_speed=n_Rad[rpm]",
-              "traction_torque=M_Rad_kNm[kNm]"]
+LOGGER_MAP = [
+    "time=t_ms[ms]",
+    "vehicle_speed=v_Lok_kmh[km/h]",
+    "wheel_speed=n_Rad[rpm]",
+    "traction_torque=M_Rad_kNm[kNm]",
+]
 
 
 def _si_columns(n=400):
@@ -30,15 +34,26 @@ def _si_columns(n=400):
     v = 0.6 + 0.2 * np.sin(0.5 * t)
     s = np.geomspace(2e-3, 0.6, n)
     mu = np.asarray(polach_adhesion(DRY, s, s * v, LOCO_22E.k_eps()))
-    return {"time": t, "vehicle_speed": v, "wheel_speed": v * (1 + s),
-            "traction_torque": mu * LOCO_22E.axle_weight_n * R}
+    return {
+        "time": t,
+        "vehicle_speed": v,
+        "wheel_speed": v * (1 + s),
+        "traction_torque": mu * LOCO_22E.axle_weight_n * R,
+    }
 
 
 def _logger_twin(cols, path):
     """The same run as a logger writes it: German names, ms, km/h, rpm, kN·m."""
-    save_recording({"t_ms": cols["time"] * 1e3, "v_Lok_kmh": cols["vehicle_speed"] * 3.6,
-                    "n_Rad": cols["wheel_speed"] / R * 60 / (2 * math.pi),
-                    "M_Rad_kNm": cols["traction_torque"] / 1e3}, LOCO_22E, path)
+    save_recording(
+        {
+            "t_ms": cols["time"] * 1e3,
+            "v_Lok_kmh": cols["vehicle_speed"] * 3.6,
+            "n_Rad": cols["wheel_speed"] / R * 60 / (2 * math.pi),
+            "M_Rad_kNm": cols["traction_torque"] / 1e3,
+        },
+        LOCO_22E,
+        path,
+    )
     return path
 
 
@@ -46,8 +61,12 @@ def test_mapped_recording_equals_its_si_twin_and_fits_the_same(tmp_path):
     cols = _si_columns()
     si = load_recording(save_recording(cols, LOCO_22E, tmp_path / "si.csv"))
     mapped = load_recording(_logger_twin(cols, tmp_path / "log.csv"), columns=LOGGER_MAP)
-    assert mapped.sources == {"time": "t_ms[ms]", "vehicle_speed": "v_Lok_kmh[km/h]",
-                              "wheel_speed": "n_Rad[rpm]", "traction_torque": "M_Rad_kNm[kNm]"}
+    assert mapped.sources == {
+        "time": "t_ms[ms]",
+        "vehicle_speed": "v_Lok_kmh[km/h]",
+        "wheel_speed": "n_Rad[rpm]",
+        "traction_torque": "M_Rad_kNm[kNm]",
+    }
     for name, values in si.columns.items():
         np.testing.assert_allclose(mapped.columns[name], values, rtol=1e-14, atol=1e-15)
     fits = [fit_polach(to_dataset(r), "lm", jax.random.key(0)) for r in (si, mapped)]
@@ -69,24 +88,39 @@ def test_sidecar_columns_map_and_flag_override(tmp_path):
 
 
 BAD = {
-    "bad unit": (["vehicle_speed=v_Lok_kmh[furlong/s]"],
-                 "--column 'vehicle_speed=v_Lok_kmh[furlong/s]': unit 'furlong/s' is not a unit "
-                 "of vehicle_speed"),
+    "bad unit": (
+        ["vehicle_speed=v_Lok_kmh[furlong/s]"],
+        "--column 'vehicle_speed=v_Lok_kmh[furlong/s]': unit 'furlong/s' is not a unit of vehicle_speed",
+    ),
     "rpm for vehicle": (["vehicle_speed=v_Lok_kmh[rpm]"], "unit 'rpm' is not a unit of vehicle_speed"),
-    "unknown column": (["vehicle_speed=v_Zug"],
-                       "--column vehicle_speed=v_Zug: no column 'v_Zug' in the file"),
+    "unknown column": (
+        ["vehicle_speed=v_Zug"],
+        "--column vehicle_speed=v_Zug: no column 'v_Zug' in the file",
+    ),
     "unknown canonical": (["speed=v_Lok_kmh[km/h]"], "unknown canonical column 'speed'"),
     "no equals": (["v_Lok_kmh"], "expected CANONICAL=SOURCE[UNIT]"),
     "empty source": (["vehicle_speed=[km/h]"], "expected CANONICAL=SOURCE[UNIT]"),
     "twice": (["vehicle_speed=v_Lok_kmh[km/h]", "vehicle_speed=n_Rad"], "mapped twice"),
     "unbalanced": (["vehicle_speed=v_Lok_kmh[km/h"], "expected CANONICAL=SOURCE[UNIT]"),
-    "ms as s": (["time=t_ms", "vehicle_speed=v_Lok_kmh[km/h]", "wheel_speed=n_Rad[rpm]",
-                 "traction_torque=M_Rad_kNm[kNm]"], None),  # valid: time in "seconds" still grows
-    "kNm unmapped unit": (LOGGER_MAP[:3] + ["traction_torque=M_Rad_kNm"],
-                          "column 'M_Rad_kNm', row"),
-    "km/h unmapped unit": (["time=t_ms[ms]", "vehicle_speed=v_Lok_kmh", "wheel_speed=n_Rad[rpm]",
-                            "traction_torque=M_Rad_kNm[kNm]"],
-                           "--column vehicle_speed=v_Lok_kmh[km/h]"),
+    "ms as s": (
+        [
+            "time=t_ms",
+            "vehicle_speed=v_Lok_kmh[km/h]",
+            "wheel_speed=n_Rad[rpm]",
+            "traction_torque=M_Rad_kNm[kNm]",
+        ],
+        None,
+    ),  # valid: time in "seconds" still grows
+    "kNm unmapped unit": (LOGGER_MAP[:3] + ["traction_torque=M_Rad_kNm"], "column 'M_Rad_kNm', row"),
+    "km/h unmapped unit": (
+        [
+            "time=t_ms[ms]",
+            "vehicle_speed=v_Lok_kmh",
+            "wheel_speed=n_Rad[rpm]",
+            "traction_torque=M_Rad_kNm[kNm]",
+        ],
+        "--column vehicle_speed=v_Lok_kmh[km/h]",
+    ),
     "missing canonical": (LOGGER_MAP[:3], "missing column 'traction_torque'"),
     "torque unit on time": (["time=t_ms[kNm]"], "unit 'kNm' is not a unit of time"),
 }
@@ -108,10 +142,24 @@ def test_bad_column_options_name_flag_and_column(tmp_path, case):
 def test_cli_bad_column_exits_2_one_line_nothing_written(tmp_path):
     path = _logger_twin(_si_columns(30), tmp_path / "log.csv")
     before = set(tmp_path.iterdir())
-    proc = subprocess.run([sys.executable, "-m", "jadhesion", "fit", str(path), "--method", "lm",
-                           "--column", "vehicle_speed=v_Lok_kmh[kmh]", "--json"],
-                          capture_output=True, text=True, timeout=300,
-                          env={**os.environ, "JADHESION_CACHE": str(tmp_path / "cache")})
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "jadhesion",
+            "fit",
+            str(path),
+            "--method",
+            "lm",
+            "--column",
+            "vehicle_speed=v_Lok_kmh[kmh]",
+            "--json",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env={**os.environ, "JADHESION_CACHE": str(tmp_path / "cache")},
+    )
     assert proc.returncode == 2 and proc.stdout == ""
     assert proc.stderr.count("\n") == 1 and "unit 'kmh' is not a unit of vehicle_speed" in proc.stderr
     assert set(tmp_path.iterdir()) - before <= {tmp_path / "cache"}
@@ -129,8 +177,10 @@ def test_axle_picks_one_axles_signals_and_the_map_overrides(tmp_path):
     np.testing.assert_array_equal(rec.columns["traction_torque"], three["traction_torque_axle2"])
     rec = load_recording(path, axle=2, columns=["wheel_speed=wheel_speed_3"])
     np.testing.assert_array_equal(rec.columns["wheel_speed"], three["wheel_speed_3"])
-    for axle, expected in [(4, "--axle 4: no column 'wheel_speed_4' or 'wheel_speed_axle4'"),
-                           (0, "--axle 0: expected an axle number >= 1")]:
+    for axle, expected in [
+        (4, "--axle 4: no column 'wheel_speed_4' or 'wheel_speed_axle4'"),
+        (0, "--axle 0: expected an axle number >= 1"),
+    ]:
         with pytest.raises(RecordingError, match=expected):
             load_recording(path, axle=axle)
 
@@ -142,8 +192,10 @@ def test_start_end_window_and_its_errors(tmp_path):
     part = trim(rec, 0.2, 0.5)
     np.testing.assert_allclose(part.columns["time"][[0, -1]], [0.2, 0.5], atol=1e-12)
     assert part.n_samples == 31 and trim(rec) is rec
-    for start, end, expected in [(0.5, 0.2, "--start 0.5 s is not before --end 0.2 s"),
-                                 (5.0, None, r"select 0 sample\(s\); the recording runs from 0 s"),
-                                 (float("nan"), None, "--start nan: expected a finite time")]:
+    for start, end, expected in [
+        (0.5, 0.2, "--start 0.5 s is not before --end 0.2 s"),
+        (5.0, None, r"select 0 sample\(s\); the recording runs from 0 s"),
+        (float("nan"), None, "--start nan: expected a finite time"),
+    ]:
         with pytest.raises(RecordingError, match=expected):
             trim(rec, start, end)

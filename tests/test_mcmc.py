@@ -8,16 +8,22 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from validation.calibration import (LEVELS, QUANTITIES, binomial_band, coverage_study,
-                                            synthetic_dataset)
+from jadhesion.experiments.mcmc_row import table2_row
 from jadhesion.identify.ensemble import ChainTooShortWarning, Diagnostics, run_ensemble
 from jadhesion.identify.laplace import laplace_covariance, lm_optimum
-from jadhesion.identify.polach_fit import polach_mae
-from jadhesion.identify.likelihood import (LOG_SCALE_BOUNDS, ar1_log_likelihood, batch_log_posterior,
-                                          log_likelihood, log_posterior, lowpass, observer_terms,
-                                          prediction)
-from jadhesion.experiments.mcmc_row import table2_row
+from jadhesion.identify.likelihood import (
+    LOG_SCALE_BOUNDS,
+    ar1_log_likelihood,
+    batch_log_posterior,
+    log_likelihood,
+    log_posterior,
+    lowpass,
+    observer_terms,
+    prediction,
+)
 from jadhesion.identify.mcmc import PosteriorResult, sample_posterior
+from jadhesion.identify.polach_fit import polach_mae
+from validation.calibration import LEVELS, QUANTITIES, binomial_band, coverage_study, synthetic_dataset
 
 THETA = np.array([0.5, 0.3, 0.35, 0.4, 0.6])
 # Interior truths of the calibration check (the prior is the whole box [0, 1]^5).
@@ -34,17 +40,18 @@ def data():
 def posterior(data):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ChainTooShortWarning)
-        return sample_posterior(data, np.asarray(lm_optimum(data)), walkers=32, steps=2500, seed=1,
-                                 max_derived=800)
+        return sample_posterior(
+            data, np.asarray(lm_optimum(data)), walkers=32, steps=2500, seed=1, max_derived=800
+        )
 
 
 def test_log_posterior_support_and_batching(data):
     rng = np.random.default_rng(1)
     inside = np.column_stack([rng.uniform(0, 1, (64, 5)), rng.uniform(*LOG_SCALE_BOUNDS, 64)])
-    inside[0, :5] = 0.0                                       # corner: zero friction, no slope
+    inside[0, :5] = 0.0  # corner: zero friction, no slope
     inside[1, :5] = 1.0
     outside = inside.copy()
-    col = rng.integers(0, 6, 64)                              # 5 = log-scale: range ~9.2 wide
+    col = rng.integers(0, 6, 64)  # 5 = log-scale: range ~9.2 wide
     outside[np.arange(64), col] += np.where(rng.random(64) < 0.5, -1.0, 1.0) * np.where(col == 5, 10.0, 1.5)
     outside[2, 0] = np.nan
     for lik in ("gauss", "laplace"):
@@ -56,17 +63,18 @@ def test_log_posterior_support_and_batching(data):
 
 
 def _obs_terms(n, rng, dt=0.02):
-    time = np.cumsum(np.full(n, dt)) + 0.01 * dt * rng.random(n)      # slightly uneven spacing
+    time = np.cumsum(np.full(n, dt)) + 0.01 * dt * rng.random(n)  # slightly uneven spacing
     return observer_terms(time, 2e4 * rng.standard_normal(n), 21500.0, 0.61, 0.05)
 
 
 def test_autoregressive_support_and_batching(data):
     rng = np.random.default_rng(2)
     obs = _obs_terms(data.creep.shape[0], rng)
-    inside = np.column_stack([rng.uniform(0, 1, (32, 5)), rng.uniform(*LOG_SCALE_BOUNDS, 32),
-                              rng.uniform(-0.98, 0.98, 32)])
+    inside = np.column_stack(
+        [rng.uniform(0, 1, (32, 5)), rng.uniform(*LOG_SCALE_BOUNDS, 32), rng.uniform(-0.98, 0.98, 32)]
+    )
     outside = inside.copy()
-    outside[:16, 6] = rng.choice([-1.0, 1.0], 16) * rng.uniform(0.995, 2.0, 16)   # |rho| > 0.99
+    outside[:16, 6] = rng.choice([-1.0, 1.0], 16) * rng.uniform(0.995, 2.0, 16)  # |rho| > 0.99
     outside[16:, 2] += 1.5
     for lik in ("ar1", "observer"):
         lp_in = np.asarray(batch_log_posterior(jnp.asarray(inside), data, LO, HI, 0.0, lik, obs))
@@ -74,11 +82,14 @@ def test_autoregressive_support_and_batching(data):
         assert np.all(np.isfinite(lp_in)) and np.all(lp_out == -np.inf)
         one = np.array([log_posterior(jnp.asarray(p), data, LO, HI, 0.0, lik, obs) for p in inside[:4]])
         np.testing.assert_allclose(lp_in[:4], one, rtol=1e-12)
-        fixed = np.asarray(batch_log_posterior(jnp.asarray(inside[:, [0, 1, 2, 3, 4, 6]]), data, LO, HI,
-                                               np.log(0.01), lik, obs))
+        fixed = np.asarray(
+            batch_log_posterior(
+                jnp.asarray(inside[:, [0, 1, 2, 3, 4, 6]]), data, LO, HI, np.log(0.01), lik, obs
+            )
+        )
         assert np.all(np.isfinite(fixed))
     with pytest.raises(ValueError):
-        log_posterior(jnp.asarray(inside[0, :5]), data, LO, HI, 0.0, "ar1")     # rho missing
+        log_posterior(jnp.asarray(inside[0, :5]), data, LO, HI, 0.0, "ar1")  # rho missing
 
 
 def test_ar1_log_likelihood_is_the_exact_gaussian():
@@ -88,14 +99,18 @@ def test_ar1_log_likelihood_is_the_exact_gaussian():
     n, rho, sigma = 40, 0.7, 0.02
     r = rng.standard_normal(n) * 0.03
     lags = np.abs(np.subtract.outer(np.arange(n), np.arange(n)))
-    cov = sigma**2 / (1 - rho**2) * rho ** lags
+    cov = sigma**2 / (1 - rho**2) * rho**lags
     expected = multivariate_normal(np.zeros(n), cov).logpdf(r)
-    np.testing.assert_allclose(float(ar1_log_likelihood(jnp.asarray(r), np.log(sigma), rho)), expected,
-                               rtol=1e-10)
+    np.testing.assert_allclose(
+        float(ar1_log_likelihood(jnp.asarray(r), np.log(sigma), rho)), expected, rtol=1e-10
+    )
     # rho = 0 is the i.i.d. Gaussian
     d = synthetic_dataset(np.random.default_rng(4), THETA, n=50)
-    np.testing.assert_allclose(float(log_likelihood(jnp.asarray(THETA), -4.0, d, "ar1", 0.0)),
-                               float(log_likelihood(jnp.asarray(THETA), -4.0, d, "gauss")), rtol=1e-12)
+    np.testing.assert_allclose(
+        float(log_likelihood(jnp.asarray(THETA), -4.0, d, "ar1", 0.0)),
+        float(log_likelihood(jnp.asarray(THETA), -4.0, d, "gauss")),
+        rtol=1e-12,
+    )
 
 
 def test_lowpass_matches_the_observer_filter():
@@ -106,9 +121,12 @@ def test_lowpass_matches_the_observer_filter():
     time = np.cumsum(rng.uniform(0.01, 0.03, n))
     obs = observer_terms(time, np.zeros(n), 21500.0, 0.61, 0.05)
     u = np.cumsum(rng.standard_normal(n))
-    np.testing.assert_allclose(np.asarray(lowpass(jnp.asarray(u), obs)),
-                               np.asarray(lowpass_foh(jnp.asarray(time), jnp.asarray(u), 0.05)),
-                               rtol=1e-10, atol=1e-10)
+    np.testing.assert_allclose(
+        np.asarray(lowpass(jnp.asarray(u), obs)),
+        np.asarray(lowpass_foh(jnp.asarray(time), jnp.asarray(u), 0.05)),
+        rtol=1e-10,
+        atol=1e-10,
+    )
 
 
 def test_observer_prediction_is_exact_on_a_noise_free_recording():
@@ -136,8 +154,11 @@ def test_errors_in_variables_likelihood(data):
     theta = jnp.asarray(THETA)
     zero = data._replace(slip_sd=jnp.zeros_like(data.slip))
     for lik in ("gauss", "ar1", "laplace"):
-        np.testing.assert_allclose(float(log_likelihood(theta, -4.0, zero, lik, 0.3)),
-                                   float(log_likelihood(theta, -4.0, data, lik, 0.3)), rtol=1e-12)
+        np.testing.assert_allclose(
+            float(log_likelihood(theta, -4.0, zero, lik, 0.3)),
+            float(log_likelihood(theta, -4.0, data, lik, 0.3)),
+            rtol=1e-12,
+        )
     sd = 0.3 * np.abs(np.asarray(data.slip)) + 1e-3
     noisy = data._replace(slip_sd=jnp.asarray(sd))
     mean, var = curve_moments(theta, noisy)
@@ -166,13 +187,13 @@ def test_wrapper_samples_a_known_gaussian():
     chain, diag = run_ensemble(log_prob, p0, 3000, 0, burn=500)
     samples = chain.reshape(-1, 3)
     assert 0.2 < diag.acceptance < 0.9
-    tol = 5 * np.sqrt(np.diag(cov) / diag.ess)                # ESS-aware: 5 standard errors
+    tol = 5 * np.sqrt(np.diag(cov) / diag.ess)  # ESS-aware: 5 standard errors
     np.testing.assert_array_less(np.abs(samples.mean(0)), tol)
     np.testing.assert_allclose(np.cov(samples.T), cov, atol=0.15)
     step = int(np.ceil(np.max(diag.tau)))
     z = chain[::step, :, 2].ravel() / np.sqrt(2.0)
     assert stats.kstest(z, "norm").pvalue > 0.01
-    assert stats.kstest(z, "norm", args=(0, 1.2)).pvalue < 0.01     # the KS check has power
+    assert stats.kstest(z, "norm", args=(0, 1.2)).pvalue < 0.01  # the KS check has power
 
 
 def test_seed_reproducible_and_short_chain_warns(data):
@@ -191,7 +212,7 @@ def test_posterior_agrees_with_laplace_where_well_identified(data, posterior):
     laplace_std = np.sqrt(np.diag(np.asarray(laplace_covariance(theta_hat, data))))
     mcmc_std = posterior.samples[:, :5].std(axis=0)
     ratio = mcmc_std / laplace_std
-    np.testing.assert_allclose(ratio[:3], 1.0, atol=0.25)    # kA, kS, mu0: Gaussian, interior
+    np.testing.assert_allclose(ratio[:3], 1.0, atol=0.25)  # kA, kS, mu0: Gaussian, interior
     for name, q in posterior.params.items():
         assert q["q05"] < q["median"] < q["q95"], name
     assert posterior.params["sigma"]["q05"] < 0.013 < posterior.params["sigma"]["q95"]
@@ -239,8 +260,9 @@ def _prior_result(seed):
     samples = rng.uniform(0, 1, (2000, 5))
     derived = {"mu_max": rng.uniform(0, 1, 2000), "creep_opt": 10 ** rng.uniform(-3, 0, 2000)}
     diag = Diagnostics(0.3, np.ones(5), np.ones(5), 2000, 1, 0, 1, 0.0, ())
-    return PosteriorResult(samples, samples[:, None], ("kA", "kS", "mu0", "A", "B"), {}, {}, derived,
-                           diag, "gauss", 1.0)
+    return PosteriorResult(
+        samples, samples[:, None], ("kA", "kS", "mu0", "A", "B"), {}, {}, derived, diag, "gauss", 1.0
+    )
 
 
 def test_inference_data_and_plots(posterior, data, tmp_path):
@@ -261,8 +283,22 @@ def test_cli_posterior_json(tmp_path, capsys):
     path = tmp_path / "curve.csv"
     rows = np.column_stack([np.asarray(d.creep), np.asarray(d.vehicle_speed), np.asarray(d.adhesion)])
     np.savetxt(path, rows, delimiter=",", header="creepage,vehicle_speed,adhesion", comments="")
-    assert main(["posterior", str(path), "--walkers", "16", "--steps", "300", "--json",
-                 "--plot", str(tmp_path / "fig")]) == 0
+    assert (
+        main(
+            [
+                "posterior",
+                str(path),
+                "--walkers",
+                "16",
+                "--steps",
+                "300",
+                "--json",
+                "--plot",
+                str(tmp_path / "fig"),
+            ]
+        )
+        == 0
+    )
     doc = json.loads(capsys.readouterr().out)
     assert set(doc["params"]) == {"kA", "kS", "mu0", "A", "B", "sigma"}
     assert set(doc["derived"]["mu_max"]) == {"median", "q05", "q95"}
@@ -288,7 +324,7 @@ def test_ar1_posterior_names_and_no_retrace(data):
         warnings.simplefilter("ignore", ChainTooShortWarning)
         res = sample_posterior(data, theta0, walkers=16, steps=60, seed=0, likelihood="ar1", max_derived=100)
         before = blp._cache_size()
-        other = synthetic_dataset(np.random.default_rng(9), THETA, n=300)       # same shape: no retrace
+        other = synthetic_dataset(np.random.default_rng(9), THETA, n=300)  # same shape: no retrace
         sample_posterior(other, theta0, walkers=16, steps=60, seed=1, likelihood="ar1", max_derived=100)
     assert res.names[-2:] == ("sigma", "rho") and res.samples.shape[1] == 7
     assert np.all(res.samples[:, 5] > 0) and np.all(np.abs(res.samples[:, 6]) <= 0.99)

@@ -14,10 +14,23 @@ from scipy.optimize import brentq
 from scipy.special import ellipe, ellipk
 
 from jadhesion.data.vehicle import LOCO_22E
-from jadhesion.models import (RAIL_SETS, Contact, adhesion_peak, creepage, elliptic_ke, friction,
-                              gradient_constant, hertz_semi_axes, initial_slope, kalker_c11,
-                              kiencke_adhesion, kiencke_optimum, kiencke_regressors,
-                              polach_adhesion, slip_velocity)
+from jadhesion.models import (
+    RAIL_SETS,
+    Contact,
+    adhesion_peak,
+    creepage,
+    elliptic_ke,
+    friction,
+    gradient_constant,
+    hertz_semi_axes,
+    initial_slope,
+    kalker_c11,
+    kiencke_adhesion,
+    kiencke_optimum,
+    kiencke_regressors,
+    polach_adhesion,
+    slip_velocity,
+)
 
 K_EPS = LOCO_22E.k_eps()
 DRY = jnp.array([0.4288, 1.0, 0.3555, 0.3575, 0.1316])
@@ -112,8 +125,7 @@ def test_gain_identity_is_exact(theta, gain, s, v):
 
 
 @settings(max_examples=100, deadline=None)
-@given(theta=theta_st, s=st.floats(-50.0, 50.0), v=st.floats(0.0, 40.0),
-       d_mu0=st.floats(0.0, 1.0))
+@given(theta=theta_st, s=st.floats(-50.0, 50.0), v=st.floats(0.0, 40.0), d_mu0=st.floats(0.0, 1.0))
 def test_polach_invariants_over_parameter_box(theta, s, v, d_mu0):
     mu_adh = float(_curve_jit(theta, s, v))
     mu_w = float(friction(theta, s * v))
@@ -137,10 +149,12 @@ def test_bound_is_approached():
     assert float(_curve_jit(theta, s, 0.0)) / 0.4 < BOUND
 
 
-@pytest.mark.parametrize("theta", [DRY, WET, SAND, jnp.array([1.0, 1.0, 0.0, 0.5, 0.5]),
-                                   jnp.zeros(5), jnp.ones(5)])
-@pytest.mark.parametrize("s,v", [(0.0, 0.0), (0.0, 5.0), (1e-12, 0.0), (1e6, 30.0), (-1e6, 30.0),
-                                 (1e300, 1.0), (-3.0, 0.0)])
+@pytest.mark.parametrize(
+    "theta", [DRY, WET, SAND, jnp.array([1.0, 1.0, 0.0, 0.5, 0.5]), jnp.zeros(5), jnp.ones(5)]
+)
+@pytest.mark.parametrize(
+    "s,v", [(0.0, 0.0), (0.0, 5.0), (1e-12, 0.0), (1e6, 30.0), (-1e6, 30.0), (1e300, 1.0), (-3.0, 0.0)]
+)
 def test_polach_finite_everywhere(theta, s, v):
     assert np.isfinite(float(_curve_jit(theta, s, v)))
     for g in _grad_all(theta, s, v):
@@ -200,9 +214,17 @@ def _dense_peak(theta, v, n=200_001):
     return float(y[i]), float(s[i])
 
 
-@pytest.mark.parametrize("theta", [DRY, WET, SAND, jnp.array([1.0, 0.0, 0.3, 0.5, 0.5]),
-                                   jnp.array([0.05, 1.0, 0.9, 1.0, 0.0]),
-                                   jnp.array([0.7, 0.2, 0.05, 0.0, 1.0])])
+@pytest.mark.parametrize(
+    "theta",
+    [
+        DRY,
+        WET,
+        SAND,
+        jnp.array([1.0, 0.0, 0.3, 0.5, 0.5]),
+        jnp.array([0.05, 1.0, 0.9, 1.0, 0.0]),
+        jnp.array([0.7, 0.2, 0.05, 0.0, 1.0]),
+    ],
+)
 @pytest.mark.parametrize("v", [0.6, 10.0])
 def test_adhesion_peak_matches_dense_grid(theta, v):
     mu_max, s_max = _peak_jit(theta, K_EPS, v)
@@ -250,8 +272,7 @@ def test_kiencke_odd_finite_and_linear_form():
         g = _kiencke_grads(lam, p1, p2)
         assert all(bool(jnp.all(jnp.isfinite(x))) for x in g)
         z, u = kiencke_regressors(lam, mu)
-        np.testing.assert_allclose(np.asarray(z), np.asarray(u @ jnp.array([p1, p2])),
-                                   rtol=1e-10, atol=1e-12)
+        np.testing.assert_allclose(np.asarray(z), np.asarray(u @ jnp.array([p1, p2])), rtol=1e-10, atol=1e-12)
     assert float(jax.grad(kiencke_adhesion)(0.0, 80.0, 100.0)) == pytest.approx(35.0)
 
 
@@ -304,13 +325,16 @@ def test_hertz_circular_limit(radius, load):
     assert float(c.b) == pytest.approx(expected, rel=1e-6)
 
 
-@pytest.mark.parametrize("wheel_r,rail_r,profile_r", [
-    (0.61, 0.3, np.inf),   # 22E: rolling axis long
-    (0.61, 0.3, 0.5),      # worn (concave wheel profile would be negative; convex here)
-    (0.45, 0.08, np.inf),  # small rail crown: very elongated ellipse
-    (0.3, 0.61, np.inf),   # rolling axis short
-    (0.5, 2.0, 10.0),
-])
+@pytest.mark.parametrize(
+    "wheel_r,rail_r,profile_r",
+    [
+        (0.61, 0.3, np.inf),  # 22E: rolling axis long
+        (0.61, 0.3, 0.5),  # worn (concave wheel profile would be negative; convex here)
+        (0.45, 0.08, np.inf),  # small rail crown: very elongated ellipse
+        (0.3, 0.61, np.inf),  # rolling axis short
+        (0.5, 2.0, 10.0),
+    ],
+)
 def test_hertz_matches_independent_scipy_solution(wheel_r, rail_r, profile_r):
     q = LOCO_22E.wheel_load
     ref_a, ref_b = _hertz_reference(0.5 / wheel_r, 0.5 * (1 / rail_r + 1 / profile_r), q, _e_star())
@@ -322,8 +346,15 @@ def test_hertz_matches_independent_scipy_solution(wheel_r, rail_r, profile_r):
 # Timoshenko & Goodier, Theory of Elasticity (2nd ed. 1951, §140, table of m and n): the Hertz
 # semi-axes are a = m·[3π P (k1 + k2) / (4 (A + B))]^(1/3), b = n·[…]^(1/3), with
 # cos θ = (B − A)/(A + B) and k_i = (1 − ν_i²)/(π E_i), i.e. 3π(k1 + k2)/4 = 3/(4 E*).
-TIMOSHENKO = [(30, 2.731, 0.493), (40, 2.136, 0.567), (50, 1.754, 0.641), (60, 1.486, 0.717),
-              (70, 1.284, 0.802), (80, 1.128, 0.893), (90, 1.0, 1.0)]
+TIMOSHENKO = [
+    (30, 2.731, 0.493),
+    (40, 2.136, 0.567),
+    (50, 1.754, 0.641),
+    (60, 1.486, 0.717),
+    (70, 1.284, 0.802),
+    (80, 1.128, 0.893),
+    (90, 1.0, 1.0),
+]
 
 
 @pytest.mark.parametrize("theta_deg,m_coef,n_coef", TIMOSHENKO)

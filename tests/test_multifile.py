@@ -15,8 +15,15 @@ import pytest
 from jadhesion import LOCO_22E, polach_adhesion
 from jadhesion.cli import main
 from jadhesion.data.dataset import PolachDataset
-from jadhesion.identify.batch_fit import (SHORT_BUCKET, bucket_length, buckets, fit_datasets,
-                                          fit_datasets_vmapped, pad_dataset, valid_samples)
+from jadhesion.identify.batch_fit import (
+    SHORT_BUCKET,
+    bucket_length,
+    buckets,
+    fit_datasets,
+    fit_datasets_vmapped,
+    pad_dataset,
+    valid_samples,
+)
 from jadhesion.identify.polach_fit import SEED_SAMPLES, fit_polach, polach_mae, subsample
 
 THETA = np.array([0.43, 0.6, 0.36, 0.36, 0.13])
@@ -33,22 +40,37 @@ def _columns(n, seed):
 
 def _dataset(n, seed):
     creep, speed, mu = _columns(n, seed)
-    return PolachDataset(jnp.asarray(creep), jnp.asarray(creep * speed), jnp.asarray(mu),
-                         jnp.asarray(speed), jnp.asarray(LOCO_22E.k_eps()))
+    return PolachDataset(
+        jnp.asarray(creep),
+        jnp.asarray(creep * speed),
+        jnp.asarray(mu),
+        jnp.asarray(speed),
+        jnp.asarray(LOCO_22E.k_eps()),
+    )
 
 
 def _write(path, n, seed):
     creep, speed, mu = _columns(n, seed)
-    path.write_text("creepage,vehicle_speed,adhesion\n"
-                    + "".join(f"{float(c)!r},{float(v)!r},{float(m)!r}\n"
-                              for c, v, m in zip(creep, speed, mu)))
+    path.write_text(
+        "creepage,vehicle_speed,adhesion\n"
+        + "".join(f"{float(c)!r},{float(v)!r},{float(m)!r}\n" for c, v, m in zip(creep, speed, mu))
+    )
     return path
 
 
 def test_buckets_and_padding():
     assert SHORT_BUCKET == SEED_SAMPLES  # short data: LM seeds on all of it, padded or not
-    assert [bucket_length(n) for n in (10, 128, 129, 256, 257, 1000, 2000, 2048, 2049)] == \
-        [128, 128, 256, 256, 512, 1024, 2048, 2048, 4096]
+    assert [bucket_length(n) for n in (10, 128, 129, 256, 257, 1000, 2000, 2048, 2049)] == [
+        128,
+        128,
+        256,
+        256,
+        512,
+        1024,
+        2048,
+        2048,
+        4096,
+    ]
     data = _dataset(150, 0)
     padded = pad_dataset(data)
     assert padded.adhesion.shape == (256,) and valid_samples(padded) == 150
@@ -104,6 +126,7 @@ def test_vmapped_buckets_agree_with_one_at_a_time(method):
 
 # ---- command line ------------------------------------------------------------------------------
 
+
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
     folder = tmp_path_factory.mktemp("campaign")
@@ -129,15 +152,39 @@ def test_many_files_equal_one_at_a_time(files, capsys, tmp_path, method):
         assert "fits" not in single and "file" not in single  # one file: today's document
         assert set(doc) == set(single) | {"file"}
         assert doc["params"] == single["params"]  # bit for bit: the same program on the same data
-        for key in ("mae", "status", "converged", "uncertainty", "correlation", "warnings",
-                    "iterations", "evaluations", "hac_lags", "creep"):
+        for key in (
+            "mae",
+            "status",
+            "converged",
+            "uncertainty",
+            "correlation",
+            "warnings",
+            "iterations",
+            "evaluations",
+            "hac_lags",
+            "creep",
+        ):
             assert doc[key] == single[key], key
     with open(tmp_path / "t.csv", newline="") as fh:
         rows = list(csv.DictReader(fh))
     assert [r["file"] for r in rows] == [str(p) for p in files]
-    assert list(rows[0]) == ["file", "method", "kA", "kS", "mu0", "A", "B", "mae", "status",
-                             "converged", "stderr_kA", "stderr_kS", "stderr_mu0", "stderr_A",
-                             "stderr_B"]
+    assert list(rows[0]) == [
+        "file",
+        "method",
+        "kA",
+        "kS",
+        "mu0",
+        "A",
+        "B",
+        "mae",
+        "status",
+        "converged",
+        "stderr_kA",
+        "stderr_kS",
+        "stderr_mu0",
+        "stderr_A",
+        "stderr_B",
+    ]
     for row, doc in zip(rows, fits):
         assert float(row["kS"]) == doc["params"]["kS"] and float(row["mae"]) == doc["mae"]
         s = doc["uncertainty"]["mu0"]["stderr"]
@@ -147,8 +194,9 @@ def test_many_files_equal_one_at_a_time(files, capsys, tmp_path, method):
 def test_many_files_human_table_and_plots(files, capsys, tmp_path):
     code, out, _ = _fit(capsys, *files, "--method", "lm", "--plot", tmp_path / "plots")
     assert code == 0 and "3 files" in out and all(p.name in out for p in files)
-    assert sorted(p.name for p in (tmp_path / "plots").iterdir()) == \
-        sorted(f"{p.stem}.fit.png" for p in files)
+    assert sorted(p.name for p in (tmp_path / "plots").iterdir()) == sorted(
+        f"{p.stem}.fit.png" for p in files
+    )
 
 
 def test_a_bad_file_fails_the_call_before_any_fit(files, capsys, tmp_path):

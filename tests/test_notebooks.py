@@ -1,6 +1,5 @@
 """Every notebook in notebooks/ runs top to bottom with small settings (JADHESION_SMALL=1)."""
 
-import os
 from pathlib import Path
 
 import pytest
@@ -16,6 +15,7 @@ def test_notebook_runs(path, monkeypatch, tmp_path):
     monkeypatch.setenv("JADHESION_SMALL", "1")
     monkeypatch.setenv("MPLBACKEND", "Agg")
     nb = nbformat.read(path, as_version=4)
-    client = nbclient.NotebookClient(nb, timeout=600, kernel_name="python3",
-                                     resources={"metadata": {"path": str(tmp_path)}})
+    client = nbclient.NotebookClient(
+        nb, timeout=600, kernel_name="python3", resources={"metadata": {"path": str(tmp_path)}}
+    )
     client.execute(cwd=str(path.parent))

@@ -61,8 +61,12 @@ def test_recovers_true_adhesion_on_a_noise_free_recording():
     rec = _smooth_recording()
     cols, true_mu = rec.columns, rec.latent["adhesion"]
     settled = cols["time"] > 5 * LOCO_22E.observer_time_constant_s
-    mu_hat = observe_adhesion(jnp.asarray(cols["time"]), jnp.asarray(cols["wheel_speed"]),
-                              jnp.asarray(cols["traction_torque"]), LOCO_22E)
+    mu_hat = observe_adhesion(
+        jnp.asarray(cols["time"]),
+        jnp.asarray(cols["wheel_speed"]),
+        jnp.asarray(cols["traction_torque"]),
+        LOCO_22E,
+    )
     np.testing.assert_allclose(mu_hat, cols["adhesion"], atol=1e-12)
     assert np.max(np.abs(np.asarray(mu_hat) - true_mu)[settled]) < 0.002
 
@@ -70,8 +74,9 @@ def test_recovers_true_adhesion_on_a_noise_free_recording():
 def test_filtered_torque_variant_is_the_lowpassed_true_adhesion():
     rec = _smooth_recording()
     cols = {k: jnp.asarray(v) for k, v in rec.columns.items()}
-    mu_f = observe_adhesion(cols["time"], cols["wheel_speed"], cols["traction_torque"], LOCO_22E,
-                            variant="filtered_torque")
+    mu_f = observe_adhesion(
+        cols["time"], cols["wheel_speed"], cols["traction_torque"], LOCO_22E, variant="filtered_torque"
+    )
     lagged = lowpass_foh(cols["time"], jnp.asarray(rec.latent["adhesion"]), T0)
     settled = np.asarray(cols["time"]) > 5 * T0
     assert np.max(np.abs(np.asarray(mu_f - lagged))[settled]) < 0.002
@@ -81,8 +86,10 @@ def test_filtered_torque_variant_removes_torque_noise():
     t = jnp.arange(0.0, 20.0, 0.02)
     noise = 1000.0 * jax.random.normal(jax.random.PRNGKey(0), t.shape)
     wheel = jnp.full_like(t, 1.0)
-    std = {v: float(jnp.std(observe_adhesion(t, wheel, 40e3 + noise, LOCO_22E, v)[50:]))
-           for v in ("paper", "filtered_torque")}
+    std = {
+        v: float(jnp.std(observe_adhesion(t, wheel, 40e3 + noise, LOCO_22E, v)[50:]))
+        for v in ("paper", "filtered_torque")
+    }
     expected = 1000.0 / (LOCO_22E.axle_weight_n * LOCO_22E.wheel_radius_m)
     assert std["paper"] == pytest.approx(expected, rel=0.1)
     assert std["filtered_torque"] < 0.5 * std["paper"]

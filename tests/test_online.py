@@ -8,7 +8,7 @@ import pytest
 from jadhesion.experiments import online as ex
 from jadhesion.identify import online as ol
 
-SHORT = 60   # steps of the short records (one compiled shape shared by several tests)
+SHORT = 60  # steps of the short records (one compiled shape shared by several tests)
 ALGORITHMS = {"1": ol.algorithm1_params, "2": ol.algorithm2_params}
 
 
@@ -24,29 +24,32 @@ def clean():
 @pytest.mark.parametrize("alg", ALGORITHMS)
 def test_noise_free_recovers_parameters_exactly(alg, clean):
     err = _relerr(ol.identify(ALGORITHMS[alg](), clean.lam, clean.mu), clean.truth)
-    assert err[20:ex.CHANGES[0]].max() < 1e-6
+    assert err[20 : ex.CHANGES[0]].max() < 1e-6
 
 
 @pytest.mark.parametrize("alg", ALGORITHMS)
 def test_tracks_the_first_rail_change(alg, clean):
     err = _relerr(ol.identify(ALGORITHMS[alg](), clean.lam, clean.mu), clean.truth)
-    assert err[ex.CHANGES[0] - 1].max() < 1e-6           # converged on dry
-    assert err[ex.CHANGES[1] - 1].max() < 1e-2           # and on normal after the change
+    assert err[ex.CHANGES[0] - 1].max() < 1e-6  # converged on dry
+    assert err[ex.CHANGES[1] - 1].max() < 1e-2  # and on normal after the change
 
 
 @pytest.mark.parametrize("case", ["zero_excitation", "constant_creep", "huge_noise"])
 @pytest.mark.parametrize("alg", ALGORITHMS)
 def test_never_nan(alg, case):
     n = 300
-    lam = {"zero_excitation": jnp.zeros(n), "constant_creep": jnp.full(n, 0.1),
-           "huge_noise": jnp.linspace(0.0, 0.3, n)}[case]
+    lam = {
+        "zero_excitation": jnp.zeros(n),
+        "constant_creep": jnp.full(n, 0.1),
+        "huge_noise": jnp.linspace(0.0, 0.3, n),
+    }[case]
     mu = 0.3 * jnp.ones(n) * (case != "zero_excitation")
     if case == "huge_noise":
         mu = mu + 10.0 * jax.random.normal(jax.random.key(1), (n,))
     trace = ol.identify(ALGORITHMS[alg](), lam, mu)
     for leaf in (trace.p1, trace.p2, trace.mu_max, trace.eta, trace.snr):
         assert not np.isnan(np.asarray(leaf)).any()
-    if case == "zero_excitation":                          # no information: estimate stays at x0
+    if case == "zero_excitation":  # no information: estimate stays at x0
         np.testing.assert_allclose(trace.p1, ol.DEFAULT_X0[0])
         np.testing.assert_allclose(trace.p2, ol.DEFAULT_X0[1])
 
@@ -79,7 +82,7 @@ def test_vmap_over_params():
     for i, params in enumerate(configs):
         one = ol.identify(params, sc.lam, sc.mu)
         np.testing.assert_allclose(batched.p1[i], one.p1, rtol=1e-10)
-    assert batched.eta[2].min() == batched.eta[2].max() == 0.98     # constant forgetting
+    assert batched.eta[2].min() == batched.eta[2].max() == 0.98  # constant forgetting
 
 
 def test_snr_step_applies_only_after_step_5_and_sets_eta_max():
@@ -107,14 +110,28 @@ def test_snr_interval_calibration_reproduces_defaults():
 #: must lie inside the 1000-run IQR; ``never`` fractions within 3.5 binomial σ of the README's.
 CLAIM_RUNS = 100
 README_IQR = {
-    "1": {"k_p1_1pct": (13, 25), "k_p2_1pct": (122, 326), "k_mumax_01pct": (46, 96),
-          "k_track_change1": (47, 53), "fluctuation": (0.1856, 0.1874)},
-    "2": {"k_p1_1pct": (15, 40), "k_p2_1pct": (328, np.inf), "k_mumax_01pct": (63, 302),
-          "k_track_change1": (152, 209), "k_track_change2": (152, 212),
-          "fluctuation": (0.001779, 0.002651)},
+    "1": {
+        "k_p1_1pct": (13, 25),
+        "k_p2_1pct": (122, 326),
+        "k_mumax_01pct": (46, 96),
+        "k_track_change1": (47, 53),
+        "fluctuation": (0.1856, 0.1874),
+    },
+    "2": {
+        "k_p1_1pct": (15, 40),
+        "k_p2_1pct": (328, np.inf),
+        "k_mumax_01pct": (63, 302),
+        "k_track_change1": (152, 209),
+        "k_track_change2": (152, 212),
+        "fluctuation": (0.001779, 0.002651),
+    },
 }
-README_NEVER = {("1", "never_p2_1pct"): 0.12, ("2", "never_p2_1pct"): 0.26,
-                ("1", "never_track_change2"): 1.0, ("2", "never_track_change2"): 0.0}
+README_NEVER = {
+    ("1", "never_p2_1pct"): 0.12,
+    ("2", "never_p2_1pct"): 0.26,
+    ("1", "never_track_change2"): 1.0,
+    ("2", "never_track_change2"): 0.0,
+}
 
 
 @pytest.fixture(scope="module")
@@ -136,18 +153,26 @@ def test_online_claims_numbers_match_the_readme(alg, claims):
 
 def test_run_contract_plot_and_verdicts(claims):
     result, plots = claims
-    assert {"A2+range", "A2+weight", "A2+snr", "A1-range", "A1-weight", "A1-snr"} <= set(
-        result["ablation"])
-    assert result["ablation"]["A2+range"]["k_track_change1"] < 60      # the range buys tracking
+    assert {"A2+range", "A2+weight", "A2+snr", "A1-range", "A1-weight", "A1-snr"} <= set(result["ablation"])
+    assert result["ablation"]["A2+range"]["k_track_change1"] < 60  # the range buys tracking
     assert {"rls_0.98", "batch_ls"} <= set(result["baselines"])
-    assert max(result["baselines"]["batch_ls"]["p1_relerr"]) < 0.01   # the information floor
+    assert max(result["baselines"]["batch_ls"]["p1_relerr"]) < 0.01  # the information floor
     assert result["paper"]["k_p2_1pct"] == 250
     assert (plots / "online_kiencke.png").stat().st_size > 10_000
     lines = ex.format_text(result).splitlines()
-    verdict = {line.split(": ", 1)[1].split(" (")[0].split(" paper")[0]: line.split(":")[0].strip()
-               for line in lines if line.strip().startswith(("holds", "DOES NOT HOLD"))}
-    for claim in ("k_p1_1pct", "k_p2_1pct", "k_mumax_01pct", "faster convergence of p2",
-                  "faster tracking, dry->normal", "smaller fluctuation, dry segment only"):
+    verdict = {
+        line.split(": ", 1)[1].split(" (")[0].split(" paper")[0]: line.split(":")[0].strip()
+        for line in lines
+        if line.strip().startswith(("holds", "DOES NOT HOLD"))
+    }
+    for claim in (
+        "k_p1_1pct",
+        "k_p2_1pct",
+        "k_mumax_01pct",
+        "faster convergence of p2",
+        "faster tracking, dry->normal",
+        "smaller fluctuation, dry segment only",
+    ):
         assert verdict[claim] == "holds", claim
     assert verdict["faster tracking, dry->normal"] == "holds"
     assert verdict["faster tracking, normal->wet"] == "DOES NOT HOLD"

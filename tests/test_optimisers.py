@@ -87,7 +87,8 @@ def test_vmap_over_problems_equals_separate_runs_without_retrace(algorithm):
     singles = [run(algorithm, sphere, BOUNDS, k, POP, ITERS, TARGET, args=c) for k, c in zip(keys, centres)]
     traced = TRACES["n"]
     batched = jax.vmap(lambda k, c: run(algorithm, sphere, BOUNDS, k, POP, ITERS, TARGET, args=c))(
-        keys, centres)
+        keys, centres
+    )
     run(algorithm, sphere, BOUNDS, keys[0], POP, ITERS, TARGET, args=centres[2] + 0.1)  # new data
     assert TRACES["n"] == traced > 0  # neither vmap nor a new dataset traced the objective again
     for i, s in enumerate(singles):
@@ -129,8 +130,7 @@ def polach_dataset(theta=THETA, n=120):
     return PolachDataset(creep, slip, mu, speed, jnp.asarray(k_eps))
 
 
-@pytest.mark.parametrize("method, mae_tol", [
-    ("lm", 1e-10), ("tlbo", 1e-4), ("itlbo", 1e-4), ("pso", 1e-4)])
+@pytest.mark.parametrize("method, mae_tol", [("lm", 1e-10), ("tlbo", 1e-4), ("itlbo", 1e-4), ("pso", 1e-4)])
 def test_fit_polach_recovers_known_parameters(method, mae_tol):
     """Noise-free data: the only error is the optimiser's. Linearised, a fit with residual
     r = J Δθ has |Δθ_i| ≤ ‖r‖ · √((JᵀJ)⁻¹)_ii (Cauchy–Schwarz; J at the truth), so each parameter's
@@ -149,9 +149,15 @@ def test_fit_polach_recovers_known_parameters(method, mae_tol):
 
 def test_atan_ratio_matches_arctan2_with_exact_gradient():
     rng = np.random.default_rng(0)
-    x = np.concatenate([np.linspace(-12.0, 12.0, 200_001), 1e3 * rng.standard_normal(100_000),
-                        np.geomspace(1e-280, 1e8, 20_001), -np.geomspace(1e-280, 1e8, 2_001),
-                        [0.0, 0.66, np.nextafter(0.66, 1.0), 2.414213562373095, 2.4142135623730954]])
+    x = np.concatenate(
+        [
+            np.linspace(-12.0, 12.0, 200_001),
+            1e3 * rng.standard_normal(100_000),
+            np.geomspace(1e-280, 1e8, 20_001),
+            -np.geomspace(1e-280, 1e8, 2_001),
+            [0.0, 0.66, np.nextafter(0.66, 1.0), 2.414213562373095, 2.4142135623730954],
+        ]
+    )
     for d in (1.0, 0.37, 1e-3, 1e-12):
         n = x * d
         ours = np.asarray(jax.jit(atan_ratio)(jnp.asarray(n), jnp.full(n.shape, d)))
@@ -200,17 +206,22 @@ def noisy_polach(n=300, seed=0):
     creep = np.exp(rng.uniform(np.log(1e-3), np.log(0.8), n))
     mu = np.asarray(jadhesion.polach_adhesion(theta, creep, creep * speed, k_eps))
     mu = mu + 0.0135 * rng.standard_normal(n)
-    return PolachDataset(*(jnp.asarray(a) for a in (creep, creep * speed, mu, speed)),
-                         jnp.asarray(k_eps))
+    return PolachDataset(*(jnp.asarray(a) for a in (creep, creep * speed, mu, speed)), jnp.asarray(k_eps))
 
 
 def test_box_lm_matches_scipy_trf_on_noisy_polach_in_few_steps():
     data = noisy_polach()
     fun = jax.jit(lambda p: polach_residual(p, data))
     jac = jax.jit(jax.jacfwd(lambda p: polach_residual(p, data)))
-    ref = scipy.optimize.least_squares(lambda p: np.asarray(fun(p)), np.full(5, 0.5),
-                                       jac=lambda p: np.asarray(jac(p)), bounds=(0.0, 1.0),
-                                       xtol=1e-15, ftol=1e-15, gtol=1e-15)
+    ref = scipy.optimize.least_squares(
+        lambda p: np.asarray(fun(p)),
+        np.full(5, 0.5),
+        jac=lambda p: np.asarray(jac(p)),
+        bounds=(0.0, 1.0),
+        xtol=1e-15,
+        ftol=1e-15,
+        gtol=1e-15,
+    )
     box = (jnp.zeros(5), jnp.ones(5))
     out = box_lm(polach_residual, jnp.full(5, 0.5), data, box)
     assert bool(out.success) and int(out.steps) <= 60  # A → 0 along the A–B valley: 44 (scipy: 52)
@@ -279,6 +290,7 @@ def test_fit_polach_batch_lm_equals_separate_fits():
 
 # --------------------------------------------------------------------------- curve_fit contract
 
+
 def decay(x, p):
     return p[0] * jnp.exp(-p[1] * x) + p[2]
 
@@ -291,8 +303,9 @@ def decay_data():
 
 def test_curve_fit_lm_matches_scipy():
     x, y = decay_data()
-    ref, ref_cov = scipy.optimize.curve_fit(lambda x, a, b, c: a * np.exp(-b * x) + c, x, y,
-                                            p0=[1.0, 1.0, 0.0], xtol=1e-14, ftol=1e-14)
+    ref, ref_cov = scipy.optimize.curve_fit(
+        lambda x, a, b, c: a * np.exp(-b * x) + c, x, y, p0=[1.0, 1.0, 0.0], xtol=1e-14, ftol=1e-14
+    )
     fit = jadhesion.curve_fit(decay, x, y, jnp.array([1.0, 1.0, 0.0]))
     np.testing.assert_allclose(fit.params, ref, rtol=1e-8)
     np.testing.assert_allclose(fit.covariance, ref_cov, rtol=1e-6)
@@ -307,8 +320,7 @@ def test_curve_fit_population_methods(method):
     x, y = decay_data()
     lm = curve_fit(decay, x, y, jnp.array([1.0, 1.0, 0.0]))
     bounds = (jnp.zeros(3), jnp.full(3, 5.0))
-    fit = curve_fit(decay, x, y, jnp.zeros(3), bounds=bounds, method=method, pop_size=20,
-                    max_iter=150)
+    fit = curve_fit(decay, x, y, jnp.zeros(3), bounds=bounds, method=method, pop_size=20, max_iter=150)
     # The same minimum as LM, to well inside its 1-σ ellipse, found before the cap: the stall
     # test stopped the run (status converged) and the covariance is LM's at that point.
     assert float(fit.sse) < 1.01 * float(lm.sse)
@@ -368,8 +380,9 @@ def test_box_lm_from_a_plateau_escapes_or_says_it_stalled():
 def test_population_run_stops_on_the_stall_test_or_the_cap(algorithm):
     """Without a target a run stops once the best fitness improved by < ftol relative over the
     window; with ftol switched off it runs to the cap and says so."""
-    stop = run_until(algorithm, sphere, BOUNDS, jax.random.key(8), POP, 400, None, args=CENTRE,
-                     ftol=1e-3, window=10)
+    stop = run_until(
+        algorithm, sphere, BOUNDS, jax.random.key(8), POP, 400, None, args=CENTRE, ftol=1e-3, window=10
+    )
     assert status_of(stop.status) == Status.CONVERGED and 10 <= int(stop.iterations) < 400
     full = run(algorithm, sphere, BOUNDS, jax.random.key(8), POP, int(stop.iterations), args=CENTRE)
     f = np.asarray(full.history.best_f)

@@ -27,8 +27,9 @@ def _dataset(n=200, seed=0):
     creep = np.linspace(1e-4, 0.05, n)
     slip = creep * 10.0
     adhesion = 0.3 * np.tanh(80 * creep) + 0.002 * rng.standard_normal(n)
-    return PolachDataset(jnp.asarray(creep), jnp.asarray(slip), jnp.asarray(adhesion),
-                         jnp.full(n, 10.0), jnp.asarray(129.88))
+    return PolachDataset(
+        jnp.asarray(creep), jnp.asarray(slip), jnp.asarray(adhesion), jnp.full(n, 10.0), jnp.asarray(129.88)
+    )
 
 
 @pytest.fixture
@@ -94,8 +95,10 @@ def test_corrupt_stale_and_truncated_files_are_rebuilt(tmp_path):
         ("corrupt", header + b"\n" + blob[: len(blob) // 2]),  # truncated
         ("unreadable", b"not a header\n" + blob),
         ("unreadable", b"\xff\xfe" * 10),
-        ("unreadable", json.dumps({**meta, "sha256": hashlib.sha256(junk).hexdigest()}).encode()
-         + b"\n" + junk),  # intact checksum of bytes that are no program
+        (
+            "unreadable",
+            json.dumps({**meta, "sha256": hashlib.sha256(junk).hexdigest()}).encode() + b"\n" + junk,
+        ),  # intact checksum of bytes that are no program
         ("key mismatch", json.dumps({**meta, "key": {**meta["key"], "code": "old"}}).encode() + b"\n" + blob),
     ]
     for reason, content in damaged:
@@ -155,22 +158,37 @@ def test_warm_fit_process_imports_no_identification_library(tmp_path):
     from jadhesion.data.recording import save_recording
 
     data = _dataset(300)
-    rec = save_recording({"vehicle_speed": np.asarray(data.vehicle_speed), "creepage": np.asarray(data.creep),
-                          "slip_velocity": np.asarray(data.slip), "adhesion": np.asarray(data.adhesion)},
-                         path=tmp_path / "rec.csv")
-    env = {**os.environ, "JADHESION_CACHE": str(tmp_path / "xla"),
-           "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
-    probe = ("import sys, json; from jadhesion.cli import main;"
-             "code = main(['fit', sys.argv[1], '--method', 'lm', '--json']);"
-             "heavy = [m for m in ('jadhesion.identify', 'optimistix', 'equinox') if m in sys.modules];"
-             "sys.stderr.write('HEAVY=' + json.dumps(heavy) + '\\n'); sys.exit(code)")
-    runs = [subprocess.run([sys.executable, "-c", probe, str(rec)], env=env, capture_output=True, text=True,
-                           timeout=600) for _ in range(2)]
+    rec = save_recording(
+        {
+            "vehicle_speed": np.asarray(data.vehicle_speed),
+            "creepage": np.asarray(data.creep),
+            "slip_velocity": np.asarray(data.slip),
+            "adhesion": np.asarray(data.adhesion),
+        },
+        path=tmp_path / "rec.csv",
+    )
+    env = {
+        **os.environ,
+        "JADHESION_CACHE": str(tmp_path / "xla"),
+        "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
+    }
+    probe = (
+        "import sys, json; from jadhesion.cli import main;"
+        "code = main(['fit', sys.argv[1], '--method', 'lm', '--json']);"
+        "heavy = [m for m in ('jadhesion.identify', 'optimistix', 'equinox') if m in sys.modules];"
+        "sys.stderr.write('HEAVY=' + json.dumps(heavy) + '\\n'); sys.exit(code)"
+    )
+    runs = [
+        subprocess.run(
+            [sys.executable, "-c", probe, str(rec)], env=env, capture_output=True, text=True, timeout=600
+        )
+        for _ in range(2)
+    ]
     for r in runs:
         assert r.returncode == 0, r.stderr
     docs = [json.loads(r.stdout) for r in runs]
     for d in docs:
         d.pop("seconds")
     assert docs[0] == docs[1]
-    assert "HEAVY=[\"jadhesion.identify\", \"optimistix\", \"equinox\"]" in runs[0].stderr
+    assert 'HEAVY=["jadhesion.identify", "optimistix", "equinox"]' in runs[0].stderr
     assert "HEAVY=[]" in runs[1].stderr

@@ -10,8 +10,7 @@ from hypothesis import strategies as st
 
 from jadhesion.data.dataset import PolachDataset, to_dataset
 from jadhesion.data.observer import observe_adhesion
-from jadhesion.data.recording import (MAX_SPEED, Recording, load_recording, save_recording,
-                                      vehicle_sidecar)
+from jadhesion.data.recording import MAX_SPEED, Recording, load_recording, save_recording, vehicle_sidecar
 from jadhesion.data.vehicle import LOCO_22E, Vehicle
 from jadhesion.errors import InputError, RecordingError
 from jadhesion.models.kinematics import SPEED_FLOOR
@@ -41,6 +40,7 @@ def _raw_text(n=30, edit=None):
 def _set(row, col, value):
     def edit(rows):
         rows[row - 1][HEADER.split(",").index(col)] = value
+
     return edit
 
 
@@ -71,8 +71,7 @@ def test_round_trip_is_exact(tmp_path):
     assert rec.vehicle == vehicle
     assert rec.sidecar["scenario"] == "dry"
     assert rec.notes == (f"{tmp_path / 'run.json'}: unknown key 'scenario' ignored",)
-    assert json.loads((tmp_path / "run.json").read_text()) == {**vehicle_sidecar(vehicle),
-                                                              "scenario": "dry"}
+    assert json.loads((tmp_path / "run.json").read_text()) == {**vehicle_sidecar(vehicle), "scenario": "dry"}
 
 
 def test_save_rejects_ragged_columns(tmp_path):
@@ -97,23 +96,23 @@ def test_creepage_only_dataset_needs_no_time(tmp_path):
     s = np.array([0.001, 0.01, -0.02, 0.3])
     v = np.array([0.6, 0.0, 1.2, 2.0])  # standstill allowed
     mu = np.array([0.1, 0.3, -0.35, 0.33])
-    save_recording({"creepage": s, "vehicle_speed": v, "adhesion": mu}, LOCO_22E,
-                   tmp_path / "ds.csv")
+    save_recording({"creepage": s, "vehicle_speed": v, "adhesion": mu}, LOCO_22E, tmp_path / "ds.csv")
     ds = to_dataset(load_recording(tmp_path / "ds.csv"))
     assert isinstance(ds, PolachDataset)
     np.testing.assert_array_equal(np.asarray(ds.creep), s)
     np.testing.assert_array_equal(np.asarray(ds.adhesion), mu)
     np.testing.assert_array_equal(np.asarray(ds.vehicle_speed), v)
-    np.testing.assert_allclose(np.asarray(ds.slip), s * np.maximum(np.abs(v), SPEED_FLOOR),
-                               rtol=1e-15)
+    np.testing.assert_allclose(np.asarray(ds.slip), s * np.maximum(np.abs(v), SPEED_FLOOR), rtol=1e-15)
     assert float(ds.k_eps) == pytest.approx(LOCO_22E.k_eps(), rel=1e-15)
 
 
 def test_slip_velocity_dataset(tmp_path):
     w = np.array([0.001, 0.01, -0.02])
     v = np.array([0.5, 1.0, 0.0])
-    (tmp_path / "d.csv").write_text("slip_velocity,vehicle_speed,adhesion,comment\n" + "".join(
-        f"{float(a)!r},{float(b)!r},0.2,run {i}\n" for i, (a, b) in enumerate(zip(w, v))))
+    (tmp_path / "d.csv").write_text(
+        "slip_velocity,vehicle_speed,adhesion,comment\n"
+        + "".join(f"{float(a)!r},{float(b)!r},0.2,run {i}\n" for i, (a, b) in enumerate(zip(w, v)))
+    )
     rec = load_recording(tmp_path / "d.csv")
     assert "comment" not in rec.columns and "'comment'" in rec.notes[0]  # text column ignored
     ds = to_dataset(rec)
@@ -125,10 +124,10 @@ def test_raw_recording_runs_the_observer_with_the_sidecar_vehicle(tmp_path):
     cols = _raw_columns(20)
     vehicle = LOCO_22E.replace(wheel_radius_m=0.59)
     save_recording(cols, vehicle, tmp_path / "r.csv")
-    ds = to_dataset(load_recording(tmp_path / "r.csv"), observer_variant="filtered_torque",
-                    creep="raw")
-    expected = observe_adhesion(cols["time"], cols["wheel_speed"], cols["traction_torque"], vehicle,
-                                "filtered_torque")
+    ds = to_dataset(load_recording(tmp_path / "r.csv"), observer_variant="filtered_torque", creep="raw")
+    expected = observe_adhesion(
+        cols["time"], cols["wheel_speed"], cols["traction_torque"], vehicle, "filtered_torque"
+    )
     np.testing.assert_array_equal(np.asarray(ds.adhesion), np.asarray(expected))
     w = cols["wheel_speed"] - cols["vehicle_speed"]
     np.testing.assert_allclose(np.asarray(ds.creep), w / cols["vehicle_speed"], rtol=1e-14)
@@ -157,48 +156,88 @@ def test_blank_and_comment_lines_are_skipped_and_lines_reported(tmp_path):
 
 
 CASES = {
-    "text": (_raw_text(30, _set(17, "vehicle_speed", "abc")),
-             ["column 'vehicle_speed', row 17 (line 18)", "'abc' is not a number"]),
-    "empty cell": (_raw_text(30, _set(4, "wheel_speed", " ")),
-                   ["column 'wheel_speed', row 4 (line 5)", "empty cell"]),
-    "nan": (_raw_text(30, _set(3, "vehicle_speed", "nan")),
-            ["column 'vehicle_speed', row 3", "'nan' is not a finite number"]),
-    "inf": (_raw_text(30, _set(9, "traction_torque", "-inf")),
-            ["column 'traction_torque', row 9", "not a finite number"]),
-    "field count": (_raw_text(30, lambda rows: rows[4].pop()),
-                    ["row 5 (line 6)", "3 fields", "4 columns"]),
+    "text": (
+        _raw_text(30, _set(17, "vehicle_speed", "abc")),
+        ["column 'vehicle_speed', row 17 (line 18)", "'abc' is not a number"],
+    ),
+    "empty cell": (
+        _raw_text(30, _set(4, "wheel_speed", " ")),
+        ["column 'wheel_speed', row 4 (line 5)", "empty cell"],
+    ),
+    "nan": (
+        _raw_text(30, _set(3, "vehicle_speed", "nan")),
+        ["column 'vehicle_speed', row 3", "'nan' is not a finite number"],
+    ),
+    "inf": (
+        _raw_text(30, _set(9, "traction_torque", "-inf")),
+        ["column 'traction_torque', row 9", "not a finite number"],
+    ),
+    "field count": (_raw_text(30, lambda rows: rows[4].pop()), ["row 5 (line 6)", "3 fields", "4 columns"]),
     "extra field": (_raw_text(30, lambda rows: rows[0].append("1")), ["row 1 (line 2)", "5 fields"]),
-    "time equal": (_raw_text(30, _set(4, "time", "0.04")),
-                   ["column 'time', row 4", "not after the previous row's 0.04", "strictly increase"]),
+    "time equal": (
+        _raw_text(30, _set(4, "time", "0.04")),
+        ["column 'time', row 4", "not after the previous row's 0.04", "strictly increase"],
+    ),
     "time decreasing": (_raw_text(30, _set(12, "time", "0.0")), ["column 'time', row 12"]),
-    "km/h": (_raw_text(30, lambda rows: [r.__setitem__(1, repr(float(r[1]) * 140)) for r in rows]),
-             ["column 'vehicle_speed', row 1",
-              "looks like km/h? map it with --column vehicle_speed=vehicle_speed[km/h]"]),
-    "wheel km/h": (_raw_text(30, lambda rows: [r.__setitem__(2, repr(float(r[1]) * 3.6))
-                                              for r in rows]),
-                   ["column 'wheel_speed', row 1", "wheel_speed looks like km/h",
-                    "--column wheel_speed=wheel_speed[km/h]"]),
-    "kNm": (_raw_text(30, lambda rows: [r.__setitem__(3, repr(float(r[3]) / 1000)) for r in rows]),
-            ["column 'traction_torque', row 26 (line 27)", "implies mu = 0.0003",
-             "looks like kN·m? map it with --column traction_torque=traction_torque[kN*m]"]),
-    "huge torque": (_raw_text(30, _set(2, "traction_torque", "1e7")),
-                    ["column 'traction_torque', row 2", "implausible"]),
+    "km/h": (
+        _raw_text(30, lambda rows: [r.__setitem__(1, repr(float(r[1]) * 140)) for r in rows]),
+        [
+            "column 'vehicle_speed', row 1",
+            "looks like km/h? map it with --column vehicle_speed=vehicle_speed[km/h]",
+        ],
+    ),
+    "wheel km/h": (
+        _raw_text(30, lambda rows: [r.__setitem__(2, repr(float(r[1]) * 3.6)) for r in rows]),
+        [
+            "column 'wheel_speed', row 1",
+            "wheel_speed looks like km/h",
+            "--column wheel_speed=wheel_speed[km/h]",
+        ],
+    ),
+    "kNm": (
+        _raw_text(30, lambda rows: [r.__setitem__(3, repr(float(r[3]) / 1000)) for r in rows]),
+        [
+            "column 'traction_torque', row 26 (line 27)",
+            "implies mu = 0.0003",
+            "looks like kN·m? map it with --column traction_torque=traction_torque[kN*m]",
+        ],
+    ),
+    "huge torque": (
+        _raw_text(30, _set(2, "traction_torque", "1e7")),
+        ["column 'traction_torque', row 2", "implausible"],
+    ),
     "no header": ("0,1,1,5\n0.1,1,1,5\n", ["no header row", "line 1"]),
     "header only": (HEADER + "\n", ["no data rows"]),
-    "duplicate": ("time,time,vehicle_speed,wheel_speed,traction_torque\n1,2,3,4,5\n",
-                  ["'time' appears twice"]),
+    "duplicate": (
+        "time,time,vehicle_speed,wheel_speed,traction_torque\n1,2,3,4,5\n",
+        ["'time' appears twice"],
+    ),
     "empty name": ("time,,vehicle_speed\n1,2,3\n", ["column 2 has an empty name"]),
-    "missing raw": ("time,vehicle_speed\n0,1\n",
-                    ["missing columns 'wheel_speed', 'traction_torque'", "present: time, vehicle_speed",
-                     "time, vehicle_speed, wheel_speed, traction_torque (raw signals)"]),
-    "missing creep": ("vehicle_speed,adhesion\n1,0.2\n",
-                      ["missing column 'creepage' or 'slip_velocity'", "fitting dataset",
-                       "present: vehicle_speed, adhesion"]),
+    "missing raw": (
+        "time,vehicle_speed\n0,1\n",
+        [
+            "missing columns 'wheel_speed', 'traction_torque'",
+            "present: time, vehicle_speed",
+            "time, vehicle_speed, wheel_speed, traction_torque (raw signals)",
+        ],
+    ),
+    "missing creep": (
+        "vehicle_speed,adhesion\n1,0.2\n",
+        [
+            "missing column 'creepage' or 'slip_velocity'",
+            "fitting dataset",
+            "present: vehicle_speed, adhesion",
+        ],
+    ),
     "missing speed": ("creepage,adhesion\n0.1,0.2\n", ["missing column 'vehicle_speed'"]),
-    "adhesion percent": ("creepage,vehicle_speed,adhesion\n0.01,1,0.3\n0.02,1,35\n",
-                         ["column 'adhesion', row 2 (line 3)", "implausible"]),
-    "dataset nan": ("creepage,vehicle_speed,adhesion\n0.01,1,0.3\nnan,1,0.3\n",
-                    ["column 'creepage', row 2", "finite"]),
+    "adhesion percent": (
+        "creepage,vehicle_speed,adhesion\n0.01,1,0.3\n0.02,1,35\n",
+        ["column 'adhesion', row 2 (line 3)", "implausible"],
+    ),
+    "dataset nan": (
+        "creepage,vehicle_speed,adhesion\n0.01,1,0.3\nnan,1,0.3\n",
+        ["column 'creepage', row 2", "finite"],
+    ),
     "empty": ("", ["empty"]),
     "blank": ("\n  \n\n", ["empty"]),
     "comments only": ("# nothing\n", ["no header row"]),
@@ -222,11 +261,14 @@ def test_missing_file_and_directory(tmp_path):
     assert "directory" in _error(tmp_path)
 
 
-@pytest.mark.parametrize("content,expected", [
-    (b"time,vehicle_speed\x00\x01\x02", "binary data (NUL byte at byte 18)"),
-    ((HEADER + "\n0,1,1,\xe9\n").encode("latin-1"), "not UTF-8 text (undecodable byte 0xe9"),
-    (b"\x89PNG\r\n\x1a\n" + bytes(range(256)), "binary data"),
-])
+@pytest.mark.parametrize(
+    "content,expected",
+    [
+        (b"time,vehicle_speed\x00\x01\x02", "binary data (NUL byte at byte 18)"),
+        ((HEADER + "\n0,1,1,\xe9\n").encode("latin-1"), "not UTF-8 text (undecodable byte 0xe9"),
+        (b"\x89PNG\r\n\x1a\n" + bytes(range(256)), "binary data"),
+    ],
+)
 def test_binary_files(tmp_path, content, expected):
     (tmp_path / "data.csv").write_bytes(content)
     msg = _error(tmp_path / "data.csv")
@@ -265,16 +307,17 @@ SIDECAR_CASES = {
     "truncated": ('{"wheel_radius_m": 0.6', ["not valid JSON"]),
     "empty": ("", ["sidecar is empty"]),
     "list": ("[0.6]", ["must be a JSON object", "list"]),
-    "string value": ('{"wheel_radius_m": "0.6"}', ["key 'wheel_radius_m'", "expected a number",
-                                                  "str \"0.6\""]),
+    "string value": ('{"wheel_radius_m": "0.6"}', ["key 'wheel_radius_m'", "expected a number", 'str "0.6"']),
     "bool value": ('{"axle_load_kg": true}', ["key 'axle_load_kg'", "expected a number"]),
     "negative": ('{"wheel_radius_m": -0.6}', ["key 'wheel_radius_m'", "must be positive"]),
     "zero inertia": ('{"wheelset_inertia_kgm2": 0}', ["key 'wheelset_inertia_kgm2'", "positive"]),
     "nan": ('{"axle_load_kg": NaN}', ["key 'axle_load_kg'", "not a finite number"]),
     "poisson": ('{"poisson_ratio": 0.7}', ["key 'poisson_ratio'", "outside [0, 0.5)"]),
     "name": ('{"name": 22}', ["key 'name'", "expected a string"]),
-    "axes one": ('{"contact_semi_axes_m": [0.008]}', ["key 'contact_semi_axes_m'",
-                                                      "two positive numbers", "[0.008]"]),
+    "axes one": (
+        '{"contact_semi_axes_m": [0.008]}',
+        ["key 'contact_semi_axes_m'", "two positive numbers", "[0.008]"],
+    ),
     "axes negative": ('{"contact_semi_axes_m": [0.008, -0.005]}', ["two positive numbers"]),
     "axes text": ('{"contact_semi_axes_m": "8 mm x 5 mm"}', ["two positive numbers"]),
     "axes three": ('{"contact_semi_axes_m": [1, 2, 3]}', ["two positive numbers"]),
@@ -300,9 +343,17 @@ def test_binary_sidecar(tmp_path):
 
 def test_sidecar_overrides_reach_vehicle(tmp_path):
     (tmp_path / "data.csv").write_text(_raw_text(5))
-    (tmp_path / "data.json").write_text(json.dumps({
-        "wheel_radius_m": 0.5, "axle_load_kg": 20000, "name": "test loco", "wheel_load_n": None,
-        "comment": "ignored"}))
+    (tmp_path / "data.json").write_text(
+        json.dumps(
+            {
+                "wheel_radius_m": 0.5,
+                "axle_load_kg": 20000,
+                "name": "test loco",
+                "wheel_load_n": None,
+                "comment": "ignored",
+            }
+        )
+    )
     rec = load_recording(tmp_path / "data.csv")
     assert rec.vehicle == Vehicle(name="test loco", wheel_radius_m=0.5, axle_load_kg=20000.0)
     assert rec.notes == (f"{tmp_path / 'data.json'}: unknown key 'comment' ignored",)
@@ -310,34 +361,44 @@ def test_sidecar_overrides_reach_vehicle(tmp_path):
     assert float(rec.vehicle.contact().a) < float(LOCO_22E.contact().a)
     assert rec.vehicle.k_eps() != pytest.approx(LOCO_22E.k_eps(), rel=1e-3)
     # Contact overrides replace Hertz.
-    (tmp_path / "data.json").write_text(json.dumps({"contact_semi_axes_m": [0.007, 0.006],
-                                                    "shear_modulus_pa": 8e10}))
+    (tmp_path / "data.json").write_text(
+        json.dumps({"contact_semi_axes_m": [0.007, 0.006], "shear_modulus_pa": 8e10})
+    )
     rec = load_recording(tmp_path / "data.csv")
     c = rec.vehicle.contact()
     assert (float(c.a), float(c.b)) == (0.007, 0.006)
     assert rec.vehicle.shear_modulus == 8e10
     assert rec.vehicle.k_eps() == pytest.approx(
-        Vehicle(contact_semi_axes_m=(0.007, 0.006), shear_modulus_pa=8e10).k_eps(), rel=1e-15)
+        Vehicle(contact_semi_axes_m=(0.007, 0.006), shear_modulus_pa=8e10).k_eps(), rel=1e-15
+    )
 
 
 # ------------------------------------------------------------------------------------- fuzzing
 
 
-_alphabet = st.sampled_from(list("0123456789.,-+eE\n\r \"#tnaiNf") + [
-    "time", "vehicle_speed", "wheel_speed", "traction_torque", "creepage", "adhesion", "1e9"])
+_alphabet = st.sampled_from(
+    list('0123456789.,-+eE\n\r "#tnaiNf')
+    + ["time", "vehicle_speed", "wheel_speed", "traction_torque", "creepage", "adhesion", "1e9"]
+)
 
 
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(data=st.one_of(st.binary(max_size=400),
-                      st.lists(_alphabet, max_size=80).map(lambda x: "".join(x).encode()),
-                      st.lists(_alphabet, max_size=60).map(
-                          lambda x: (HEADER + ",adhesion\n" + "".join(x)).encode())),
-       sidecar=st.one_of(st.none(), st.binary(max_size=40),
-                         st.dictionaries(st.sampled_from(["wheel_radius_m", "name", "x",
-                                                          "contact_semi_axes_m"]),
-                                         st.one_of(st.floats(), st.text(max_size=3),
-                                                   st.lists(st.floats(), max_size=3)),
-                                         max_size=3).map(lambda d: json.dumps(d).encode())))
+@given(
+    data=st.one_of(
+        st.binary(max_size=400),
+        st.lists(_alphabet, max_size=80).map(lambda x: "".join(x).encode()),
+        st.lists(_alphabet, max_size=60).map(lambda x: (HEADER + ",adhesion\n" + "".join(x)).encode()),
+    ),
+    sidecar=st.one_of(
+        st.none(),
+        st.binary(max_size=40),
+        st.dictionaries(
+            st.sampled_from(["wheel_radius_m", "name", "x", "contact_semi_axes_m"]),
+            st.one_of(st.floats(), st.text(max_size=3), st.lists(st.floats(), max_size=3)),
+            max_size=3,
+        ).map(lambda d: json.dumps(d).encode()),
+    ),
+)
 def test_garbage_never_raises_anything_but_recording_error(tmp_path_factory, data, sidecar):
     folder = tmp_path_factory.mktemp("fuzz")
     (folder / "g.csv").write_bytes(data)
@@ -360,16 +421,18 @@ def test_overview_figure_builds(tmp_path):
 
     cols = _raw_columns(300)
     s = (cols["wheel_speed"] - cols["vehicle_speed"]) / cols["vehicle_speed"]
-    cols["adhesion"] = np.asarray(polach_adhesion(DRY, s, s * cols["vehicle_speed"],
-                                                  LOCO_22E.k_eps()))
+    cols["adhesion"] = np.asarray(polach_adhesion(DRY, s, s * cols["vehicle_speed"], LOCO_22E.k_eps()))
     save_recording(cols, LOCO_22E, tmp_path / "ov.csv")
     fig = recording_overview(load_recording(tmp_path / "ov.csv"), truth_params=DRY)
     assert len(fig.axes) == 5 and fig.axes[-1].get_xscale() == "log"
     assert fig.axes[0].get_ylabel() == "speed [km/h]"
     fig.savefig(tmp_path / "ov.png", dpi=40)
     # A creepage-only dataset with signed creep: no time, no torque, symmetric-log creep axis.
-    ds = {"creepage": np.linspace(-0.1, 0.1, 51), "vehicle_speed": np.ones(51),
-          "adhesion": np.linspace(-0.3, 0.3, 51)}
+    ds = {
+        "creepage": np.linspace(-0.1, 0.1, 51),
+        "vehicle_speed": np.ones(51),
+        "adhesion": np.linspace(-0.3, 0.3, 51),
+    }
     fig = recording_overview(ds, truth_params=DRY)
     assert len(fig.axes) == 4 and fig.axes[-1].get_xscale() == "symlog"
     assert fig.axes[2].get_xlabel() == "sample [-]"

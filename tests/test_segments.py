@@ -35,12 +35,17 @@ def test_selection_report_is_exact(logger):
     assert doc["gaps"] == [[pytest.approx(8.99), pytest.approx(11.0)]]
     assert doc["stretches"] == [[0.0, pytest.approx(8.99)], [pytest.approx(11.0), pytest.approx(13.99)]]
     assert doc["counts"] == {"standstill": 100, "traction": 700, "coasting": 100, "braking": 300}
-    assert [{**e, "start": round(e["start"], 6), "end": round(e["end"], 6)}
-            for e in doc["excluded"]] == EXCLUDED_TRACTION
+    assert [
+        {**e, "start": round(e["start"], 6), "end": round(e["end"], 6)} for e in doc["excluded"]
+    ] == EXCLUDED_TRACTION
     braking = select(logger, "braking").document()
     assert braking["used"] == 300
     assert [(e["reason"], e["samples"]) for e in braking["excluded"]] == [
-        ("standstill", 100), ("traction", 400), ("coasting", 100), ("traction", 300)]
+        ("standstill", 100),
+        ("traction", 400),
+        ("coasting", 100),
+        ("traction", 300),
+    ]
     assert select(logger, "both").used == 1000
 
 
@@ -57,8 +62,7 @@ def test_observer_runs_per_stretch_and_never_bridges_the_gap(logger):
     bridged = np.asarray(to_dataset(logger, creep="raw").adhesion)[sel.mask]
     assert abs(bridged[700] - 0.3) > 0.015 and abs(float(data.adhesion[700]) - 0.3) < 0.005
     mu = np.asarray(data.adhesion)  # the abrupt steps of the test signal give transients: medians
-    assert [round(float(np.median(m)), 2) for m in (mu[:400], mu[400:700], mu[700:])] == [
-        0.3, -0.3, 0.3]
+    assert [round(float(np.median(m)), 2) for m in (mu[:400], mu[400:700], mu[700:])] == [0.3, -0.3, 0.3]
     smoothed, _ = selected_dataset(logger, "traction")
     assert smoothed.creep.shape == (700,) and smoothed.creep_sd.shape == (700,)
     assert np.all(np.asarray(smoothed.creep) > 0.005)
@@ -67,8 +71,9 @@ def test_observer_runs_per_stretch_and_never_bridges_the_gap(logger):
 def test_a_clean_recording_gives_exactly_to_dataset(tmp_path):
     cols = stretches_si()
     keep = slice(100, 500)  # the first traction stretch only
-    rec = load_recording(save_recording({k: v[keep] for k, v in cols.items()}, LOCO_22E,
-                                        tmp_path / "clean.csv"))
+    rec = load_recording(
+        save_recording({k: v[keep] for k, v in cols.items()}, LOCO_22E, tmp_path / "clean.csv")
+    )
     data, sel = selected_dataset(rec)
     assert sel.complete and sel.document()["excluded"] == []
     for a, b in zip(data, to_dataset(rec), strict=True):
@@ -80,9 +85,12 @@ def test_direction_change_and_short_stretch(tmp_path):
     t = np.arange(n) * 0.01
     v = np.where(t < 3.0, 1.0, -1.0) * np.minimum(1.0, 0.1 + np.abs(t - 3.0))  # reverses at 3 s
     torque = np.sign(v) * 0.3 * SCALE
-    cols = {"time": np.r_[t, 10.0 + 0.01 * np.arange(10)],  # then 10 samples after a gap
-            "vehicle_speed": np.r_[v, np.ones(10)], "wheel_speed": np.r_[v * 1.01, np.full(10, 1.01)],
-            "traction_torque": np.r_[torque, np.full(10, 0.3 * SCALE)]}
+    cols = {
+        "time": np.r_[t, 10.0 + 0.01 * np.arange(10)],  # then 10 samples after a gap
+        "vehicle_speed": np.r_[v, np.ones(10)],
+        "wheel_speed": np.r_[v * 1.01, np.full(10, 1.01)],
+        "traction_torque": np.r_[torque, np.full(10, 0.3 * SCALE)],
+    }
     rec = load_recording(save_recording(cols, LOCO_22E, tmp_path / "rev.csv"))
     sel = select(rec, "traction")
     counts = sel.counts()
@@ -107,9 +115,14 @@ def test_nothing_selected_and_bad_phase(logger):
 
 
 def _cli(tmp_path, *argv):
-    return subprocess.run([sys.executable, "-m", "jadhesion", *map(str, argv)], capture_output=True,
-                          text=True, timeout=600, cwd=tmp_path,
-                          env={**os.environ, "JADHESION_CACHE": str(tmp_path / "cache")})
+    return subprocess.run(
+        [sys.executable, "-m", "jadhesion", *map(str, argv)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        cwd=tmp_path,
+        env={**os.environ, "JADHESION_CACHE": str(tmp_path / "cache")},
+    )
 
 
 def test_fit_json_reports_the_selection_and_fits_braking_alone(tmp_path):
@@ -140,26 +153,34 @@ def test_adhesion_column_is_ignored_when_raw_signals_are_present(tmp_path):
     bogus = save_recording({**cols, "adhesion": np.full(400, 0.9)}, LOCO_22E, tmp_path / "b.csv")
     args = Namespace(column=[], axle=None, start=None, end=None)
     rec = load_from_args(args, bogus)
-    assert rec.notes == (f"{bogus}: column 'adhesion' ignored: mu_hat is the observer's output of "
-                         f"the raw signals",)
+    assert rec.notes == (
+        f"{bogus}: column 'adhesion' ignored: mu_hat is the observer's output of the raw signals",
+    )
     mu = np.asarray(to_dataset(rec, creep="raw").adhesion)
     expected = observe_adhesion(cols["time"], cols["wheel_speed"], cols["traction_torque"], LOCO_22E)
     np.testing.assert_array_equal(mu, np.asarray(expected))
     # Without the raw signals (a fitting-dataset file) the column is mu_hat.
-    ds = save_recording({"vehicle_speed": cols["vehicle_speed"], "creepage": np.full(400, 0.01),
-                         "adhesion": np.full(400, 0.3)}, LOCO_22E, tmp_path / "d.csv")
+    ds = save_recording(
+        {
+            "vehicle_speed": cols["vehicle_speed"],
+            "creepage": np.full(400, 0.01),
+            "adhesion": np.full(400, 0.3),
+        },
+        LOCO_22E,
+        tmp_path / "d.csv",
+    )
     np.testing.assert_array_equal(np.asarray(to_dataset(load_recording(ds)).adhesion), 0.3)
 
 
 def test_posterior_falls_back_to_gauss_when_samples_are_excluded(tmp_path):
     path = write_logger_file(tmp_path / "log.csv")
-    proc = _cli(tmp_path, "posterior", path, "--walkers", "12", "--steps", "60", "--creep", "raw",
-                "--json")
+    proc = _cli(tmp_path, "posterior", path, "--walkers", "12", "--steps", "60", "--creep", "raw", "--json")
     assert proc.returncode == 0, proc.stderr
     doc = json.loads(proc.stdout)
     assert doc["likelihood"] == "gauss" and doc["likelihood_note"].startswith(
         "auto: samples excluded (samples: 700 of 1200 used (traction, 2 stretch(es), 1 gap(s)); "
-        "excluded: braking 300, coasting 100, standstill 100)")
+        "excluded: braking 300, coasting 100, standstill 100)"
+    )
     assert doc["selection"]["used"] == 700
     bad = _cli(tmp_path, "posterior", path, "--steps", "60", "--likelihood", "observer")
     assert bad.returncode == 2 and bad.stdout == "" and bad.stderr.count("\n") == 1

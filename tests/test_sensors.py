@@ -5,8 +5,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jadhesion.data.sensors import (CLEAN, REALISTIC, SensorModel, ar1_noise, measure, quantise,
-                                    sensor_model)
+from jadhesion.data.sensors import CLEAN, REALISTIC, SensorModel, ar1_noise, measure, quantise, sensor_model
 from jadhesion.data.simulator import simulate
 
 
@@ -20,7 +19,7 @@ def test_ar1_noise_has_its_sd_and_correlation():
     n, sd, tau, dt = 40000, 2e-3, 0.1, 0.02
     c = np.asarray(ar1_noise(jax.random.PRNGKey(0), n, sd, tau, dt))
     rho = np.exp(-dt / tau)
-    ess = n * (1 - rho) / (1 + rho)                  # effective samples of an AR(1) series
+    ess = n * (1 - rho) / (1 + rho)  # effective samples of an AR(1) series
     assert np.std(c) == pytest.approx(sd, rel=4 / np.sqrt(2 * ess))
     assert np.corrcoef(c[1:], c[:-1])[0, 1] == pytest.approx(rho, abs=0.01)
 

@@ -49,8 +49,15 @@ def test_batch_equals_single_runs_and_is_a_stacked_dataset():
 def test_recording_columns_and_truth():
     result = simulate("wet", seed=5)
     cols = result.columns
-    assert set(cols) >= {"time", "vehicle_speed", "wheel_speed", "traction_torque", "creepage",
-                         "slip_velocity", "adhesion"}
+    assert set(cols) >= {
+        "time",
+        "vehicle_speed",
+        "wheel_speed",
+        "traction_torque",
+        "creepage",
+        "slip_velocity",
+        "adhesion",
+    }
     np.testing.assert_allclose(np.diff(cols["time"]), 0.02)
     np.testing.assert_allclose(cols["slip_velocity"], cols["wheel_speed"] - cols["vehicle_speed"])
     truth = result.truth
@@ -71,8 +78,7 @@ def test_rail_change_lowers_adhesion_after_the_step():
     late, early = t > 0.55 * t[-1], t < 0.45 * t[-1]
     drop = base.latent["adhesion"][late].mean() - eff.latent["adhesion"][late].mean()
     assert drop > 0.03
-    np.testing.assert_allclose(eff.columns["adhesion"][early], base.columns["adhesion"][early],
-                               atol=1e-6)
+    np.testing.assert_allclose(eff.columns["adhesion"][early], base.columns["adhesion"][early], atol=1e-6)
 
 
 def test_wheel_radius_error_offsets_slip_and_scales_adhesion():
@@ -88,8 +94,9 @@ def test_wheel_radius_error_offsets_slip_and_scales_adhesion():
 def test_signal_delay_shifts_the_recorded_torque():
     base, eff = _base_and("signal_delay", 0.1)
     lag = 5  # 0.1 s at 50 Hz
-    np.testing.assert_allclose(eff.columns["traction_torque"][lag:],
-                               base.columns["traction_torque"][:-lag], rtol=1e-9)
+    np.testing.assert_allclose(
+        eff.columns["traction_torque"][lag:], base.columns["traction_torque"][:-lag], rtol=1e-9
+    )
 
 
 def test_torque_offset_shifts_observed_adhesion():
@@ -101,7 +108,7 @@ def test_speed_dependence_lowers_friction_as_speed_rises():
     base, eff = _base_and("speed_dependence", 0.5)
     ratio = eff.latent["adhesion"] / base.latent["adhesion"]
     n = len(ratio)
-    assert ratio[: n // 5].mean() > 1.02 and ratio[-n // 5:].mean() < 0.98
+    assert ratio[: n // 5].mean() > 1.02 and ratio[-n // 5 :].mean() < 0.98
 
 
 def test_thermal_softening_and_load_transfer_lower_observed_adhesion():
@@ -111,8 +118,13 @@ def test_thermal_softening_and_load_transfer_lower_observed_adhesion():
 
 
 def test_effect_and_scenario_input_errors():
-    for bad in (["nope"], [("rail_change", "x")], [("rail_change", 2.0)], ["signal_delay=-1"],
-                ["torque_offset", "torque_offset"]):
+    for bad in (
+        ["nope"],
+        [("rail_change", "x")],
+        [("rail_change", 2.0)],
+        ["signal_delay=-1"],
+        ["torque_offset", "torque_offset"],
+    ):
         with pytest.raises(InputError):
             magnitudes(bad)
     assert magnitudes(["rail_change"])[0] == EFFECTS["rail_change"].default
@@ -121,14 +133,26 @@ def test_effect_and_scenario_input_errors():
 
 
 def _cli(*args):
-    return subprocess.run([sys.executable, "-m", "jadhesion", "simulate", *args],
-                          capture_output=True, text=True, timeout=300)
+    return subprocess.run(
+        [sys.executable, "-m", "jadhesion", "simulate", *args], capture_output=True, text=True, timeout=300
+    )
 
 
 def test_cli_writes_recording_sidecar_and_truth(tmp_path):
     out = tmp_path / "rec.csv"
-    proc = _cli("--scenario", "sand", "--effect", "rail_change=0.3", "--seed", "2",
-                "--sensor-noise", "2", "--out", str(out), "--json")
+    proc = _cli(
+        "--scenario",
+        "sand",
+        "--effect",
+        "rail_change=0.3",
+        "--seed",
+        "2",
+        "--sensor-noise",
+        "2",
+        "--out",
+        str(out),
+        "--json",
+    )
     assert proc.returncode == 0, proc.stderr
     summary = json.loads(proc.stdout)
     assert summary["n_samples"] == 2000 and summary["effects"]["rail_change"]["magnitude"] == 0.3
@@ -142,9 +166,15 @@ def test_cli_writes_recording_sidecar_and_truth(tmp_path):
     assert truth["envelope"] == summary["envelope"]
 
 
-@pytest.mark.parametrize("args", [["--scenario", "icy"], ["--scenario", "dry", "--effect", "bogus"],
-                                  ["--scenario", "dry", "--effect", "rail_change=abc"],
-                                  ["--scenario", "dry", "--sensor-noise", "-1"]])
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["--scenario", "icy"],
+        ["--scenario", "dry", "--effect", "bogus"],
+        ["--scenario", "dry", "--effect", "rail_change=abc"],
+        ["--scenario", "dry", "--sensor-noise", "-1"],
+    ],
+)
 def test_cli_bad_input_exits_2_and_writes_nothing(tmp_path, args):
     proc = _cli(*args, "--out", str(tmp_path / "x.csv"))
     assert proc.returncode == 2, proc.stderr

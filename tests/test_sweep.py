@@ -54,8 +54,26 @@ def _free_port() -> int:
 
 #: A real sweep (simulated 22E tests, improved TLBO) whose table, when a chunk of 16 was sharded as
 #: 4 points per device, differed from the one-device table in the last bits of 4 of its 16 MAEs.
-CLI_SWEEP = ("sweep", "--scenarios", "dry", "--seeds", "8", "--methods", "itlbo", "--pop-size", "20",
-             "--max-iter", "60", "--samples", "500", "--noise", "1,2", "--chunk-size", "16", "--json")
+CLI_SWEEP = (
+    "sweep",
+    "--scenarios",
+    "dry",
+    "--seeds",
+    "8",
+    "--methods",
+    "itlbo",
+    "--pop-size",
+    "20",
+    "--max-iter",
+    "60",
+    "--samples",
+    "500",
+    "--noise",
+    "1,2",
+    "--chunk-size",
+    "16",
+    "--json",
+)
 
 
 def _worker(out, *extra):
@@ -65,13 +83,19 @@ def _worker(out, *extra):
 
 def _spawn(argv, devices=None, *, cache):
     """Start ``python argv…`` with ``devices`` forced CPU devices and the test's compilation cache."""
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")]),
-               JADHESION_CACHE=str(cache), JAX_NUMPY_RANK_PROMOTION="raise", JAX_PLATFORMS="cpu")
+    env = dict(
+        os.environ,
+        PYTHONPATH=os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")]),
+        JADHESION_CACHE=str(cache),
+        JAX_NUMPY_RANK_PROMOTION="raise",
+        JAX_PLATFORMS="cpu",
+    )
     env.pop("XLA_FLAGS", None)
     if devices:
         env["XLA_FLAGS"] = f"--xla_force_host_platform_device_count={devices}"
-    return subprocess.Popen([sys.executable, *argv],
-                            env=env, cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    return subprocess.Popen(
+        [sys.executable, *argv], env=env, cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
 
 
 def _finish(proc) -> dict:
@@ -95,8 +119,9 @@ def workers(tmp_path_factory):
     address = f"127.0.0.1:{_free_port()}"
     procs = {f"devices{n}": _spawn(_worker(root / f"devices{n}.csv"), n, cache=cache) for n in (4, 2)}
     for n in (1, 4):
-        procs[f"cli{n}"] = _spawn(["-m", "jadhesion", *CLI_SWEEP, "--out", str(root / f"cli{n}.csv")], n,
-                                  cache=cache)
+        procs[f"cli{n}"] = _spawn(
+            ["-m", "jadhesion", *CLI_SWEEP, "--out", str(root / f"cli{n}.csv")], n, cache=cache
+        )
     for i in range(2):
         dist = ("--coordinator", address, "--num-processes", "2", "--process-id", str(i))
         procs[f"rank{i}"] = _spawn(_worker(root / "dist.csv", *dist), 2, cache=cache)
@@ -127,8 +152,9 @@ def _assert_same(a, b):
 
 
 def test_grid_expansion_and_chunks():
-    grid = Grid(scenarios=["dry", "wet"], seeds=range(3), methods=["lm", "pso"], noise_scale=[1, 2],
-                creep_max=[0.1])
+    grid = Grid(
+        scenarios=["dry", "wet"], seeds=range(3), methods=["lm", "pso"], noise_scale=[1, 2], creep_max=[0.1]
+    )
     assert grid.size == 2 * 3 * 2 * 2 and grid.per_seed == 2
     chunks = plan(grid, 4)
     assert [c.index for c in chunks] == list(range(len(chunks))) == list(range(8))
@@ -136,8 +162,15 @@ def test_grid_expansion_and_chunks():
     cell = np.concatenate([c.points for c in chunks[:2]])
     np.testing.assert_array_equal(cell, [[s, n, 0] for s in range(3) for n in range(2)])
     assert sum(len(c.points) for c in chunks) == grid.size
-    for bad in (dict(scenarios=["ice"]), dict(methods=["bfgs"]), dict(seeds=[]), dict(seeds=[1, 1]),
-                dict(noise_scale=[-1.0]), dict(creep_max=[0.0]), dict(n_samples=10)):
+    for bad in (
+        dict(scenarios=["ice"]),
+        dict(methods=["bfgs"]),
+        dict(seeds=[]),
+        dict(seeds=[1, 1]),
+        dict(noise_scale=[-1.0]),
+        dict(creep_max=[0.0]),
+        dict(n_samples=10),
+    ):
         with pytest.raises(InputError):
             Grid(**bad)
     with pytest.raises(InputError):
@@ -159,8 +192,11 @@ def test_observe_scales_noise_and_selects_creep_range():
     low, covered = observe_(data, theta, 2.0, 0.05)
     assert int(covered) == 3
     np.testing.assert_array_equal(low.creep, [0.01, 0.01, 0.02, 0.02, 0.05, 0.05])
-    np.testing.assert_allclose(low.adhesion - polach_adhesion(theta, low.creep, low.slip, 130.0),
-                               2.0 * np.array([-1.0, -1.0, -2.0, -2.0, 0.5, 0.5]) * 1e-2, atol=1e-14)
+    np.testing.assert_allclose(
+        low.adhesion - polach_adhesion(theta, low.creep, low.slip, 130.0),
+        2.0 * np.array([-1.0, -1.0, -2.0, -2.0, 0.5, 0.5]) * 1e-2,
+        atol=1e-14,
+    )
     none, covered = observe_(data, theta, 1.0, 1e-3)
     assert int(covered) == 0 and np.all(none.creep == 0.01)
 
@@ -193,8 +229,9 @@ def test_resume_recomputes_only_missing_chunk(reference, tmp_path):
     files[2].unlink()
     again, summary = run_sweep(toy_grid(), out, chunk_size=CHUNK, simulate=toy_simulate)
     assert (summary.chunks_computed, summary.computed) == (1, len(plan(toy_grid(), CHUNK)[2].points))
-    assert {f.name: f.stat().st_mtime_ns for f in files if f != files[2]} == \
-        {k: v for k, v in stamps.items() if k != files[2].name}
+    assert {f.name: f.stat().st_mtime_ns for f in files if f != files[2]} == {
+        k: v for k, v in stamps.items() if k != files[2].name
+    }
     _assert_same(again, table)
 
 
@@ -260,8 +297,14 @@ def test_parquet_round_trip(reference, tmp_path):
 
 def test_cli_bad_arguments_exit_2(tmp_path, capsys):
     out = tmp_path / "x.csv"
-    for argv in (["--scenarios", "dry,ice"], ["--methods", "newton"], ["--seeds", "0"], ["--chunk-size", "0"],
-                 ["--creep-max", "-1"], ["--max-iter", "0"]):
+    for argv in (
+        ["--scenarios", "dry,ice"],
+        ["--methods", "newton"],
+        ["--seeds", "0"],
+        ["--chunk-size", "0"],
+        ["--creep-max", "-1"],
+        ["--max-iter", "0"],
+    ):
         assert cli_main(["sweep", *argv, "--out", str(out), "--json"]) == 2
         err = capsys.readouterr().err
         assert err.startswith("jadhesion: error:") and err.count("\n") == 1
@@ -271,9 +314,31 @@ def test_cli_bad_arguments_exit_2(tmp_path, capsys):
 @pytest.mark.slow
 def test_cli_end_to_end(tmp_path):
     out = tmp_path / "sweep.csv"
-    cmd = [sys.executable, "-m", "jadhesion", "sweep", "--scenarios", "dry", "--seeds", "1",
-           "--methods", "pso", "--pop-size", "10", "--max-iter", "10", "--noise", "1,2", "--samples", "100",
-           "--chunk-size", "2", "--out", str(out), "--json"]
+    cmd = [
+        sys.executable,
+        "-m",
+        "jadhesion",
+        "sweep",
+        "--scenarios",
+        "dry",
+        "--seeds",
+        "1",
+        "--methods",
+        "pso",
+        "--pop-size",
+        "10",
+        "--max-iter",
+        "10",
+        "--noise",
+        "1,2",
+        "--samples",
+        "100",
+        "--chunk-size",
+        "2",
+        "--out",
+        str(out),
+        "--json",
+    ]
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")]))
     proc = subprocess.run(cmd, cwd=REPO, env=env, capture_output=True, text=True, timeout=TIMEOUT)
     assert proc.returncode == 0, proc.stderr[-3000:]

@@ -17,9 +17,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from jadhesion.data.dataset import PolachDataset
-from jadhesion.models.polach import PARAM_NAMES, adhesion_peak, polach_adhesion
 from jadhesion.identify.laplace import initial_spread, lm_optimum
 from jadhesion.identify.mcmc import ChainTooShortWarning, sample_posterior
+from jadhesion.models.polach import PARAM_NAMES, adhesion_peak, polach_adhesion
 
 LEVELS = (0.9, 0.5)
 # Faces of the default prior box for the 5 parameters; the derived quantities have none.
@@ -39,16 +39,28 @@ class CoverageReport(NamedTuple):
     seconds: float
 
 
-def synthetic_dataset(rng: np.random.Generator, theta, n: int = 300, sigma: float = 0.013,
-                      k_eps: float = 130.0, speed=(0.6, 3.0), creep=(1e-3, 1.0)) -> PolachDataset:
+def synthetic_dataset(
+    rng: np.random.Generator,
+    theta,
+    n: int = 300,
+    sigma: float = 0.013,
+    k_eps: float = 130.0,
+    speed=(0.6, 3.0),
+    creep=(1e-3, 1.0),
+) -> PolachDataset:
     """``n`` samples of ``polach_adhesion(theta)`` plus Gaussian noise ``sigma`` [-]: creep
     log-uniform on ``creep`` (dense around the peak at s ≈ 0.01–0.2), vehicle speed uniform on
     ``speed`` [m/s], slip ``w = s·v`` [m/s]."""
     s = np.exp(rng.uniform(np.log(creep[0]), np.log(creep[1]), n))
     v = rng.uniform(*speed, n)
     mu = np.asarray(polach_adhesion(jnp.asarray(theta, float), s, s * v, k_eps))
-    return PolachDataset(jnp.asarray(s), jnp.asarray(s * v), jnp.asarray(mu + sigma * rng.standard_normal(n)),
-                         jnp.asarray(v), jnp.asarray(float(k_eps)))
+    return PolachDataset(
+        jnp.asarray(s),
+        jnp.asarray(s * v),
+        jnp.asarray(mu + sigma * rng.standard_normal(n)),
+        jnp.asarray(v),
+        jnp.asarray(float(k_eps)),
+    )
 
 
 def binomial_band(m: int, q: float, level: float = 0.99) -> tuple:
@@ -63,8 +75,9 @@ def binomial_band(m: int, q: float, level: float = 0.99) -> tuple:
 
 def truth_quantities(theta, data: PolachDataset) -> np.ndarray:
     """The true values of :data:`QUANTITIES` (derived ones at the dataset's median speed)."""
-    mu_max, creep_opt = adhesion_peak(jnp.asarray(theta, float), data.k_eps,
-                                      float(np.median(np.asarray(data.vehicle_speed))))
+    mu_max, creep_opt = adhesion_peak(
+        jnp.asarray(theta, float), data.k_eps, float(np.median(np.asarray(data.vehicle_speed)))
+    )
     return np.concatenate([np.asarray(theta, float), [float(mu_max), float(creep_opt)]])
 
 
@@ -79,7 +92,9 @@ def interval_hits(draws: np.ndarray, truth: np.ndarray, level: float, lower=None
     lower = np.full(k, -np.inf) if lower is None else np.asarray(lower, float)
     upper = np.full(k, np.inf) if upper is None else np.asarray(upper, float)
     lo, hi = np.quantile(draws, [(1 - level) / 2, (1 + level) / 2], axis=0)
-    lo = np.where(truth >= upper, np.quantile(draws, 1 - level, axis=0), np.where(truth <= lower, -np.inf, lo))
+    lo = np.where(
+        truth >= upper, np.quantile(draws, 1 - level, axis=0), np.where(truth <= lower, -np.inf, lo)
+    )
     hi = np.where(truth <= lower, np.quantile(draws, level, axis=0), np.where(truth >= upper, np.inf, hi))
     return (lo <= truth) & (truth <= hi)
 
@@ -88,13 +103,22 @@ def posterior_draws(result) -> np.ndarray:
     """Posterior draws of :data:`QUANTITIES` (derived ones on their thinned subset)."""
     m = result.derived_samples["mu_max"].shape[0]
     idx = np.linspace(0, result.samples.shape[0] - 1, m).astype(int)
-    return np.column_stack([result.samples[idx, :5], result.derived_samples["mu_max"],
-                            result.derived_samples["creep_opt"]])
+    return np.column_stack(
+        [result.samples[idx, :5], result.derived_samples["mu_max"], result.derived_samples["creep_opt"]]
+    )
 
 
-def coverage_study(datasets, thetas, *, sampler: Optional[Callable] = None, seed: int = 0,
-                   progress: Optional[Callable[[int], None]] = None, observers=None,
-                   on_result: Optional[Callable] = None, **options) -> CoverageReport:
+def coverage_study(
+    datasets,
+    thetas,
+    *,
+    sampler: Optional[Callable] = None,
+    seed: int = 0,
+    progress: Optional[Callable[[int], None]] = None,
+    observers=None,
+    on_result: Optional[Callable] = None,
+    **options,
+) -> CoverageReport:
     """Posterior for each (dataset, true theta) pair; interval hits at :data:`LEVELS`.
 
     ``sampler(data, theta0, seed=..., spread=..., **options)`` defaults to :func:`sample_posterior`;
@@ -113,8 +137,14 @@ def coverage_study(datasets, thetas, *, sampler: Optional[Callable] = None, seed
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", ChainTooShortWarning)
             theta0 = lm_optimum(data, obs=obs)
-            result = sampler(data, np.asarray(theta0), seed=seed + i,
-                             spread=np.asarray(initial_spread(theta0, data, obs=obs)), **options, **extra)
+            result = sampler(
+                data,
+                np.asarray(theta0),
+                seed=seed + i,
+                spread=np.asarray(initial_spread(theta0, data, obs=obs)),
+                **options,
+                **extra,
+            )
         if on_result is not None:
             on_result(i, result)
         draws, truth = posterior_draws(result), truth_quantities(theta, data)

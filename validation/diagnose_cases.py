@@ -47,9 +47,12 @@ def random_vehicle(rng, p_varied: float = 0.5):
     if rng.random() >= p_varied:
         return LOCO_22E, False
     axle = float(rng.uniform(18000.0, 23000.0))
-    return LOCO_22E.replace(wheel_radius_m=float(rng.uniform(0.57, 0.61)),
-                            wheelset_inertia_kgm2=float(rng.uniform(2250, 3750)),
-                            axle_load_kg=axle, locomotive_mass_kg=6.0 * axle), True
+    return LOCO_22E.replace(
+        wheel_radius_m=float(rng.uniform(0.57, 0.61)),
+        wheelset_inertia_kgm2=float(rng.uniform(2250, 3750)),
+        axle_load_kg=axle,
+        locomotive_mass_kg=6.0 * axle,
+    ), True
 
 
 def random_profile(rng, name: str, p_varied: float = 0.0):
@@ -62,10 +65,13 @@ def random_profile(rng, name: str, p_varied: float = 0.0):
         return base, None, False
     params = tuple(float(np.clip(p * rng.uniform(0.8, 1.2), 0.0, 1.0)) for p in base.params)
     scenario = base.replace(
-        params=params, mean_speed_kmh=base.mean_speed_kmh * float(rng.uniform(0.6, 1.8)),
+        params=params,
+        mean_speed_kmh=base.mean_speed_kmh * float(rng.uniform(0.6, 1.8)),
         speed_ramp=float(rng.uniform(0.2, 0.8)),
         creep_base=base.creep_base * float(rng.uniform(0.6, 1.6)),
-        wander=float(rng.uniform(0.1, 0.4)), minor_excursions=int(rng.integers(0, 4)))
+        wander=float(rng.uniform(0.1, 0.4)),
+        minor_excursions=int(rng.integers(0, 4)),
+    )
     return scenario, int(rng.choice(VARIED_SAMPLES)), True
 
 
@@ -79,8 +85,9 @@ def random_effects(rng, names) -> list:
     return out
 
 
-def run_case(effects, rng, directory, n_samples=None, p_varied_profile: float = 0.0,
-             p_varied_vehicle: float = 0.5) -> dict:
+def run_case(
+    effects, rng, directory, n_samples=None, p_varied_profile: float = 0.0, p_varied_vehicle: float = 0.5
+) -> dict:
     """Simulate one recording, write CSV + sidecar into ``directory``, diagnose it through the CLI
     code path; returns the truth and the diagnosis (without its arrays)."""
     name = str(rng.choice(SCENARIOS))
@@ -95,11 +102,17 @@ def run_case(effects, rng, directory, n_samples=None, p_varied_profile: float = 
     result, _ = diagnose_file(path)
     result["seconds"] = time.perf_counter() - start
     result.pop("_series")
-    return {"scenario": name, "seed": seed, "vehicle_varied": varied,
-            "profile_varied": profile_varied, "n_samples": int(raw["time"].size),
-            "true_params": sim.truth["params"],
-            "effects": [list(e) for e in effects], "truth": sim.truth["effects"],
-            "diagnosis": result}
+    return {
+        "scenario": name,
+        "seed": seed,
+        "vehicle_varied": varied,
+        "profile_varied": profile_varied,
+        "n_samples": int(raw["time"].size),
+        "true_params": sim.truth["params"],
+        "effects": [list(e) for e in effects],
+        "truth": sim.truth["effects"],
+        "diagnosis": result,
+    }
 
 
 def null_statistics(n: int, seed: int = 0, n_samples=None, progress=None) -> dict:
@@ -113,9 +126,12 @@ def null_statistics(n: int, seed: int = 0, n_samples=None, progress=None) -> dic
             generic.append(d["generic"]["gain"])
             if progress:
                 progress.update()
-    return {"max_gain": gains, "generic_gain": generic,
-            "gain_q95": float(np.quantile(gains, 0.95)),
-            "generic_q95": float(np.quantile(generic, 0.95))}
+    return {
+        "max_gain": gains,
+        "generic_gain": generic,
+        "gain_q95": float(np.quantile(gains, 0.95)),
+        "generic_q95": float(np.quantile(generic, 0.95)),
+    }
 
 
 def main(argv=None) -> None:
@@ -126,8 +142,7 @@ def main(argv=None) -> None:
     args = parser.parse_args(argv)
     enable_x64()
     enable_compilation_cache()
-    stats = null_statistics(args.n, args.seed, args.samples,
-                            progress=Progress(args.n, "null recordings"))
+    stats = null_statistics(args.n, args.seed, args.samples, progress=Progress(args.n, "null recordings"))
     print(json.dumps(stats))
 
 

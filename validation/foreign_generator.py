@@ -54,8 +54,18 @@ def _params(params, rng) -> dict:
     return {k: float(params[k]) for k in physics.PARAM_NAMES}
 
 
-def generate(seed, *, params=None, effect="none", magnitude=None, vehicle=None, profile=None,
-             rate_hz=None, duration_s=None, sensor=None) -> ForeignRecording:
+def generate(
+    seed,
+    *,
+    params=None,
+    effect="none",
+    magnitude=None,
+    vehicle=None,
+    profile=None,
+    rate_hz=None,
+    duration_s=None,
+    sensor=None,
+) -> ForeignRecording:
     """Simulate one recording; deterministic in ``seed`` and the arguments.
 
     Args:
@@ -72,7 +82,8 @@ def generate(seed, *, params=None, effect="none", magnitude=None, vehicle=None, 
     if effect not in dynamics.EFFECTS:
         raise ValueError(f"unknown effect {effect!r}; expected one of {EFFECT_NAMES}")
     r_par, r_plan, r_eff, r_sens, r_noise, r_pick = (
-        np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(6))
+        np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(6)
+    )
     params = _params(params, r_par)
     if vehicle is None:
         vehicle = str(r_pick.choice(sorted(physics.VEHICLES)))
@@ -100,28 +111,43 @@ def generate(seed, *, params=None, effect="none", magnitude=None, vehicle=None, 
     latent["mu_obs"] = latent["force"] * world.r_true / (veh.axle_weight_n * veh.wheel_radius_m)
     delay = magnitude if effect == "signal_delay" else 0.0
     offset = magnitude * veh.axle_weight_n * veh.wheel_radius_m if effect == "torque_offset" else 0.0
-    latent["torque_logged"] = np.interp(np.maximum(t - delay, 0.0), fine["time"], fine["torque"]) \
-        + offset
+    latent["torque_logged"] = np.interp(np.maximum(t - delay, 0.0), fine["time"], fine["torque"]) + offset
     columns = {"time": sensors.quantise(t, sens["time_quantum_s"])}
-    for name, truth_signal in (("vehicle_speed", latent["vehicle_speed"]),
-                               ("wheel_speed", latent["wheel_speed"]),
-                               ("traction_torque", latent["torque_logged"])):
+    for name, truth_signal in (
+        ("vehicle_speed", latent["vehicle_speed"]),
+        ("wheel_speed", latent["wheel_speed"]),
+        ("traction_torque", latent["torque_logged"]),
+    ):
         columns[name] = sensors.measure(truth_signal, sens[name], rate, r_noise)
-    vdict = {k: (None if isinstance(v, float) and math.isinf(v) else v)
-             for k, v in dataclasses.asdict(veh).items()}
+    vdict = {
+        k: (None if isinstance(v, float) and math.isinf(v) else v) for k, v in dataclasses.asdict(veh).items()
+    }
     truth = {
-        "generator": NAME, "version": VERSION, "seed": seed, "params": params,
-        "effect": effect, "magnitude": magnitude,
-        "magnitude_unit": dynamics.EFFECTS[effect].unit, "effect_detail": detail,
+        "generator": NAME,
+        "version": VERSION,
+        "seed": seed,
+        "params": params,
+        "effect": effect,
+        "magnitude": magnitude,
+        "magnitude_unit": dynamics.EFFECTS[effect].unit,
+        "effect_detail": detail,
         "effect_doc": dynamics.EFFECTS[effect].doc,
-        "torque_offset_nm": offset, "true_wheel_radius_m": world.r_true,
-        "vehicle": {**vdict, "c11": veh.c11(), "k_eps": veh.k_eps(),
-                    "contact_semi_axes_m": list(veh.semi_axes())},
+        "torque_offset_nm": offset,
+        "true_wheel_radius_m": world.r_true,
+        "vehicle": {
+            **vdict,
+            "c11": veh.c11(),
+            "k_eps": veh.k_eps(),
+            "contact_semi_axes_m": list(veh.semi_axes()),
+        },
         "contact_note": "c11 from a coarse excerpt of Kalker's Table E.3 (steps 0.2 in a/b), "
-                        "linear in ln(a/b) and nu; jadhesion's finer table differs by < 1 %",
+        "linear in ln(a/b) and nu; jadhesion's finer table differs by < 1 %",
         "creep_floor_m_s": dynamics.V_FLOOR,
         "profile": {**dataclasses.asdict(plan)},
-        "sensor": sens, "rate_hz": rate, "duration_s": duration, "n_samples": int(t.size),
+        "sensor": sens,
+        "rate_hz": rate,
+        "duration_s": duration,
+        "n_samples": int(t.size),
     }
     return ForeignRecording(columns, veh.sidecar(), truth, latent)
 
@@ -142,8 +168,9 @@ def write(recording: ForeignRecording, path, *, truth: bool = True) -> Path:
 def main(argv=None) -> int:
     """Write a blind set: ``rec_NNN.csv`` (+ sidecars) in shuffled effect order, and
     ``answer_key.json`` mapping each file to its truth."""
-    ap = argparse.ArgumentParser(prog="python -m validation.foreign_generator",
-                                 description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(
+        prog="python -m validation.foreign_generator", description=__doc__.splitlines()[0]
+    )
     ap.add_argument("--n", type=int, default=16)
     ap.add_argument("--out", required=True)
     ap.add_argument("--seed", type=int, default=0)
@@ -154,8 +181,7 @@ def main(argv=None) -> int:
     unknown = [e for e in effects if e not in dynamics.EFFECTS]
     if unknown:
         ap.error(f"unknown effect(s) {', '.join(unknown)}; expected {', '.join(EFFECT_NAMES)}")
-    order = np.random.default_rng(args.seed).permutation(
-        [effects[i % len(effects)] for i in range(args.n)])
+    order = np.random.default_rng(args.seed).permutation([effects[i % len(effects)] for i in range(args.n)])
     out = Path(args.out)
     key = {"generator": NAME, "version": VERSION, "seed": args.seed, "files": {}}
     for i, effect in enumerate(order):

@@ -24,12 +24,16 @@ def _rational(num, den):
         top = sum(b[i] * x**i for i in range(num))
         bottom = 1.0 + sum(b[num + i] * x ** (i + 1) for i in range(den))
         return top / bottom
+
     return f
 
 
 def _gauss(x, b):
-    return (b[0] * jnp.exp(-b[1] * x) + b[2] * jnp.exp(-((x - b[3]) ** 2) / b[4] ** 2)
-            + b[5] * jnp.exp(-((x - b[6]) ** 2) / b[7] ** 2))
+    return (
+        b[0] * jnp.exp(-b[1] * x)
+        + b[2] * jnp.exp(-((x - b[3]) ** 2) / b[4] ** 2)
+        + b[5] * jnp.exp(-((x - b[6]) ** 2) / b[7] ** 2)
+    )
 
 
 def _lanczos(x, b):
@@ -42,8 +46,15 @@ def _misra1a(x, b):
 
 def _enso(x, b):
     w = 2.0 * _PI * x
-    return (b[0] + b[1] * jnp.cos(w / 12) + b[2] * jnp.sin(w / 12) + b[4] * jnp.cos(w / b[3])
-            + b[5] * jnp.sin(w / b[3]) + b[7] * jnp.cos(w / b[6]) + b[8] * jnp.sin(w / b[6]))
+    return (
+        b[0]
+        + b[1] * jnp.cos(w / 12)
+        + b[2] * jnp.sin(w / 12)
+        + b[4] * jnp.cos(w / b[3])
+        + b[5] * jnp.sin(w / b[3])
+        + b[7] * jnp.cos(w / b[6])
+        + b[8] * jnp.sin(w / b[6])
+    )
 
 
 MODELS = {
@@ -54,10 +65,14 @@ MODELS = {
     "DanWood": lambda x, b: b[0] * x ** b[1],
     "ENSO": _enso,
     "Eckerle4": lambda x, b: (b[0] / b[1]) * jnp.exp(-0.5 * ((x - b[2]) / b[1]) ** 2),
-    "Gauss1": _gauss, "Gauss2": _gauss, "Gauss3": _gauss,
+    "Gauss1": _gauss,
+    "Gauss2": _gauss,
+    "Gauss3": _gauss,
     "Hahn1": _rational(4, 3),
     "Kirby2": _rational(3, 2),
-    "Lanczos1": _lanczos, "Lanczos2": _lanczos, "Lanczos3": _lanczos,
+    "Lanczos1": _lanczos,
+    "Lanczos2": _lanczos,
+    "Lanczos3": _lanczos,
     "MGH09": lambda x, b: b[0] * (x**2 + x * b[1]) / (x**2 + x * b[2] + b[3]),
     "MGH10": lambda x, b: b[0] * jnp.exp(b[1] / (x + b[2])),
     "MGH17": lambda x, b: b[0] + b[1] * jnp.exp(-x * b[3]) + b[2] * jnp.exp(-x * b[4]),

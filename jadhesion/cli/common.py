@@ -54,8 +54,14 @@ class Progress:
 
     def __init__(self, total=None, label: str = "", unit: str = "it", enabled: bool = True):
         self.done = 0
-        self.bar = tqdm(total=total, desc=label, unit=unit, file=sys.stderr, dynamic_ncols=True,
-                        disable=None if enabled else True)
+        self.bar = tqdm(
+            total=total,
+            desc=label,
+            unit=unit,
+            file=sys.stderr,
+            dynamic_ncols=True,
+            disable=None if enabled else True,
+        )
 
     def __call__(self, done: int, total: int) -> None:
         self.bar.total = total

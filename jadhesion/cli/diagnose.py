@@ -18,8 +18,9 @@ from .recording_options import add_recording_options
 def register(sub) -> None:
     p = sub.add_parser("diagnose", help="name the missing physics behind a Polach misfit")
     p.add_argument("file", help="recording CSV (time, vehicle_speed, wheel_speed, traction_torque)")
-    p.add_argument("--report", metavar="DIR", default=None,
-                   help="write a Markdown report with figures into DIR")
+    p.add_argument(
+        "--report", metavar="DIR", default=None, help="write a Markdown report with figures into DIR"
+    )
     p.add_argument("--json", action="store_true", help="one JSON document on stdout")
     add_recording_options(p)
     p.set_defaults(func=run)
@@ -33,8 +34,9 @@ def diagnose_file(path, columns=(), axle=None) -> tuple:
 
     recording = load_recording(path, columns=columns, axle=axle)
     if not recording.has_raw_signals:
-        raise UserError(f"{path}: diagnosis needs the raw columns time, vehicle_speed, "
-                        "wheel_speed, traction_torque")
+        raise UserError(
+            f"{path}: diagnosis needs the raw columns time, vehicle_speed, wheel_speed, traction_torque"
+        )
     return diagnose(recording.columns, recording.vehicle, str(path)), recording
 
 
@@ -50,12 +52,20 @@ def run(args) -> int:
     if args.json:
         emit_json(result)
         return 0
-    print(f"verdict: {result['verdict']}" + (f"  (effects: {' + '.join(result['effects'])})"
-                                             if len(result["effects"]) > 1 else ""))
-    rows = [{"candidate": c["name"], "heldout_mae": c["heldout_mae"], "gain": c["gain"],
-             "delta_bic": c["delta_bic"],
-             "detectable_from": result["sensitivity"][c["name"]]["min_detectable"]}
-            for c in result["candidates"]]
+    print(
+        f"verdict: {result['verdict']}"
+        + (f"  (effects: {' + '.join(result['effects'])})" if len(result["effects"]) > 1 else "")
+    )
+    rows = [
+        {
+            "candidate": c["name"],
+            "heldout_mae": c["heldout_mae"],
+            "gain": c["gain"],
+            "delta_bic": c["delta_bic"],
+            "detectable_from": result["sensitivity"][c["name"]]["min_detectable"],
+        }
+        for c in result["candidates"]
+    ]
     rows.insert(0, {"candidate": "(base)", "heldout_mae": result["base"]["heldout_mae"]})
     print(table(rows, ["candidate", "heldout_mae", "gain", "delta_bic", "detectable_from"]))
     print(result["explanation"])

@@ -21,28 +21,56 @@ CREEP = ("smoothed", "raw")
 
 def register(sub) -> None:
     p = sub.add_parser("fit", help=COMMANDS["fit"])
-    p.add_argument("file", nargs="+",
-                   help="recording or creepage CSV(s), or directories of them (every *.csv): "
-                        "several are fitted in one process, one compiled program per length "
-                        "bucket, each exactly as when fitted alone")
-    p.add_argument("--method", choices=METHODS, default="itlbo",
-                   help="improved TLBO (default), TLBO, PSO or Levenberg–Marquardt")
-    p.add_argument("--model", choices=MODELS, default="polach",
-                   help="Polach [kA, kS, mu0, A, B] (default) or Kiencke [p1, p2, a_s]")
-    p.add_argument("--creep", choices=CREEP, default="smoothed",
-                   help="creep from the Kalman/RTS-smoothed speeds (default) or their raw difference")
+    p.add_argument(
+        "file",
+        nargs="+",
+        help="recording or creepage CSV(s), or directories of them (every *.csv): "
+        "several are fitted in one process, one compiled program per length "
+        "bucket, each exactly as when fitted alone",
+    )
+    p.add_argument(
+        "--method",
+        choices=METHODS,
+        default="itlbo",
+        help="improved TLBO (default), TLBO, PSO or Levenberg–Marquardt",
+    )
+    p.add_argument(
+        "--model",
+        choices=MODELS,
+        default="polach",
+        help="Polach [kA, kS, mu0, A, B] (default) or Kiencke [p1, p2, a_s]",
+    )
+    p.add_argument(
+        "--creep",
+        choices=CREEP,
+        default="smoothed",
+        help="creep from the Kalman/RTS-smoothed speeds (default) or their raw difference",
+    )
     p.add_argument("--seed", type=int, default=0, help="optimiser seed (default 0)")
     p.add_argument("--pop-size", type=int, default=50, help="population size (default 50, >= 2)")
-    p.add_argument("--max-iter", type=int, default=300,
-                   help="iteration cap of a population method (default 300); it stops earlier "
-                        "when its best MAE stalls")
-    p.add_argument("--plot", metavar="DIR", default=None,
-                   help="write fit.png (data, fit and residuals) into DIR (several files: "
-                        "one STEM.fit.png each)")
-    p.add_argument("--json", action="store_true",
-                   help="one JSON document on stdout (several files: {\"fits\": [one per file]})")
-    p.add_argument("--out", metavar="FILE.csv", default=None,
-                   help="also write a CSV table, one row per file: file, method, params, mae, "
-                        "status, converged, stderr per parameter")
+    p.add_argument(
+        "--max-iter",
+        type=int,
+        default=300,
+        help="iteration cap of a population method (default 300); it stops earlier when its best MAE stalls",
+    )
+    p.add_argument(
+        "--plot",
+        metavar="DIR",
+        default=None,
+        help="write fit.png (data, fit and residuals) into DIR (several files: one STEM.fit.png each)",
+    )
+    p.add_argument(
+        "--json",
+        action="store_true",
+        help='one JSON document on stdout (several files: {"fits": [one per file]})',
+    )
+    p.add_argument(
+        "--out",
+        metavar="FILE.csv",
+        default=None,
+        help="also write a CSV table, one row per file: file, method, params, mae, "
+        "status, converged, stderr per parameter",
+    )
     add_recording_options(p)
     p.set_defaults(handler="jadhesion.cli.fit_run:run")

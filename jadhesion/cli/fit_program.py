@@ -32,8 +32,12 @@ from ..programs import ProgramCache, code_key
 FIT_SOURCES = ("identify", "models", "data/dataset.py", "cli/fit_program.py")
 FIT_DISTRIBUTIONS = ("optimistix", "equinox", "lineax")
 #: Sources of ``Vehicle.k_eps`` (Hertz, Kalker's table, Polach's gradient constant).
-K_EPS_SOURCES = ("models/contact.py", "models/polach.py", "data/vehicle.py",
-                 "resources/kalker_c_table_e3.csv")
+K_EPS_SOURCES = (
+    "models/contact.py",
+    "models/polach.py",
+    "data/vehicle.py",
+    "resources/kalker_c_table_e3.csv",
+)
 
 
 @functools.cache
@@ -72,27 +76,41 @@ def _polach_program(method, pop_size, max_iter, use_target):
     from ..identify.polach_fit import fit_polach as library_fit
 
     def program(data, key_data, target):
-        fit = library_fit(data, method, jax.random.wrap_key_data(key_data), pop_size=pop_size,
-                          max_iter=max_iter, target=target if use_target else None)
+        fit = library_fit(
+            data,
+            method,
+            jax.random.wrap_key_data(key_data),
+            pop_size=pop_size,
+            max_iter=max_iter,
+            target=target if use_target else None,
+        )
         return fit._asdict()
 
     return program
 
 
-def fit_polach(dataset, method: str, key, *, pop_size: int = 50, max_iter: int = 300,
-               target=None):
+def fit_polach(dataset, method: str, key, *, pop_size: int = 50, max_iter: int = 300, target=None):
     """:func:`jadhesion.identify.polach_fit.fit_polach` through a kept program (exported now on a
     miss). Returns a named tuple with :class:`~jadhesion.identify.polach_fit.PolachFit`'s fields
     (in alphabetical order), equal bit for bit to the library's result."""
     use_target = target is not None
     if not _enabled():
         out = _polach_program(method, pop_size, max_iter, use_target)(
-            dataset, jax.random.key_data(key), target)
+            dataset, jax.random.key_data(key), target
+        )
         return _result_type(tuple(out))(**out)
-    static = {"method": method, "pop_size": int(pop_size), "max_iter": int(max_iter),
-              "use_target": use_target, "prng": str(jax.random.key_impl(key))}
-    args = (dataset, jax.random.key_data(key),
-            np.asarray(0.0 if target is None else target, dataset.adhesion.dtype))
+    static = {
+        "method": method,
+        "pop_size": int(pop_size),
+        "max_iter": int(max_iter),
+        "use_target": use_target,
+        "prng": str(jax.random.key_impl(key)),
+    }
+    args = (
+        dataset,
+        jax.random.key_data(key),
+        np.asarray(0.0 if target is None else target, dataset.adhesion.dtype),
+    )
     code = _code(FIT_SOURCES, FIT_DISTRIBUTIONS)
     cache = _cache()
     program = cache.load("polach_fit", args, static=static, code=code)
@@ -102,7 +120,12 @@ def fit_polach(dataset, method: str, key, *, pop_size: int = 50, max_iter: int =
         except Exception:  # a kept program this process cannot run is rebuilt below, never fatal
             program = None
     if program is None:
-        program = cache.export("polach_fit", _polach_program(method, pop_size, max_iter, use_target),
-                               args, static=static, code=code)
+        program = cache.export(
+            "polach_fit",
+            _polach_program(method, pop_size, max_iter, use_target),
+            args,
+            static=static,
+            code=code,
+        )
         out = program(*args)
     return _result_type(tuple(out))(**out)

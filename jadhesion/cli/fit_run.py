@@ -50,6 +50,7 @@ def _check_flags(args) -> None:
 
 RECORDING_SUFFIXES = (".csv",) + PARQUET_SUFFIXES + MAT_SUFFIXES
 
+
 def expand_files(names) -> tuple[list[Path], bool]:
     """The recordings named (a directory stands for its CSV, Parquet and MATLAB files, sorted) and
     whether the call is a many-file one (more than one name, or a directory)."""
@@ -57,11 +58,9 @@ def expand_files(names) -> tuple[list[Path], bool]:
     for name in names:
         p = Path(name)
         if p.is_dir():
-            found = sorted(q for q in p.iterdir()
-                           if q.is_file() and q.suffix.lower() in RECORDING_SUFFIXES)
+            found = sorted(q for q in p.iterdir() if q.is_file() and q.suffix.lower() in RECORDING_SUFFIXES)
             if not found:
-                raise UserError(f"fit: {p}: directory holds no recording "
-                                f"({', '.join(RECORDING_SUFFIXES)})")
+                raise UserError(f"fit: {p}: directory holds no recording ({', '.join(RECORDING_SUFFIXES)})")
             paths += found
             many = True
         else:
@@ -75,14 +74,17 @@ def _load(args, path):
     recording = load_from_args(args, path)
     rows = min((len(c) for c in recording.columns.values()), default=0)
     if rows < MIN_SAMPLES:
-        raise UserError(f"{path}: {rows} samples cannot identify the model "
-                        f"(at least {MIN_SAMPLES} needed, {RECOMMENDED_SAMPLES} recommended)")
+        raise UserError(
+            f"{path}: {rows} samples cannot identify the model "
+            f"(at least {MIN_SAMPLES} needed, {RECOMMENDED_SAMPLES} recommended)"
+        )
     _, dataset, selection = load_dataset(args, path, to_dataset, recording=recording)
     require_samples(dataset, str(path))
     return dataset, selection
 
 
 # ---- fits -------------------------------------------------------------------------------------
+
 
 def _describe(doc) -> str:
     """The trust block in words."""
@@ -95,20 +97,30 @@ def _describe(doc) -> str:
     for name, value in doc["params"].items():
         u = doc["uncertainty"][name]
         ci = u["ci95"]
-        rows.append({"parameter": name, "value": value,
-                     "stderr": "on bound" if u["stderr"] is None else u["stderr"],
-                     "95% interval": "-" if ci is None else f"[{ci[0]:.4g}, {ci[1]:.4g}]"})
+        rows.append(
+            {
+                "parameter": name,
+                "value": value,
+                "stderr": "on bound" if u["stderr"] is None else u["stderr"],
+                "95% interval": "-" if ci is None else f"[{ci[0]:.4g}, {ci[1]:.4g}]",
+            }
+        )
     lines.append(table(rows, ["parameter", "value", "stderr", "95% interval"]))
-    lines.append(f"standard errors: Newey–West (HAC, {doc['hac_lags']} lags), robust to the "
-                 "observer's coloured residuals")
+    lines.append(
+        f"standard errors: Newey–West (HAC, {doc['hac_lags']} lags), robust to the "
+        "observer's coloured residuals"
+    )
     lines += [f"warning [{w['code']}]: {w['message']}" for w in doc["warnings"]]
     return "\n".join(lines)
 
 
 def _fit_kiencke(args, dataset) -> dict:
     start = time.perf_counter()
-    fit = jax.block_until_ready(fit_kiencke(dataset, args.method, jax.random.key(args.seed),
-                                            pop_size=args.pop_size, max_iter=args.max_iter))
+    fit = jax.block_until_ready(
+        fit_kiencke(
+            dataset, args.method, jax.random.key(args.seed), pop_size=args.pop_size, max_iter=args.max_iter
+        )
+    )
     return {"method": args.method, **fit_document(fit), "seconds": time.perf_counter() - start}
 
 
@@ -133,8 +145,14 @@ def _polach_doc(args, dataset, fit, seconds) -> dict:
 def _fit_all(args, datasets) -> list[dict]:
     if args.model == "kiencke":
         return [_fit_kiencke(args, d) for d in datasets]
-    fitted = fit_datasets(datasets, args.method, jax.random.key(args.seed),
-                          pop_size=args.pop_size, max_iter=args.max_iter, fit=fit_polach)
+    fitted = fit_datasets(
+        datasets,
+        args.method,
+        jax.random.key(args.seed),
+        pop_size=args.pop_size,
+        max_iter=args.max_iter,
+        fit=fit_polach,
+    )
     return [_polach_doc(args, d, f.fit, f.seconds) for d, f in zip(datasets, fitted)]
 
 
@@ -143,18 +161,26 @@ def _plot(args, path, dataset, doc, many: bool) -> None:
     out.mkdir(parents=True, exist_ok=True)
     theta = np.array([doc["params"][n] for n in PARAM_NAMES])
     fit_figure(dataset, theta, title=f"{path.name}: {args.method}").savefig(
-        out / (f"{path.stem}.fit.png" if many else "fit.png"), dpi=110)
+        out / (f"{path.stem}.fit.png" if many else "fit.png"), dpi=110
+    )
 
 
 # ---- output -----------------------------------------------------------------------------------
+
 
 def table_rows(paths, docs) -> list[dict]:
     """``--out``'s rows: file, method, the parameters, mae, status, converged and (Polach) one
     ``stderr_<param>`` per parameter (empty: on a bound; ``inf``: undetermined)."""
     rows = []
     for path, doc in zip(paths, docs):
-        row = {"file": str(path), "method": doc["method"], **doc["params"], "mae": doc["mae"],
-               "status": doc["status"], "converged": doc["converged"]}
+        row = {
+            "file": str(path),
+            "method": doc["method"],
+            **doc["params"],
+            "mae": doc["mae"],
+            "status": doc["status"],
+            "converged": doc["converged"],
+        }
         for name, u in doc.get("uncertainty", {}).items():
             row[f"stderr_{name}"] = "" if u["stderr"] is None else u["stderr"]
         rows.append(row)
@@ -165,31 +191,41 @@ def write_table(path, rows) -> None:
     buf = io.StringIO()
     writer = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
     writer.writeheader()
-    writer.writerows({k: repr(v) if isinstance(v, float) else v for k, v in r.items()}
-                     for r in rows)
+    writer.writerows({k: repr(v) if isinstance(v, float) else v for k, v in r.items()} for r in rows)
     atomic_write(Path(path), lambda tmp: tmp.write_text(buf.getvalue(), encoding="utf-8"))
 
 
 def _print_one(args, doc) -> None:
     if args.model == "kiencke":
         p = doc["params"]
-        print(f"Kiencke by {args.method}: p1 {p['p1']:.5g}, p2 {p['p2']:.5g}, a_s {p['a_s']:.5g}; "
-              f"mu_max {doc['mu_max']}, creep_opt {doc['creep_opt']}; MAE {doc['mae']:.5g}; "
-              f"{'converged' if doc['converged'] else 'NOT CONVERGED: ' + doc['status']}")
+        print(
+            f"Kiencke by {args.method}: p1 {p['p1']:.5g}, p2 {p['p2']:.5g}, a_s {p['a_s']:.5g}; "
+            f"mu_max {doc['mu_max']}, creep_opt {doc['creep_opt']}; MAE {doc['mae']:.5g}; "
+            f"{'converged' if doc['converged'] else 'NOT CONVERGED: ' + doc['status']}"
+        )
     else:
-        print(f"method {doc['method']}: MAE {doc['mae']:.5g}, {doc['iterations']} iterations, "
-              f"{doc['evaluations']} evaluations, {doc['seconds']:.2f} s (compilation included)")
+        print(
+            f"method {doc['method']}: MAE {doc['mae']:.5g}, {doc['iterations']} iterations, "
+            f"{doc['evaluations']} evaluations, {doc['seconds']:.2f} s (compilation included)"
+        )
         print(_describe(doc))
 
 
 def _print_many(args, paths, docs) -> None:
-    rows = [{"file": p.name, **{k: (f"{v:.5g}" if isinstance(v, float) else v)
-                                for k, v in d["params"].items()},
-             "MAE": f"{d['mae']:.5g}", "status": d["status"],
-             "warnings": ",".join(sorted({w["code"] for w in d.get("warnings", [])})) or "-"}
-            for p, d in zip(paths, docs)]
-    print(f"{len(docs)} files, {args.model} by {args.method}, "
-          f"{sum(d['seconds'] for d in docs):.2f} s fitting (compilation included)")
+    rows = [
+        {
+            "file": p.name,
+            **{k: (f"{v:.5g}" if isinstance(v, float) else v) for k, v in d["params"].items()},
+            "MAE": f"{d['mae']:.5g}",
+            "status": d["status"],
+            "warnings": ",".join(sorted({w["code"] for w in d.get("warnings", [])})) or "-",
+        }
+        for p, d in zip(paths, docs)
+    ]
+    print(
+        f"{len(docs)} files, {args.model} by {args.method}, "
+        f"{sum(d['seconds'] for d in docs):.2f} s fitting (compilation included)"
+    )
     print(table(rows, list(rows[0])))
 
 
@@ -210,8 +246,7 @@ def run(args) -> int:
     if args.out is not None:
         write_table(args.out, table_rows(paths, docs))
     if args.json:
-        emit_json({"fits": [{"file": str(p), **d} for p, d in zip(paths, docs)]} if many
-                  else docs[0])
+        emit_json({"fits": [{"file": str(p), **d} for p, d in zip(paths, docs)]} if many else docs[0])
     elif many:
         _print_many(args, paths, docs)
     else:

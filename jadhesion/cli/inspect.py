@@ -15,8 +15,11 @@ def register(sub) -> None:
     p = sub.add_parser("inspect", help=COMMANDS["inspect"])
     p.add_argument("file", help="recording (CSV, Parquet or MATLAB .mat)")
     p.add_argument("--json", action="store_true", help="one JSON document on stdout")
-    p.add_argument("--plot", metavar="DIR", default=None,
-                   help="write inspect.png (signals with the excluded stretches shaded, μ̂ against "
-                        "creep) into DIR")
+    p.add_argument(
+        "--plot",
+        metavar="DIR",
+        default=None,
+        help="write inspect.png (signals with the excluded stretches shaded, μ̂ against creep) into DIR",
+    )
     add_recording_options(p)
     p.set_defaults(handler="jadhesion.cli.inspect_run:run")

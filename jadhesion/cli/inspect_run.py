@@ -18,20 +18,25 @@ def _text(doc) -> str:
     s, r, sel = doc["sampling"], doc["ranges"], doc["selection"]
     lines = [f"{doc['file']}: {doc['samples']} samples, columns {', '.join(doc['columns'])}"]
     if s["rate_hz"] is not None:
-        lines.append(f"duration {s['duration_s']:.4g} s, rate {s['rate_hz']:.4g} Hz, jitter "
-                     f"{100 * s['jitter']:.2g} % of the step, steps {s['step_s']['min']:.3g}–"
-                     f"{s['step_s']['max']:.3g} s, {len(s['gaps'])} gap(s)"
-                     + "".join(f"\n  gap {a:.6g} s → {b:.6g} s" for a, b in s["gaps"]))
-    lines.append(f"selected: {sel['used']} of {sel['samples']} samples ({sel['phase']}); "
-                 f"{len(sel['stretches'])} stretch(es)")
+        lines.append(
+            f"duration {s['duration_s']:.4g} s, rate {s['rate_hz']:.4g} Hz, jitter "
+            f"{100 * s['jitter']:.2g} % of the step, steps {s['step_s']['min']:.3g}–"
+            f"{s['step_s']['max']:.3g} s, {len(s['gaps'])} gap(s)"
+            + "".join(f"\n  gap {a:.6g} s → {b:.6g} s" for a, b in s["gaps"])
+        )
+    lines.append(
+        f"selected: {sel['used']} of {sel['samples']} samples ({sel['phase']}); "
+        f"{len(sel['stretches'])} stretch(es)"
+    )
     for e in sel["excluded"]:
-        lines.append(f"  excluded {e['reason']}: {e['start']:.6g}–{e['end']:.6g} s, "
-                     f"{e['samples']} samples")
+        lines.append(f"  excluded {e['reason']}: {e['start']:.6g}–{e['end']:.6g} s, {e['samples']} samples")
     if not sel["excluded_listed_all"]:
-        lines.append("  (more excluded stretches; counts: "
-                     + ", ".join(f"{k} {v}" for k, v in sel["counts"].items()) + ")")
-    for name, unit in (("vehicle_speed", "m/s"), ("creep", ""), ("slip_velocity", "m/s"),
-                       ("adhesion", "")):
+        lines.append(
+            "  (more excluded stretches; counts: "
+            + ", ".join(f"{k} {v}" for k, v in sel["counts"].items())
+            + ")"
+        )
+    for name, unit in (("vehicle_speed", "m/s"), ("creep", ""), ("slip_velocity", "m/s"), ("adhesion", "")):
         lo, hi = r[name]
         lines.append(f"{name:>14}: {lo:.4g} … {hi:.4g} {unit}".rstrip())
     lines += [f"identifiability [{n['code']}]: {n['message']}" for n in doc["identifiability"]]
@@ -49,14 +54,16 @@ def run(args) -> int:
     selection = select(recording, args.phase)
     full = per_stretch_dataset(recording, selection)
     mask = selection.mask
-    chosen = full._replace(**{k: np.asarray(getattr(full, k))[mask]
-                              for k in ("creep", "slip", "adhesion", "vehicle_speed")})
+    chosen = full._replace(
+        **{k: np.asarray(getattr(full, k))[mask] for k in ("creep", "slip", "adhesion", "vehicle_speed")}
+    )
     doc = inspect_document(recording, selection, chosen)
     if args.plot is not None:
         out = Path(args.plot)
         out.mkdir(parents=True, exist_ok=True)
         recording_overview(recording, mu_hat=np.asarray(full.adhesion), selection=selection).savefig(
-            out / "inspect.png", dpi=100)
+            out / "inspect.png", dpi=100
+        )
     if args.json:
         emit_json(doc)
     else:

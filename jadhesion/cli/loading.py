@@ -16,8 +16,9 @@ def load_from_args(args, path) -> Recording:
     ignored, :func:`jadhesion.data.dataset.adhesion_source`)."""
     recording = load_recording(path, columns=args.column, axle=args.axle)
     if recording.has_adhesion and adhesion_source(recording) == "observer":
-        note = (f"{recording.path}: column 'adhesion' ignored: mu_hat is the observer's output of "
-                f"the raw signals")
+        note = (
+            f"{recording.path}: column 'adhesion' ignored: mu_hat is the observer's output of the raw signals"
+        )
         recording = dataclasses.replace(recording, notes=recording.notes + (note,))
     return trim(recording, args.start, args.end)
 
@@ -30,6 +31,7 @@ def load_dataset(args, path, build=to_dataset, *, recording: Recording | None = 
     :func:`load_from_args` already gave, when the caller has it."""
     if recording is None:
         recording = load_from_args(args, path)
-    dataset, selection = selected_dataset(recording, args.phase,
-                                          creep=getattr(args, "creep", "smoothed"), build=build)
+    dataset, selection = selected_dataset(
+        recording, args.phase, creep=getattr(args, "creep", "smoothed"), build=build
+    )
     return recording, dataset, selection

@@ -21,10 +21,19 @@ ALGORITHM_NAMES = ("1", "2", "rls")
 def register(sub) -> None:
     p = sub.add_parser("online", help=COMMANDS["online"])
     p.add_argument("file", help="recording or creepage CSV")
-    p.add_argument("--algorithm", choices=ALGORITHM_NAMES, default="1",
-                   help="paper 000's Algorithm 1 (default) or 2, or plain RLS (forgetting 0.98)")
-    p.add_argument("--a-s", type=float, default=None, metavar="VALUE",
-                   help="Kiencke's initial slope a_s [-] (default: estimated from the data)")
+    p.add_argument(
+        "--algorithm",
+        choices=ALGORITHM_NAMES,
+        default="1",
+        help="paper 000's Algorithm 1 (default) or 2, or plain RLS (forgetting 0.98)",
+    )
+    p.add_argument(
+        "--a-s",
+        type=float,
+        default=None,
+        metavar="VALUE",
+        help="Kiencke's initial slope a_s [-] (default: estimated from the data)",
+    )
     p.add_argument("--seed", type=int, default=0, help="seed of the a_s estimate's LM (default 0)")
     p.add_argument("--plot", metavar="DIR", default=None, help="write FILE-stem_online.png into DIR")
     p.add_argument("--json", action="store_true", help="one JSON document on stdout")

@@ -32,41 +32,60 @@ def run(args) -> int:
     used = np.asarray(out.used)
     status = status_of(out.status)
     if status.name == "NOT_RUN":
-        raise UserError(f"{args.file}: only {int(used.sum())} informative samples (|v| >= 0.1 m/s, "
-                        "|adhesion| >= 0.02); online identification needs at least 10")
+        raise UserError(
+            f"{args.file}: only {int(used.sum())} informative samples (|v| >= 0.1 m/s, "
+            "|adhesion| >= 0.02); online identification needs at least 10"
+        )
     cols = recording.columns
     time = np.asarray(cols["time"]) if "time" in cols else np.arange(used.size, dtype=float)
     tr = out.trace
     doc = {
-        "file": str(args.file), "algorithm": args.algorithm, "a_s": float(out.a_s),
+        "file": str(args.file),
+        "algorithm": args.algorithm,
+        "a_s": float(out.a_s),
         "a_s_source": "given" if args.a_s is not None else "estimated",
         "final": {f: _finite(getattr(tr, f)[-1]) for f in ("p1", "p2", "mu_max", "creep_opt")},
-        "status": status.label, "converged": status.converged,
-        "n_samples": int(used.size), "n_used": int(used.sum()),
-        "track": {"time": time, **{f: np.asarray(getattr(tr, f)) for f in TRACK_FIELDS},
-                  "used": used},
+        "status": status.label,
+        "converged": status.converged,
+        "n_samples": int(used.size),
+        "n_used": int(used.sum()),
+        "track": {"time": time, **{f: np.asarray(getattr(tr, f)) for f in TRACK_FIELDS}, "used": used},
     }
     if out.slope_fit is not None:
         fit = out.slope_fit
-        doc["a_s_fit"] = {"method": "lm", "p1": float(fit.params[0]), "p2": float(fit.params[1]),
-                          "mae": float(fit.mae), "status": status_of(fit.status).label}
+        doc["a_s_fit"] = {
+            "method": "lm",
+            "p1": float(fit.params[0]),
+            "p2": float(fit.params[1]),
+            "mae": float(fit.mae),
+            "status": status_of(fit.status).label,
+        }
     if args.plot is not None:
         Path(args.plot).mkdir(parents=True, exist_ok=True)
         path = Path(args.plot) / f"{Path(args.file).stem}_online.png"
-        fig = recording_figure(time, data.adhesion, data.creep, tr, used,
-                               title=f"{Path(args.file).name}: online Kiencke, algorithm "
-                                     f"{args.algorithm}, a_s = {doc['a_s']:.4g}",
-                               time_label="time [s]" if "time" in cols else "sample")
+        fig = recording_figure(
+            time,
+            data.adhesion,
+            data.creep,
+            tr,
+            used,
+            title=f"{Path(args.file).name}: online Kiencke, algorithm "
+            f"{args.algorithm}, a_s = {doc['a_s']:.4g}",
+            time_label="time [s]" if "time" in cols else "sample",
+        )
         fig.savefig(path, dpi=110)
         doc["plots"] = [str(path)]
     if args.json:
         emit_json(doc)
     else:
-        rows = [{"quantity": k, "final": "none" if v is None else f"{v:.5g}"}
-                for k, v in doc["final"].items()]
+        rows = [
+            {"quantity": k, "final": "none" if v is None else f"{v:.5g}"} for k, v in doc["final"].items()
+        ]
         print(table(rows, ["quantity", "final"]))
-        print(f"algorithm {args.algorithm}, a_s {doc['a_s']:.5g} ({doc['a_s_source']}), "
-              f"{doc['n_used']}/{doc['n_samples']} samples used, status {doc['status']}")
+        print(
+            f"algorithm {args.algorithm}, a_s {doc['a_s']:.5g} ({doc['a_s_source']}), "
+            f"{doc['n_used']}/{doc['n_samples']} samples used, status {doc['status']}"
+        )
         for path in doc.get("plots", []):
             print(f"wrote {path}")
     return 0

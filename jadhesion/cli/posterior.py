@@ -30,14 +30,21 @@ def register(sub) -> None:
     p.add_argument("file", help="recording or creepage CSV")
     p.add_argument("--walkers", type=int, default=32, help="ensemble size (default 32)")
     p.add_argument("--steps", type=int, default=5000, help="steps per walker, burn-in included")
-    p.add_argument("--likelihood", choices=("auto", "gauss", "laplace", "ar1", "observer"),
-                   default="auto",
-                   help="auto (default): observer when the file has raw signals, else gauss; ar1: "
-                        "AR(1) residuals in time order; observer: the adhesion observer's lag "
-                        "modelled, AR(1) noise (needs time and traction_torque)")
-    p.add_argument("--creep", choices=("smoothed", "raw"), default="smoothed",
-                   help="smoothed (default): creep as a smoothed state with its uncertainty in the "
-                        "likelihood (errors in variables); raw: the difference of the speeds")
+    p.add_argument(
+        "--likelihood",
+        choices=("auto", "gauss", "laplace", "ar1", "observer"),
+        default="auto",
+        help="auto (default): observer when the file has raw signals, else gauss; ar1: "
+        "AR(1) residuals in time order; observer: the adhesion observer's lag "
+        "modelled, AR(1) noise (needs time and traction_torque)",
+    )
+    p.add_argument(
+        "--creep",
+        choices=("smoothed", "raw"),
+        default="smoothed",
+        help="smoothed (default): creep as a smoothed state with its uncertainty in the "
+        "likelihood (errors in variables); raw: the difference of the speeds",
+    )
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--json", action="store_true", help="one JSON document on stdout")
     add_recording_options(p)

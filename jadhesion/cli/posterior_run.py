@@ -24,8 +24,10 @@ def _choose_likelihood(recording, requested: str):
         return requested, None, "requested"
     if not recording.has_raw_signals:
         if requested == "observer":
-            raise UserError(f"{recording.path}: --likelihood observer needs the columns time, "
-                            f"vehicle_speed, wheel_speed and traction_torque")
+            raise UserError(
+                f"{recording.path}: --likelihood observer needs the columns time, "
+                f"vehicle_speed, wheel_speed and traction_torque"
+            )
         return "gauss", None, "auto: no raw signals (time, speeds, torque), i.i.d. Gaussian"
     # With the raw signals mu_hat is the observer's output (an adhesion column is ignored:
     # jadhesion.data.dataset.adhesion_source), so the observer likelihood applies.
@@ -33,8 +35,13 @@ def _choose_likelihood(recording, requested: str):
         obs = recording_observer_terms(recording)
     except ValueError as err:
         raise UserError(f"{recording.path}: {err}") from None
-    return "observer", obs, "requested" if requested == "observer" else (
-        "auto: raw signals present, the observer's lag modelled")
+    return (
+        "observer",
+        obs,
+        "requested"
+        if requested == "observer"
+        else ("auto: raw signals present, the observer's lag modelled"),
+    )
 
 
 def _document(result, theta0, note="", creep="raw") -> dict:
@@ -51,15 +58,17 @@ def _document(result, theta0, note="", creep="raw") -> dict:
             "acceptance": diag.acceptance,
             "tau": dict(zip(result.names, diag.tau.tolist())),
             "ess": dict(zip(result.names, diag.ess.tolist())),
-            "n_samples": diag.n_samples, "steps": diag.steps, "burn": diag.burn,
-            "seconds": diag.seconds, "compile_seconds": diag.compile_seconds,
+            "n_samples": diag.n_samples,
+            "steps": diag.steps,
+            "burn": diag.burn,
+            "seconds": diag.seconds,
+            "compile_seconds": diag.compile_seconds,
             "warnings": list(diag.warnings),
         },
     }
 
 
 def run(args) -> int:
-
 
     if args.walkers < 12 or args.walkers % 2:
         raise UserError(f"--walkers must be an even number >= 12, got {args.walkers}")
@@ -70,8 +79,10 @@ def run(args) -> int:
     if selection.complete:
         likelihood, obs, note = _choose_likelihood(recording, args.likelihood)
     elif args.likelihood == "observer":
-        raise UserError(f"{recording.path}: --likelihood observer needs one contiguous series, but "
-                        f"{selection.summary()}; use --likelihood gauss or --start/--end")
+        raise UserError(
+            f"{recording.path}: --likelihood observer needs one contiguous series, but "
+            f"{selection.summary()}; use --likelihood gauss or --start/--end"
+        )
     elif args.likelihood == "auto":  # the observer likelihood needs one contiguous series
         likelihood, obs = "gauss", None
         note = f"auto: samples excluded ({selection.summary()}), i.i.d. Gaussian"
@@ -82,14 +93,21 @@ def run(args) -> int:
     theta0 = np.asarray(theta0)
     progress = Progress(args.steps, "posterior", "steps", enabled=not args.json or sys.stderr.isatty())
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore", ChainTooShortWarning)   # reported in diagnostics instead
-        result = sample_posterior(data, theta0, walkers=args.walkers, steps=args.steps,
-                                  likelihood=likelihood, seed=args.seed, spread=spread, obs=obs,
-                                  callback=lambda i: progress.update(i - progress.done))
+        warnings.simplefilter("ignore", ChainTooShortWarning)  # reported in diagnostics instead
+        result = sample_posterior(
+            data,
+            theta0,
+            walkers=args.walkers,
+            steps=args.steps,
+            likelihood=likelihood,
+            seed=args.seed,
+            spread=spread,
+            obs=obs,
+            callback=lambda i: progress.update(i - progress.done),
+        )
     for message in result.diagnostics.warnings:
         sys.stderr.write(f"jadhesion: warning: {message}\n")
     if args.plot:
-
         out = Path(args.plot)
         out.mkdir(parents=True, exist_ok=True)
         corner_plot(result).savefig(out / "posterior_corner.png", dpi=90)
@@ -103,6 +121,8 @@ def run(args) -> int:
     print(f"likelihood: {likelihood} ({note}); creep: {doc['creep']}")
     print(table(rows, ["quantity", "median", "q05", "q95"]))
     d = doc["diagnostics"]
-    print(f"acceptance {d['acceptance']:.2f}, tau max {max(d['tau'].values()):.0f} steps, "
-          f"ESS min {min(d['ess'].values()):.0f}, {d['n_samples']} samples, {d['seconds']:.1f} s")
+    print(
+        f"acceptance {d['acceptance']:.2f}, tau max {max(d['tau'].values()):.0f} steps, "
+        f"ESS min {min(d['ess'].values()):.0f}, {d['n_samples']} samples, {d['seconds']:.1f} s"
+    )
     return 0

@@ -13,19 +13,43 @@ PHASES = ("traction", "braking", "both")
 def add_recording_options(parser) -> None:
     """Add ``--column CANONICAL=SOURCE[UNIT]`` (repeatable), ``--axle``, ``--start``, ``--end``
     and ``--phase`` to a command's parser."""
-    parser.add_argument("--column", action="append", default=[], metavar="CANONICAL=SOURCE[UNIT]",
-                        help="read a canonical column from the file's SOURCE column in UNIT, e.g. "
-                             "vehicle_speed=v_Lok_kmh[km/h] (repeatable; overrides the sidecar's "
-                             "\"columns\")")
-    parser.add_argument("--axle", type=int, default=None, metavar="N",
-                        help="take wheel_speed and traction_torque of axle N from a multi-axle file "
-                             "(columns wheel_speed_N, wheel_speed_axleN or wheel_speedN, likewise "
-                             "traction_torque)")
-    parser.add_argument("--start", type=float, default=None, metavar="SECONDS",
-                        help="use the samples from this time on [s, as recorded]")
-    parser.add_argument("--end", type=float, default=None, metavar="SECONDS",
-                        help="use the samples up to this time [s, as recorded]")
-    parser.add_argument("--phase", choices=PHASES, default="traction",
-                        help="samples used: traction (default: moving, torque driving), braking "
-                             "(negative torque and creep) or both; standstill, coasting, direction "
-                             "changes and stretches between gaps too short are excluded and reported")
+    parser.add_argument(
+        "--column",
+        action="append",
+        default=[],
+        metavar="CANONICAL=SOURCE[UNIT]",
+        help="read a canonical column from the file's SOURCE column in UNIT, e.g. "
+        "vehicle_speed=v_Lok_kmh[km/h] (repeatable; overrides the sidecar's "
+        '"columns")',
+    )
+    parser.add_argument(
+        "--axle",
+        type=int,
+        default=None,
+        metavar="N",
+        help="take wheel_speed and traction_torque of axle N from a multi-axle file "
+        "(columns wheel_speed_N, wheel_speed_axleN or wheel_speedN, likewise "
+        "traction_torque)",
+    )
+    parser.add_argument(
+        "--start",
+        type=float,
+        default=None,
+        metavar="SECONDS",
+        help="use the samples from this time on [s, as recorded]",
+    )
+    parser.add_argument(
+        "--end",
+        type=float,
+        default=None,
+        metavar="SECONDS",
+        help="use the samples up to this time [s, as recorded]",
+    )
+    parser.add_argument(
+        "--phase",
+        choices=PHASES,
+        default="traction",
+        help="samples used: traction (default: moving, torque driving), braking "
+        "(negative torque and creep) or both; standstill, coasting, direction "
+        "changes and stretches between gaps too short are excluded and reported",
+    )

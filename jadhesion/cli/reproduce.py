@@ -18,10 +18,16 @@ def register(sub) -> None:
     p.add_argument("target", nargs="?", choices=("table2", "online"), default=None)
     p.add_argument("--seeds", type=int, default=20, help="table2: data/optimiser seeds per cell")
     p.add_argument("--runs", type=int, default=1000, help="online: Monte Carlo runs per algorithm")
-    p.add_argument("--no-mcmc", action="store_true",
-                   help="table2: leave out the emcee posterior row of each scenario")
-    p.add_argument("--mcmc-steps", type=int, default=None, metavar="S",
-                   help="table2: steps of each posterior chain (default 1500; burn-in a third)")
+    p.add_argument(
+        "--no-mcmc", action="store_true", help="table2: leave out the emcee posterior row of each scenario"
+    )
+    p.add_argument(
+        "--mcmc-steps",
+        type=int,
+        default=None,
+        metavar="S",
+        help="table2: steps of each posterior chain (default 1500; burn-in a third)",
+    )
     p.add_argument("--plot", metavar="DIR", default=None, help="write figures into DIR")
     p.add_argument("--json", action="store_true", help="one JSON document on stdout")
     p.set_defaults(handler="jadhesion.cli.reproduce_run:run")

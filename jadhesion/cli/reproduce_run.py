@@ -14,8 +14,13 @@ def run(args) -> int:
     out = {}
     if args.target in (None, "table2"):
         with Progress(label="table2", unit="cells") as progress:
-            out["table2"] = table2.run(seeds=args.seeds, plot_dir=args.plot, progress=progress,
-                                       mcmc=not args.no_mcmc, mcmc_steps=args.mcmc_steps)
+            out["table2"] = table2.run(
+                seeds=args.seeds,
+                plot_dir=args.plot,
+                progress=progress,
+                mcmc=not args.no_mcmc,
+                mcmc_steps=args.mcmc_steps,
+            )
     if args.target in (None, "online"):
         with Progress(label="online Monte Carlo", unit="configs") as progress:
             out["online"] = online.run(runs=args.runs, plot_dir=args.plot, progress=progress)

@@ -25,30 +25,54 @@ def _list(kind, name):
             return [kind(t) for t in items]
         except ValueError:
             raise argparse.ArgumentTypeError(f"{name}: cannot read {text!r} as {kind.__name__}s") from None
+
     return parse
 
 
 def register(sub) -> None:
     """Add the ``sweep`` subcommand to ``sub`` (argparse subparsers)."""
     p = sub.add_parser("sweep", help=COMMANDS["sweep"], description=__doc__.splitlines()[0])
-    p.add_argument("--scenarios", type=_list(str, "--scenarios"), default=["dry", "wet", "sand"],
-                   help="comma-separated scenarios (default dry,wet,sand)")
+    p.add_argument(
+        "--scenarios",
+        type=_list(str, "--scenarios"),
+        default=["dry", "wet", "sand"],
+        help="comma-separated scenarios (default dry,wet,sand)",
+    )
     p.add_argument("--seeds", type=int, default=10, help="data seeds 0..N-1 (default 10)")
-    p.add_argument("--methods", type=_list(str, "--methods"), default=["lm"],
-                   help="comma-separated fitting methods: lm, itlbo, tlbo, pso (default lm)")
-    p.add_argument("--noise", type=_list(float, "--noise"), default=[1.0],
-                   help="noise scales around the true curve (default 1 = as simulated)")
-    p.add_argument("--creep-max", type=_list(float, "--creep-max"), default=[math.inf],
-                   help="creep ranges covered by the test, 'inf' = all samples (default inf)")
+    p.add_argument(
+        "--methods",
+        type=_list(str, "--methods"),
+        default=["lm"],
+        help="comma-separated fitting methods: lm, itlbo, tlbo, pso (default lm)",
+    )
+    p.add_argument(
+        "--noise",
+        type=_list(float, "--noise"),
+        default=[1.0],
+        help="noise scales around the true curve (default 1 = as simulated)",
+    )
+    p.add_argument(
+        "--creep-max",
+        type=_list(float, "--creep-max"),
+        default=[math.inf],
+        help="creep ranges covered by the test, 'inf' = all samples (default inf)",
+    )
     p.add_argument("--pop-size", type=int, default=None, help="population methods: class size (default 50)")
     p.add_argument("--max-iter", type=int, default=None, help="population methods: iterations (default 300)")
     p.add_argument("--samples", type=int, default=None, help="samples per simulated test (default 2000)")
     p.add_argument("--chunk-size", type=int, default=64, help="fits per compiled batch (default 64)")
     p.add_argument("--out", default="sweep.csv", help="table file, .csv or .parquet (default sweep.csv)")
-    p.add_argument("--resume", action=argparse.BooleanOptionalAction, default=True,
-                   help="skip chunks whose part file exists (default on)")
-    p.add_argument("--distributed", action="store_true",
-                   help="join a multi-process run (cluster auto-detected by jax.distributed)")
+    p.add_argument(
+        "--resume",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="skip chunks whose part file exists (default on)",
+    )
+    p.add_argument(
+        "--distributed",
+        action="store_true",
+        help="join a multi-process run (cluster auto-detected by jax.distributed)",
+    )
     p.add_argument("--coordinator", metavar="HOST:PORT", help="multi-process run: coordinator address")
     p.add_argument("--num-processes", type=int, help="multi-process run: number of processes")
     p.add_argument("--process-id", type=int, help="multi-process run: this process's index")

@@ -26,23 +26,31 @@ def run(args) -> int:
     """Run the sweep the arguments describe; print (or ``--json``) its summary on process 0."""
     _initialize(args)
     budget = {"pop_size": args.pop_size, "max_iter": args.max_iter}
-    require_at_least("sweep", 1, seeds=args.seeds, max_iter=args.max_iter,
-                     chunk_size=args.chunk_size)
+    require_at_least("sweep", 1, seeds=args.seeds, max_iter=args.max_iter, chunk_size=args.chunk_size)
     require_at_least("sweep", 2, pop_size=args.pop_size)
     require_at_least("sweep", MIN_SAMPLES, samples=args.samples)
-    grid = Grid(scenarios=args.scenarios, seeds=range(args.seeds), methods=args.methods,
-                noise_scale=args.noise, creep_max=args.creep_max, n_samples=args.samples,
-                fit_options={k: v for k, v in budget.items() if v is not None})
+    grid = Grid(
+        scenarios=args.scenarios,
+        seeds=range(args.seeds),
+        methods=args.methods,
+        noise_scale=args.noise,
+        creep_max=args.creep_max,
+        n_samples=args.samples,
+        fit_options={k: v for k, v in budget.items() if v is not None},
+    )
     with Progress(label="sweep", unit="fits") as progress:
-        _, summary = run_sweep(grid, args.out, chunk_size=args.chunk_size, resume=args.resume,
-                               progress=progress)
+        _, summary = run_sweep(
+            grid, args.out, chunk_size=args.chunk_size, resume=args.resume, progress=progress
+        )
     if jax.process_index() != 0:
         return 0
     doc = summary._asdict()
     if args.json:
         emit_json(doc)
     else:
-        print(f"{doc['fits']} fits ({doc['computed']} computed, {doc['chunks_computed']}/{doc['chunks']} "
-              f"chunks) in {doc['seconds']:.1f} s = {doc['fits_per_second']:.1f} fits/s on "
-              f"{doc['devices']} device(s), {doc['processes']} process(es) -> {doc['out']}")
+        print(
+            f"{doc['fits']} fits ({doc['computed']} computed, {doc['chunks_computed']}/{doc['chunks']} "
+            f"chunks) in {doc['seconds']:.1f} s = {doc['fits_per_second']:.1f} fits/s on "
+            f"{doc['devices']} device(s), {doc['processes']} process(es) -> {doc['out']}"
+        )
     return 0

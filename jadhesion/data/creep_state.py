@@ -54,17 +54,17 @@ _H = np.array([[1.0, 0.0, 1.0, 0.0], [1.0, 0.0, 0.0, 0.0]])
 class CreepEstimate(NamedTuple):
     """Smoothed states (each (n,)) and the noise levels they were estimated with."""
 
-    vehicle_speed: jax.Array   # v [m/s]
-    slip: jax.Array            # w [m/s]
-    creep: jax.Array           # s [-]
+    vehicle_speed: jax.Array  # v [m/s]
+    slip: jax.Array  # w [m/s]
+    creep: jax.Array  # s [-]
     vehicle_speed_sd: jax.Array
     slip_sd: jax.Array
     creep_sd: jax.Array
-    acceleration: jax.Array    # a [m/s²]
-    slip_rate: jax.Array       # ẇ [m/s²]
-    adhesion: jax.Array        # μ̂ from the smoothed wheel acceleration [-]
+    acceleration: jax.Array  # a [m/s²]
+    slip_rate: jax.Array  # ẇ [m/s²]
+    adhesion: jax.Array  # μ̂ from the smoothed wheel acceleration [-]
     measurement_sd: jax.Array  # (wheel, vehicle) [m/s]
-    process_q: jax.Array       # (q_v, q_w) [m²/s⁵]
+    process_q: jax.Array  # (q_v, q_w) [m²/s⁵]
 
 
 def difference_sd(y):
@@ -76,7 +76,7 @@ def difference_sd(y):
 def _transition(dt, q_v, q_w):
     z = jnp.zeros((2, 2), dt.dtype)
     f = jnp.array([[1.0, 0.0], [0.0, 1.0]], dt.dtype) + jnp.array([[0.0, 1.0], [0.0, 0.0]]) * dt
-    base = jnp.array([[dt ** 3 / 3, dt ** 2 / 2], [dt ** 2 / 2, dt]])
+    base = jnp.array([[dt**3 / 3, dt**2 / 2], [dt**2 / 2, dt]])
     F = jnp.block([[f, z], [z, f]])
     Q = jnp.block([[q_v * base, z], [z, q_w * base]])
     return F, Q
@@ -98,8 +98,9 @@ def _filter(y, dts, r, q):
         s = H @ p @ H.T + R
         innov = obs - H @ x
         k = jnp.linalg.solve(s, H @ p).T
-        ll = -0.5 * (jnp.linalg.slogdet(s)[1] + innov @ jnp.linalg.solve(s, innov)
-                     + 2.0 * jnp.log(2.0 * jnp.pi))
+        ll = -0.5 * (
+            jnp.linalg.slogdet(s)[1] + innov @ jnp.linalg.solve(s, innov) + 2.0 * jnp.log(2.0 * jnp.pi)
+        )
         p = p - k @ H @ p
         return x + k @ innov, 0.5 * (p + p.T), ll
 
@@ -131,8 +132,7 @@ def _smooth(xs, ps, xps, pps, dts, q):
         p_s = 0.5 * (p_s + p_s.T)
         return (x_s, p_s), (x_s, p_s)
 
-    _, (xb, pb) = jax.lax.scan(step, (xs[-1], ps[-1]), (xs[:-1], ps[:-1], xps, pps, dts),
-                               reverse=True)
+    _, (xb, pb) = jax.lax.scan(step, (xs[-1], ps[-1]), (xs[:-1], ps[:-1], xps, pps, dts), reverse=True)
     return jnp.concatenate([xb, xs[-1:]]), jnp.concatenate([pb, ps[-1:]])
 
 
@@ -145,9 +145,11 @@ def estimate_noise(time, wheel_speed, vehicle_speed):
     recording (module docstring: differencing for R, grid maximum likelihood for q)."""
     y = jnp.stack([wheel_speed, vehicle_speed], axis=1)
     dts = jnp.diff(time)
-    r = jnp.maximum(jnp.stack([difference_sd(wheel_speed), difference_sd(vehicle_speed)]),
-                    MIN_MEASUREMENT_SD) ** 2
-    grid = jnp.asarray(10.0 ** Q_GRID, y.dtype)
+    r = (
+        jnp.maximum(jnp.stack([difference_sd(wheel_speed), difference_sd(vehicle_speed)]), MIN_MEASUREMENT_SD)
+        ** 2
+    )
+    grid = jnp.asarray(10.0**Q_GRID, y.dtype)
     ll_many = jax.vmap(_log_likelihood, in_axes=(None, None, None, 0))
 
     def best(qs):
@@ -164,8 +166,9 @@ def smooth_creep(time, wheel_speed, vehicle_speed, torque, inertia, wheel_radius
     """:class:`CreepEstimate` of a recording from its four raw signals (each (n,), SI units; the
     vehicle's ``J`` [kg·m²], nominal ``r`` [m] and axle load [kg] for ``μ̂``). Pure and jitted;
     vmap over recordings of one length."""
-    time, wheel_speed, vehicle_speed, torque = (jnp.asarray(a, jnp.result_type(float)) for a in
-                                                (time, wheel_speed, vehicle_speed, torque))
+    time, wheel_speed, vehicle_speed, torque = (
+        jnp.asarray(a, jnp.result_type(float)) for a in (time, wheel_speed, vehicle_speed, torque)
+    )
     r, q = estimate_noise(time, wheel_speed, vehicle_speed)
     dts = jnp.diff(time)
     y = jnp.stack([wheel_speed, vehicle_speed], axis=1)
@@ -175,15 +178,33 @@ def smooth_creep(time, wheel_speed, vehicle_speed, torque, inertia, wheel_radius
     var_v, var_w, cov = pm[:, 0, 0], pm[:, 2, 2], pm[:, 0, 2]
     speed = jnp.maximum(jnp.abs(v), SPEED_FLOOR)
     s = w / speed
-    var_s = jnp.maximum(var_w - 2.0 * s * cov + s * s * var_v, 0.0) / speed ** 2
+    var_s = jnp.maximum(var_w - 2.0 * s * cov + s * s * var_v, 0.0) / speed**2
     mu = (torque - inertia * (a + wd) / wheel_radius) / (axle_load * GRAVITY * wheel_radius)
-    return CreepEstimate(v, w, s, jnp.sqrt(jnp.maximum(var_v, 0.0)), jnp.sqrt(jnp.maximum(var_w, 0.0)),
-                         jnp.sqrt(var_s), a, wd, mu, jnp.sqrt(r), q)
+    return CreepEstimate(
+        v,
+        w,
+        s,
+        jnp.sqrt(jnp.maximum(var_v, 0.0)),
+        jnp.sqrt(jnp.maximum(var_w, 0.0)),
+        jnp.sqrt(var_s),
+        a,
+        wd,
+        mu,
+        jnp.sqrt(r),
+        q,
+    )
 
 
 def smooth_recording(recording) -> CreepEstimate:
     """:func:`smooth_creep` of a recording (anything with ``columns`` holding the four raw signals
     and a ``vehicle``)."""
     c, veh = recording.columns, recording.vehicle
-    return smooth_creep(c["time"], c["wheel_speed"], c["vehicle_speed"], c["traction_torque"],
-                        veh.wheelset_inertia_kgm2, veh.wheel_radius_m, veh.axle_load_kg)
+    return smooth_creep(
+        c["time"],
+        c["wheel_speed"],
+        c["vehicle_speed"],
+        c["traction_torque"],
+        veh.wheelset_inertia_kgm2,
+        veh.wheel_radius_m,
+        veh.axle_load_kg,
+    )

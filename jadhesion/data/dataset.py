@@ -64,8 +64,13 @@ class PolachDataset(NamedTuple):
 CREEP_OPTIONS = ("smoothed", "raw")
 
 
-def to_dataset(recording: "Recording", observer_variant: str = "paper",
-               creep: str = "smoothed", *, k_eps: float | None = None) -> PolachDataset:
+def to_dataset(
+    recording: "Recording",
+    observer_variant: str = "paper",
+    creep: str = "smoothed",
+    *,
+    k_eps: float | None = None,
+) -> PolachDataset:
     """The fitting dataset (creep s, slip w, mu_hat, v, k_eps; with ``creep="smoothed"`` also
     ``slip_sd``, ``creep_sd``) of a recording (or a simulation result).
 
@@ -88,8 +93,13 @@ def to_dataset(recording: "Recording", observer_variant: str = "paper",
     if creep == "raw" or not all(c in recording.columns for c in RAW_SIGNALS):
         return raw
     est = smooth_recording(recording)
-    return raw._replace(creep=est.creep, slip=est.slip, vehicle_speed=est.vehicle_speed,
-                        slip_sd=est.slip_sd, creep_sd=est.creep_sd)
+    return raw._replace(
+        creep=est.creep,
+        slip=est.slip,
+        vehicle_speed=est.vehicle_speed,
+        slip_sd=est.slip_sd,
+        creep_sd=est.creep_sd,
+    )
 
 
 RAW_SIGNALS = ("time", "vehicle_speed", "wheel_speed", "traction_torque")
@@ -117,11 +127,17 @@ def _raw_dataset(recording, observer_variant: str, k_eps=None) -> PolachDataset:
         else:
             s = np.asarray(kinematics.creepage(w, v))
     else:
-        mu = observe_adhesion(cols["time"], cols["wheel_speed"], cols["traction_torque"],
-                              recording.vehicle, observer_variant)
+        mu = observe_adhesion(
+            cols["time"], cols["wheel_speed"], cols["traction_torque"], recording.vehicle, observer_variant
+        )
         w = np.asarray(kinematics.slip_velocity(cols["wheel_speed"], v))
         s = np.asarray(kinematics.creepage(w, v))
     if k_eps is None:
         k_eps = recording.vehicle.k_eps()
-    return PolachDataset(creep=jnp.asarray(s), slip=jnp.asarray(w), adhesion=jnp.asarray(mu),
-                         vehicle_speed=jnp.asarray(v), k_eps=jnp.asarray(k_eps))
+    return PolachDataset(
+        creep=jnp.asarray(s),
+        slip=jnp.asarray(w),
+        adhesion=jnp.asarray(mu),
+        vehicle_speed=jnp.asarray(v),
+        k_eps=jnp.asarray(k_eps),
+    )

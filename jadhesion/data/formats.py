@@ -60,8 +60,11 @@ def _mat_variables(path: Path, name: str) -> dict:
         h5py = None
     if h5py is not None and h5py.is_hdf5(path):  # MATLAB v7.3
         with h5py.File(path, "r") as f:
-            return {k: np.asarray(v) for k, v in f.items()
-                    if isinstance(v, h5py.Dataset) and not k.startswith("#")}
+            return {
+                k: np.asarray(v)
+                for k, v in f.items()
+                if isinstance(v, h5py.Dataset) and not k.startswith("#")
+            }
     try:
         import scipy.io
     except ImportError:
@@ -86,14 +89,18 @@ def _mat(path: Path, name: str):
         else:
             skipped.append(key)
     if not vectors:
-        raise _fail(name, "no numeric vector variables in the .mat file (one variable a signal, "
-                          "n×1 or 1×n)")
+        raise _fail(name, "no numeric vector variables in the .mat file (one variable a signal, n×1 or 1×n)")
     n = Counter(v.size for v in vectors.values()).most_common(1)[0][0]
     skipped += [k for k, v in vectors.items() if v.size != n]
     header = [k for k in vectors if vectors[k].size == n]
-    notes = (f"{name}: variable{'s' if len(skipped) > 1 else ''} "
-             f"{', '.join(map(repr, skipped))} ignored (not a numeric vector of {n} values)",
-             ) if skipped else ()
+    notes = (
+        (
+            f"{name}: variable{'s' if len(skipped) > 1 else ''} "
+            f"{', '.join(map(repr, skipped))} ignored (not a numeric vector of {n} values)",
+        )
+        if skipped
+        else ()
+    )
     return header, [vectors[k] for k in header], notes
 
 

@@ -35,9 +35,12 @@ def sampling(time) -> dict:
     dt = np.diff(time)
     med = float(np.median(dt))
     regular = dt[dt <= 5.0 * med]
-    return {"duration_s": float(time[-1] - time[0]), "rate_hz": 1.0 / med,
-            "step_s": {"median": med, "min": float(dt.min()), "max": float(dt.max())},
-            "jitter": float(np.std(regular) / med)}
+    return {
+        "duration_s": float(time[-1] - time[0]),
+        "rate_hz": 1.0 / med,
+        "step_s": {"median": med, "min": float(dt.min()), "max": float(dt.max())},
+        "jitter": float(np.std(regular) / med),
+    }
 
 
 def _range(x) -> list | None:
@@ -50,27 +53,46 @@ def identifiability(creep, slip, adhesion) -> list:
     creep, slip, mu = (np.abs(np.asarray(a, dtype=np.float64)) for a in (creep, slip, adhesion))
     notes = []
     if creep.size < FEW_SAMPLES:
-        notes.append({"code": "few_samples", "message": f"only {creep.size} samples selected (fewer "
-                      f"than {FEW_SAMPLES}): standard errors will be rough"})
+        notes.append(
+            {
+                "code": "few_samples",
+                "message": f"only {creep.size} samples selected (fewer "
+                f"than {FEW_SAMPLES}): standard errors will be rough",
+            }
+        )
     if creep.size == 0:
         return notes
     w_hi = float(np.percentile(slip, 99))
     if w_hi < SLIP_FOR_AB:
-        notes.append({"code": "slip_range", "message": f"slip velocity never exceeds "
-                      f"{SLIP_FOR_AB:g} m/s (99th percentile {w_hi:.3g} m/s): A and B will not be "
-                      f"identified"})
+        notes.append(
+            {
+                "code": "slip_range",
+                "message": f"slip velocity never exceeds "
+                f"{SLIP_FOR_AB:g} m/s (99th percentile {w_hi:.3g} m/s): A and B will not be "
+                f"identified",
+            }
+        )
     edges = np.quantile(creep, np.linspace(0.0, 1.0, CREEP_BINS + 1))
     which = np.clip(np.searchsorted(edges, creep, side="right") - 1, 0, CREEP_BINS - 1)
-    medians = [np.median(mu[which == k]) if np.any(which == k) else -np.inf
-               for k in range(CREEP_BINS)]
+    medians = [np.median(mu[which == k]) if np.any(which == k) else -np.inf for k in range(CREEP_BINS)]
     if int(np.argmax(medians)) == CREEP_BINS - 1:
-        notes.append({"code": "no_peak", "message": f"creep never passes the adhesion peak (μ̂ "
-                      f"still rising at creep {float(np.percentile(creep, 99)):.3g}): μ0 weakly "
-                      f"identified, the falling branch not seen"})
+        notes.append(
+            {
+                "code": "no_peak",
+                "message": f"creep never passes the adhesion peak (μ̂ "
+                f"still rising at creep {float(np.percentile(creep, 99)):.3g}): μ0 weakly "
+                f"identified, the falling branch not seen",
+            }
+        )
     s_lo = float(np.percentile(creep, 1))
     if s_lo > CREEP_FOR_SLOPE:
-        notes.append({"code": "no_small_creep", "message": f"creep never below {s_lo:.3g} (1st "
-                      f"percentile): the initial slope (kA) weakly identified"})
+        notes.append(
+            {
+                "code": "no_small_creep",
+                "message": f"creep never below {s_lo:.3g} (1st "
+                f"percentile): the initial slope (kA) weakly identified",
+            }
+        )
     return notes
 
 
@@ -80,15 +102,28 @@ def inspect_document(recording, selection: Selection, dataset) -> dict:
     (``vehicle_speed`` [m/s], ``creep`` [-], ``slip_velocity`` [m/s], ``adhesion`` μ̂ [-]) and
     ``ranges_all`` of every sample's speeds, ``selection`` and ``identifiability``."""
     cols = recording.columns
-    timing = sampling(cols["time"]) if "time" in cols else {"duration_s": None, "rate_hz": None,
-                                                          "step_s": None, "jitter": None}
+    timing = (
+        sampling(cols["time"])
+        if "time" in cols
+        else {"duration_s": None, "rate_hz": None, "step_s": None, "jitter": None}
+    )
     timing["gaps"] = [list(g) for g in selection.gaps]
-    ranges = {"vehicle_speed": _range(dataset.vehicle_speed), "creep": _range(dataset.creep),
-              "slip_velocity": _range(dataset.slip), "adhesion": _range(dataset.adhesion)}
-    every = {c: _range(cols[c]) for c in ("vehicle_speed", "wheel_speed", "traction_torque")
-             if c in cols}
-    return {"file": str(recording.path), "samples": recording.n_samples,
-            "columns": sorted(cols), "sources": dict(recording.sources),
-            "notes": list(recording.notes), "sampling": timing, "ranges": ranges,
-            "ranges_all": every, "selection": selection.document(),
-            "identifiability": identifiability(dataset.creep, dataset.slip, dataset.adhesion)}
+    ranges = {
+        "vehicle_speed": _range(dataset.vehicle_speed),
+        "creep": _range(dataset.creep),
+        "slip_velocity": _range(dataset.slip),
+        "adhesion": _range(dataset.adhesion),
+    }
+    every = {c: _range(cols[c]) for c in ("vehicle_speed", "wheel_speed", "traction_torque") if c in cols}
+    return {
+        "file": str(recording.path),
+        "samples": recording.n_samples,
+        "columns": sorted(cols),
+        "sources": dict(recording.sources),
+        "notes": list(recording.notes),
+        "sampling": timing,
+        "ranges": ranges,
+        "ranges_all": every,
+        "selection": selection.document(),
+        "identifiability": identifiability(dataset.creep, dataset.slip, dataset.adhesion),
+    }

@@ -66,8 +66,9 @@ def lowpass_foh(time, signal, t0):
     return jnp.concatenate([signal[:1], rest])
 
 
-def observer_core(time, wheel_speed, torque, inertia, wheel_radius, axle_load, t0,
-                  variant="paper", gravity=GRAVITY):
+def observer_core(
+    time, wheel_speed, torque, inertia, wheel_radius, axle_load, t0, variant="paper", gravity=GRAVITY
+):
     """Observed adhesion coefficient ``mu_hat`` [-] (paper eq 19) from plain numbers; pure, jit- and
     vmap-able (also over the constants).
 
@@ -93,6 +94,13 @@ def observe_adhesion(time, wheel_speed, torque, vehicle: Vehicle = LOCO_22E, var
     The vehicle's numbers enter as Python floats, so this is pure and jit/vmap-able in the signals
     (close over the vehicle, or call :func:`observer_core` to trace the constants too).
     """
-    return observer_core(time, wheel_speed, torque, vehicle.wheelset_inertia_kgm2,
-                         vehicle.wheel_radius_m, vehicle.axle_load_kg,
-                         vehicle.observer_time_constant_s, variant)
+    return observer_core(
+        time,
+        wheel_speed,
+        torque,
+        vehicle.wheelset_inertia_kgm2,
+        vehicle.wheel_radius_m,
+        vehicle.axle_load_kg,
+        vehicle.observer_time_constant_s,
+        variant,
+    )

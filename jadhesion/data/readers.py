@@ -15,7 +15,6 @@ from .validate import RAW_COLUMNS, _fail, _is_number
 _BLANK_LINE = re.compile(r"\n[ \t\r]*\n")
 
 
-
 def _read_text(path: Path, name: str, *, kind: str = "file") -> str:
     if not path.exists():
         raise _fail(name, f"{kind} not found")
@@ -31,13 +30,13 @@ def _read_text(path: Path, name: str, *, kind: str = "file") -> str:
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
-        line = raw[:exc.start].count(b"\n") + 1
-        raise _fail(name, f"not UTF-8 text (undecodable byte 0x{raw[exc.start]:02x} at byte "
-                          f"{exc.start}, line {line})") from None
+        line = raw[: exc.start].count(b"\n") + 1
+        raise _fail(
+            name, f"not UTF-8 text (undecodable byte 0x{raw[exc.start]:02x} at byte {exc.start}, line {line})"
+        ) from None
     if not text.strip():
         raise _fail(name, f"{kind} is empty")
     return text
-
 
 
 def _parse_rows(text: str, name: str):
@@ -61,8 +60,11 @@ def _parse_rows(text: str, name: str):
     if header is None:
         raise _fail(name, "no header row (only blank or comment lines)")
     if all(_is_number(f) for f in header):
-        raise _fail(name, f"no header row: line {header_line} holds numbers; the first row must name "
-                          f"the columns, e.g. {','.join(RAW_COLUMNS)}")
+        raise _fail(
+            name,
+            f"no header row: line {header_line} holds numbers; the first row must name "
+            f"the columns, e.g. {','.join(RAW_COLUMNS)}",
+        )
     for j, col in enumerate(header):
         if not col:
             raise _fail(name, f"header (line {header_line}): column {j + 1} has an empty name")
@@ -75,8 +77,9 @@ def _parse_rows(text: str, name: str):
     bad = np.flatnonzero(counts != width)
     if bad.size:
         i = int(bad[0])
-        raise _fail(name, f"row {i + 1} (line {lines[i]}): {counts[i]} fields, but the header names "
-                          f"{width} columns")
+        raise _fail(
+            name, f"row {i + 1} (line {lines[i]}): {counts[i]} fields, but the header names {width} columns"
+        )
     return header, rows, lines
 
 
@@ -94,18 +97,28 @@ def _fast_parse(text: str):
         return None
     first, _, body = text.partition("\n")
     header = [f.strip() for f in first.rstrip("\r").split(",")]
-    if (not all(header) or len(set(header)) != len(header) or all(_is_number(f) for f in header)
-            or not body.strip()):
+    if (
+        not all(header)
+        or len(set(header)) != len(header)
+        or all(_is_number(f) for f in header)
+        or not body.strip()
+    ):
         return None
-    options = pacsv.ConvertOptions(column_types={h: pa.float64() for h in header}, null_values=[],
-                                   strings_can_be_null=False, quoted_strings_can_be_null=False)
+    options = pacsv.ConvertOptions(
+        column_types={h: pa.float64() for h in header},
+        null_values=[],
+        strings_can_be_null=False,
+        quoted_strings_can_be_null=False,
+    )
     try:
-        table = pacsv.read_csv(io.BytesIO(body.encode()), convert_options=options,
-                               read_options=pacsv.ReadOptions(column_names=header))
+        table = pacsv.read_csv(
+            io.BytesIO(body.encode()),
+            convert_options=options,
+            read_options=pacsv.ReadOptions(column_names=header),
+        )
     except (pa.ArrowInvalid, ValueError):
         return None
     columns = [table.column(j).to_numpy() for j in range(len(header))]
     if not all(np.isfinite(c).all() for c in columns):
         return None
     return header, columns, range(2, table.num_rows + 2)
-

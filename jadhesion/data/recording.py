@@ -28,7 +28,6 @@ Sign conventions: negative vehicle and wheel speeds are **allowed** (running in 
 negative torque (braking). Only magnitudes are checked for plausibility.
 """
 
-
 import dataclasses
 import io
 import json
@@ -42,16 +41,23 @@ from .formats import is_binary, read_columns
 from .readers import _fast_parse, _parse_rows, _read_text
 from .sidecar import _load_sidecar
 from .units import ColumnSpec, parse_column_map, to_si
+
 # Re-exported: other code reads the validation constants from here.
-from .validate import (CREEP_COLUMNS, DATASET_COLUMNS, KNOWN_COLUMNS, MAX_ADHESION,  # noqa: F401
-                       MAX_SPEED, MAX_TORQUE_MU, MIN_TORQUE_MU, RAW_COLUMNS, _check_layout,
-                       _check_values, _convert_column, _fail)
+from .validate import (
+    KNOWN_COLUMNS,
+    MAX_ADHESION,  # noqa: F401
+    MAX_SPEED,
+    RAW_COLUMNS,
+    _check_layout,
+    _check_values,
+    _convert_column,
+    _fail,
+)
 from .vehicle import LOCO_22E, SIDECAR_KEYS, Vehicle
 
 #: Per-axle columns of a multi-axle file and their naming patterns (``--axle N``), first match wins.
 AXLE_COLUMNS = ("wheel_speed", "traction_torque")
 AXLE_PATTERNS = ("{name}_{n}", "{name}_axle{n}", "{name}{n}")
-
 
 
 @dataclasses.dataclass(frozen=True)
@@ -91,8 +97,9 @@ def _column_map(columns, sidecar: dict, sidecar_name: str, header, name: str, ax
     """``{canonical: ColumnSpec}``: the sidecar's ``columns`` overridden by ``columns`` (--column);
     with ``axle`` N, unmapped ``wheel_speed``/``traction_torque`` come from the first present of
     ``{name}_{N}``, ``{name}_axle{N}``, ``{name}{N}``."""
-    specs = parse_column_map([f"{k}={v}" for k, v in (sidecar.get("columns") or {}).items()],
-                             f"{sidecar_name}: key 'columns':")
+    specs = parse_column_map(
+        [f"{k}={v}" for k, v in (sidecar.get("columns") or {}).items()], f"{sidecar_name}: key 'columns':"
+    )
     specs.update(parse_column_map(columns or (), "--column"))
     if axle is not None:
         if isinstance(axle, bool) or not isinstance(axle, int) or axle < 1:
@@ -103,13 +110,19 @@ def _column_map(columns, sidecar: dict, sidecar_name: str, header, name: str, ax
             names = [p.format(name=canonical, n=axle) for p in AXLE_PATTERNS]
             found = [c for c in names if c in header]
             if not found:
-                raise _fail(name, f"--axle {axle}: no column {' or '.join(map(repr, names))} in the "
-                                  f"file (columns: {', '.join(header)}); map it with --column")
+                raise _fail(
+                    name,
+                    f"--axle {axle}: no column {' or '.join(map(repr, names))} in the "
+                    f"file (columns: {', '.join(header)}); map it with --column",
+                )
             specs[canonical] = ColumnSpec(canonical, found[0])
     for spec in specs.values():
         if spec.source not in header:
-            raise _fail(name, f"--column {spec.canonical}={spec.source}: no column {spec.source!r} "
-                              f"in the file (columns: {', '.join(header)})")
+            raise _fail(
+                name,
+                f"--column {spec.canonical}={spec.source}: no column {spec.source!r} "
+                f"in the file (columns: {', '.join(header)})",
+            )
     return specs
 
 
@@ -119,8 +132,11 @@ def _check_finite(cols, name, shown):
         bad = np.flatnonzero(~np.isfinite(values))
         if bad.size:
             i = int(bad[0])
-            raise _fail(name, f"column {shown.get(col, col)!r}, row {i + 1}: {values[i]} is not a "
-                              f"finite number (NaN, a missing value, and inf are not allowed)")
+            raise _fail(
+                name,
+                f"column {shown.get(col, col)!r}, row {i + 1}: {values[i]} is not a "
+                f"finite number (NaN, a missing value, and inf are not allowed)",
+            )
 
 
 def load_recording(path, *, columns=(), axle=None, max_speed: float = MAX_SPEED) -> Recording:
@@ -158,10 +174,11 @@ def load_recording(path, *, columns=(), axle=None, max_speed: float = MAX_SPEED)
     by_source = {spec.source: spec for spec in specs.values()}
     shadowed = [c for c in header if c in specs and c not in by_source]
     if shadowed:
-        notes += (f"{name}: column{'s' if len(shadowed) > 1 else ''} "
-                  f"{', '.join(map(repr, shadowed))} replaced by the column map",)
-    renamed = [by_source[c].canonical if c in by_source else (None if c in shadowed else c)
-               for c in header]
+        notes += (
+            f"{name}: column{'s' if len(shadowed) > 1 else ''} "
+            f"{', '.join(map(repr, shadowed))} replaced by the column map",
+        )
+    renamed = [by_source[c].canonical if c in by_source else (None if c in shadowed else c) for c in header]
     shown = {spec.canonical: spec.source for spec in specs.values()}
     _check_layout([c for c in renamed if c is not None], name)
     required = [c for c in renamed if c in KNOWN_COLUMNS]
@@ -170,8 +187,11 @@ def load_recording(path, *, columns=(), axle=None, max_speed: float = MAX_SPEED)
     for j, col in enumerate(renamed):
         if col is None:
             continue
-        values = parsed[j] if fast is not None else _convert_column(
-            cells[:, j], shown.get(col, col), lines, name, strict=col in required)
+        values = (
+            parsed[j]
+            if fast is not None
+            else _convert_column(cells[:, j], shown.get(col, col), lines, name, strict=col in required)
+        )
         if values is None and lines is None and col in required:
             raise _fail(name, f"column {shown.get(col, col)!r}: not numeric")
         if values is None:
@@ -182,13 +202,20 @@ def load_recording(path, *, columns=(), axle=None, max_speed: float = MAX_SPEED)
     if lines is None:
         _check_finite({c: columns[c] for c in required if c in columns}, name, shown)
     if ignored:
-        notes += (f"{name}: non-numeric column{'s' if len(ignored) > 1 else ''} "
-                  f"{', '.join(map(repr, ignored))} ignored",)
+        notes += (
+            f"{name}: non-numeric column{'s' if len(ignored) > 1 else ''} "
+            f"{', '.join(map(repr, ignored))} ignored",
+        )
     with np.errstate(all="ignore"):  # differences of huge finite values may overflow to inf
         _check_values({c: columns[c] for c in required}, vehicle, lines, name, max_speed, shown)
-    return Recording(path=path, columns=columns, vehicle=vehicle, sidecar=sidecar, notes=notes,
-                     sources={c: str(specs[c].source) + (f"[{specs[c].unit}]" if specs[c].unit else "")
-                              for c in specs})
+    return Recording(
+        path=path,
+        columns=columns,
+        vehicle=vehicle,
+        sidecar=sidecar,
+        notes=notes,
+        sources={c: str(specs[c].source) + (f"[{specs[c].unit}]" if specs[c].unit else "") for c in specs},
+    )
 
 
 # ------------------------------------------------------------------------------------------ saving
@@ -216,8 +243,9 @@ def atomic_write(path: Path, write) -> None:
         tmp.unlink(missing_ok=True)
 
 
-def save_recording(columns, vehicle: Vehicle = LOCO_22E, path="recording.csv",
-                   extra_sidecar: Optional[dict] = None) -> Path:
+def save_recording(
+    columns, vehicle: Vehicle = LOCO_22E, path="recording.csv", extra_sidecar: Optional[dict] = None
+) -> Path:
     """Write ``columns`` as a recording CSV and the vehicle's sidecar ``<same stem>.json``.
 
     Values are written in Python's shortest round-trip notation, so :func:`load_recording` reads back
@@ -247,8 +275,9 @@ def save_recording(columns, vehicle: Vehicle = LOCO_22E, path="recording.csv",
         if a.ndim != 1:
             raise ValueError(f"save_recording: column {c!r} has shape {a.shape}, expected 1-D")
         if len(a) != len(arrays[0]):
-            raise ValueError(f"save_recording: column {c!r} has {len(a)} rows, "
-                             f"{names[0]!r} has {len(arrays[0])}")
+            raise ValueError(
+                f"save_recording: column {c!r} has {len(a)} rows, {names[0]!r} has {len(arrays[0])}"
+            )
     sidecar = vehicle_sidecar(vehicle)
     if extra_sidecar:
         sidecar.update(extra_sidecar)
@@ -258,6 +287,7 @@ def save_recording(columns, vehicle: Vehicle = LOCO_22E, path="recording.csv",
     buf.write(",".join(names) + "\n")
     buf.writelines(",".join(map(repr, row)) + "\n" for row in zip(*lists))
     atomic_write(path, lambda tmp: tmp.write_text(buf.getvalue(), encoding="utf-8", newline=""))
-    atomic_write(path.with_suffix(".json"),
-                 lambda tmp: tmp.write_text(sidecar_text, encoding="utf-8", newline=""))
+    atomic_write(
+        path.with_suffix(".json"), lambda tmp: tmp.write_text(sidecar_text, encoding="utf-8", newline="")
+    )
     return path

@@ -75,20 +75,74 @@ class Scenario:
         return dataclasses.replace(self, **changes)
 
 
-SCENARIOS = {s.name: s for s in (
-    Scenario("dry", (0.4288, 1.0, 0.3555, 0.3575, 0.1316), 2.2, 1.65, 0.8, 0.23, 0.42, 0.36, 0.0108,
-             creep_base=0.0052, creep_start=0.0022, ramp_fraction=0.04, wander=0.25,
-             excursion_width_s=0.6, minor_excursions=2, minor_peak=0.3, speed_ramp=0.4,
-             torque_noise=1700.0, speed_noise=5e-5),
-    Scenario("wet", (1.0, 1.0, 0.2610, 0.6858, 0.2251), 5.5, 2.1, 0.4, 0.16, 0.28, 0.22, 0.0119,
-             creep_base=0.0024, creep_start=0.0012, ramp_fraction=0.04, wander=0.25,
-             excursion_width_s=0.6, minor_excursions=2, minor_peak=0.3, speed_ramp=0.4,
-             torque_noise=1850.0, speed_noise=5e-5),
-    Scenario("sand", (1.0, 0.4089, 0.4205, 0.0, 0.1554), 5.3, 1.6, 0.32, 0.12, 0.34, 0.29, 0.0167,
-             creep_base=0.0062, creep_start=0.0008, ramp_fraction=0.04, wander=0.15,
-             excursion_width_s=0.12, minor_excursions=0, minor_peak=0.1, speed_ramp=0.4,
-             torque_noise=2600.0, speed_noise=5e-5),
-)}
+SCENARIOS = {
+    s.name: s
+    for s in (
+        Scenario(
+            "dry",
+            (0.4288, 1.0, 0.3555, 0.3575, 0.1316),
+            2.2,
+            1.65,
+            0.8,
+            0.23,
+            0.42,
+            0.36,
+            0.0108,
+            creep_base=0.0052,
+            creep_start=0.0022,
+            ramp_fraction=0.04,
+            wander=0.25,
+            excursion_width_s=0.6,
+            minor_excursions=2,
+            minor_peak=0.3,
+            speed_ramp=0.4,
+            torque_noise=1700.0,
+            speed_noise=5e-5,
+        ),
+        Scenario(
+            "wet",
+            (1.0, 1.0, 0.2610, 0.6858, 0.2251),
+            5.5,
+            2.1,
+            0.4,
+            0.16,
+            0.28,
+            0.22,
+            0.0119,
+            creep_base=0.0024,
+            creep_start=0.0012,
+            ramp_fraction=0.04,
+            wander=0.25,
+            excursion_width_s=0.6,
+            minor_excursions=2,
+            minor_peak=0.3,
+            speed_ramp=0.4,
+            torque_noise=1850.0,
+            speed_noise=5e-5,
+        ),
+        Scenario(
+            "sand",
+            (1.0, 0.4089, 0.4205, 0.0, 0.1554),
+            5.3,
+            1.6,
+            0.32,
+            0.12,
+            0.34,
+            0.29,
+            0.0167,
+            creep_base=0.0062,
+            creep_start=0.0008,
+            ramp_fraction=0.04,
+            wander=0.15,
+            excursion_width_s=0.12,
+            minor_excursions=0,
+            minor_peak=0.1,
+            speed_ramp=0.4,
+            torque_noise=2600.0,
+            speed_noise=5e-5,
+        ),
+    )
+}
 
 
 def get_scenario(scenario) -> Scenario:
@@ -113,13 +167,11 @@ def envelope(result) -> dict:
     ``true_param_mae``: mean |Polach(true params; recorded s, w) − mu_hat|, the error a perfect
     identification would reach on this recording.
     """
-    from ..models.polach import polach_adhesion
 
     cols = result.columns
     mu_hat = np.asarray(cols["adhesion"])
     theta = np.array([result.truth["params"][k] for k in PARAM_NAMES])
-    model = np.asarray(polach_adhesion(theta, cols["creepage"], cols["slip_velocity"],
-                                       result.truth["k_eps"]))
+    model = np.asarray(polach_adhesion(theta, cols["creepage"], cols["slip_velocity"], result.truth["k_eps"]))
     data = to_dataset(result)
     smoothed = np.asarray(polach_adhesion(theta, data.creep, data.slip, result.truth["k_eps"]))
     low, high = np.quantile(mu_hat, RANGE_QUANTILES)
@@ -127,8 +179,10 @@ def envelope(result) -> dict:
         "mean_speed_kmh": float(np.mean(cols["vehicle_speed"]) / KMH),
         "max_slip_kmh": float(np.max(np.abs(cols["slip_velocity"])) / KMH),
         "max_creep": float(np.max(np.abs(cols["creepage"]))),
-        "mu_low": float(low), "mu_high": float(high),
-        "mu_min": float(mu_hat.min()), "mu_max": float(mu_hat.max()),
+        "mu_low": float(low),
+        "mu_high": float(high),
+        "mu_min": float(mu_hat.min()),
+        "mu_max": float(mu_hat.max()),
         "mu_mean": float(np.mean(mu_hat)),
         "true_param_mae": float(np.mean(np.abs(smoothed - mu_hat))),
         "true_param_mae_raw": float(np.mean(np.abs(model - mu_hat))),
@@ -138,6 +192,12 @@ def envelope(result) -> dict:
 def paper_envelope(scenario) -> dict:
     """The published counterparts of :func:`envelope`'s keys."""
     s = get_scenario(scenario)
-    return {"mean_speed_kmh": s.mean_speed_kmh, "max_slip_kmh": s.max_slip_kmh,
-            "max_creep": s.max_creep, "mu_low": s.mu_low, "mu_high": s.mu_high,
-            "mu_mean": s.mu_mean, "true_param_mae": s.paper_error}
+    return {
+        "mean_speed_kmh": s.mean_speed_kmh,
+        "max_slip_kmh": s.max_slip_kmh,
+        "max_creep": s.max_creep,
+        "mu_low": s.mu_low,
+        "mu_high": s.mu_high,
+        "mu_mean": s.mu_mean,
+        "true_param_mae": s.paper_error,
+    }

@@ -44,8 +44,15 @@ CREEP_TOLERANCE = 0.005
 DIRECTION_GUARD_S = 1.0
 PHASES = ("traction", "braking", "both")
 #: Exclusion reasons, in the order they are tested.
-REASONS = ("short stretch", "standstill", "direction change", "coasting",
-           "torque and creep disagree", "braking", "traction")
+REASONS = (
+    "short stretch",
+    "standstill",
+    "direction change",
+    "coasting",
+    "torque and creep disagree",
+    "braking",
+    "traction",
+)
 #: Most excluded stretches listed in a report (the counts by reason are always complete).
 MAX_LISTED = 200
 
@@ -66,8 +73,9 @@ def trim(recording, start=None, end=None):
     if start is not None and end is not None and start >= end:
         raise RecordingError(f"{name}: --start {start:g} s is not before --end {end:g} s")
     if "time" not in recording.columns:
-        raise RecordingError(f"{name}: --start/--end need a time column (map one with --column "
-                             f"time=SOURCE[s])")
+        raise RecordingError(
+            f"{name}: --start/--end need a time column (map one with --column time=SOURCE[s])"
+        )
     t = recording.columns["time"]
     keep = np.ones(t.shape, bool)
     if start is not None:
@@ -75,8 +83,10 @@ def trim(recording, start=None, end=None):
     if end is not None:
         keep &= t <= end
     if keep.sum() < 2:
-        raise RecordingError(f"{name}: --start/--end select {int(keep.sum())} sample(s); the "
-                             f"recording runs from {t[0]:g} s to {t[-1]:g} s")
+        raise RecordingError(
+            f"{name}: --start/--end select {int(keep.sum())} sample(s); the "
+            f"recording runs from {t[0]:g} s to {t[-1]:g} s"
+        )
     return slice_recording(recording, keep)
 
 
@@ -123,8 +133,14 @@ class Selection:
             edges = np.flatnonzero((lab[1:] != lab[:-1]) | (keep[1:] != keep[:-1])) + 1
             for a, b in zip(np.r_[0, edges], np.r_[edges, i1 - i0], strict=True):
                 if not keep[a]:
-                    runs.append({"reason": str(lab[a]), "start": float(self.time[i0 + a]),
-                                 "end": float(self.time[i0 + b - 1]), "samples": int(b - a)})
+                    runs.append(
+                        {
+                            "reason": str(lab[a]),
+                            "start": float(self.time[i0 + a]),
+                            "end": float(self.time[i0 + b - 1]),
+                            "samples": int(b - a),
+                        }
+                    )
         return runs
 
     def counts(self) -> dict:
@@ -138,20 +154,27 @@ class Selection:
         wanted = ("traction", "braking") if self.phase == "both" else (self.phase,)
         out = [f"{k} {v}" for k, v in sorted(counts.items()) if k not in wanted]
         gaps = f", {len(self.gaps)} gap(s)" if self.gaps else ""
-        return (f"samples: {self.used} of {self.mask.size} used ({self.phase}, "
-                f"{len(self.stretches)} stretch(es){gaps}); excluded: "
-                f"{', '.join(out) if out else 'none'}")
+        return (
+            f"samples: {self.used} of {self.mask.size} used ({self.phase}, "
+            f"{len(self.stretches)} stretch(es){gaps}); excluded: "
+            f"{', '.join(out) if out else 'none'}"
+        )
 
     def document(self) -> dict:
         """The selection as JSON: ``phase``, ``used``, ``samples``, ``stretches`` [[t0, t1]],
         ``gaps`` [[t0, t1]], ``counts`` by label, ``excluded`` runs (at most :data:`MAX_LISTED`;
         ``excluded_listed_all`` says whether all are)."""
         runs = self.excluded()
-        return {"phase": self.phase, "used": self.used, "samples": int(self.mask.size),
-                "stretches": [[float(self.time[a]), float(self.time[b - 1])]
-                              for a, b in self.stretches],
-                "gaps": [list(g) for g in self.gaps], "counts": self.counts(),
-                "excluded": runs[:MAX_LISTED], "excluded_listed_all": len(runs) <= MAX_LISTED}
+        return {
+            "phase": self.phase,
+            "used": self.used,
+            "samples": int(self.mask.size),
+            "stretches": [[float(self.time[a]), float(self.time[b - 1])] for a, b in self.stretches],
+            "gaps": [list(g) for g in self.gaps],
+            "counts": self.counts(),
+            "excluded": runs[:MAX_LISTED],
+            "excluded_listed_all": len(runs) <= MAX_LISTED,
+        }
 
 
 def find_stretches(time):
@@ -196,8 +219,7 @@ def select(recording, phase: str = "traction") -> Selection:
     """The :class:`Selection` of ``recording``'s samples for ``phase`` (module docstring: the
     rules, limits and reasons). Raises :class:`RecordingError` for an unknown phase."""
     if phase not in PHASES:
-        raise RecordingError(f"{recording.path}: --phase {phase}: expected one of "
-                             f"{', '.join(PHASES)}")
+        raise RecordingError(f"{recording.path}: --phase {phase}: expected one of {', '.join(PHASES)}")
     cols = recording.columns
     v = np.asarray(cols["vehicle_speed"], dtype=np.float64)
     n = v.size
@@ -231,5 +253,6 @@ def select(recording, phase: str = "traction") -> Selection:
     labels[short] = "short stretch"
     wanted = ("traction", "braking") if phase == "both" else (phase,)
     mask = np.isin(labels, wanted)
-    return Selection(mask=mask, stretches=stretches, labels=labels.astype(str), phase=phase,
-                     time=t, gaps=gaps)
+    return Selection(
+        mask=mask, stretches=stretches, labels=labels.astype(str), phase=phase, time=t, gaps=gaps
+    )

@@ -31,21 +31,32 @@ def _concatenate(parts) -> PolachDataset:
 def no_samples_message(recording, selection: Selection) -> str:
     """One line: the phase selected nothing, and what the samples were."""
     counts = ", ".join(f"{k} {v}" for k, v in sorted(selection.counts().items()))
-    return (f"{recording.path}: --phase {selection.phase} selects no samples ({counts}); try "
-            f"another --phase or --start/--end")
+    return (
+        f"{recording.path}: --phase {selection.phase} selects no samples ({counts}); try "
+        f"another --phase or --start/--end"
+    )
 
 
-def per_stretch_dataset(recording, selection: Selection, observer_variant: str = "paper",
-                        creep: str = "raw", *, build=to_dataset) -> PolachDataset:
+def per_stretch_dataset(
+    recording, selection: Selection, observer_variant: str = "paper", creep: str = "raw", *, build=to_dataset
+) -> PolachDataset:
     """The dataset of every sample (none masked), the observer run on each stretch alone (default
     ``creep="raw"``: any stretch length); for inspection and figures."""
-    parts = [build(slice_recording(recording, slice(a, b)), observer_variant, creep)
-             for a, b in selection.stretches]
+    parts = [
+        build(slice_recording(recording, slice(a, b)), observer_variant, creep)
+        for a, b in selection.stretches
+    ]
     return parts[0] if len(parts) == 1 else _concatenate(parts)
 
 
-def selected_dataset(recording, phase: str = "traction", observer_variant: str = "paper",
-                     creep: str = "smoothed", *, build=to_dataset):
+def selected_dataset(
+    recording,
+    phase: str = "traction",
+    observer_variant: str = "paper",
+    creep: str = "smoothed",
+    *,
+    build=to_dataset,
+):
     """``(PolachDataset, Selection)``: the dataset of the samples of ``phase``.
 
     ``build(recording, observer_variant, creep)`` makes one stretch's dataset (default
@@ -58,7 +69,7 @@ def selected_dataset(recording, phase: str = "traction", observer_variant: str =
     if selection.used == 0:
         raise RecordingError(no_samples_message(recording, selection))
     if selection.mask.size < MIN_STRETCH_SAMPLES:  # too short for the smoother: the raw
-        creep = "raw"                              # difference (the fit names its minimum)
+        creep = "raw"  # difference (the fit names its minimum)
     if selection.complete:
         return build(recording, observer_variant, creep), selection
     parts = []
@@ -67,6 +78,12 @@ def selected_dataset(recording, phase: str = "traction", observer_variant: str =
         if not keep.any():
             continue
         data = build(slice_recording(recording, slice(a, b)), observer_variant, creep)
-        parts.append(type(data)(*(f if f is None or name == "k_eps" else f[keep]
-                                  for name, f in zip(PolachDataset._fields, data, strict=True))))
+        parts.append(
+            type(data)(
+                *(
+                    f if f is None or name == "k_eps" else f[keep]
+                    for name, f in zip(PolachDataset._fields, data, strict=True)
+                )
+            )
+        )
     return _concatenate(parts), selection

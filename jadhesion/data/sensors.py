@@ -42,16 +42,19 @@ class SensorModel(NamedTuple):
 
     def scaled(self, factor: float) -> "SensorModel":
         """Every noise level and resolution times ``factor`` (the correlation time kept)."""
-        return self._replace(speed_white_mps=self.speed_white_mps * factor,
-                             speed_colour_mps=self.speed_colour_mps * factor,
-                             speed_quantum_mps=self.speed_quantum_mps * factor,
-                             torque_white_nm=self.torque_white_nm * factor,
-                             torque_quantum_nm=self.torque_quantum_nm * factor)
+        return self._replace(
+            speed_white_mps=self.speed_white_mps * factor,
+            speed_colour_mps=self.speed_colour_mps * factor,
+            speed_quantum_mps=self.speed_quantum_mps * factor,
+            torque_white_nm=self.torque_white_nm * factor,
+            torque_quantum_nm=self.torque_quantum_nm * factor,
+        )
 
     def speed_sd(self) -> float:
         """Total standard deviation of one speed channel [m/s] (white, colour, ``q/√12``)."""
-        return math.sqrt(self.speed_white_mps ** 2 + self.speed_colour_mps ** 2
-                         + self.speed_quantum_mps ** 2 / 12.0)
+        return math.sqrt(
+            self.speed_white_mps**2 + self.speed_colour_mps**2 + self.speed_quantum_mps**2 / 12.0
+        )
 
     def as_dict(self) -> dict:
         """JSON-ready fields."""
@@ -103,15 +106,18 @@ def ar1_noise(key, n: int, sd, time_s, dt):
 def speed_channel(key, x, model: SensorModel, dt):
     """One recorded speed channel [m/s] from the true speed ``x`` (n,)."""
     kw, kc = jax.random.split(key)
-    noisy = (x + model.speed_white_mps * jax.random.normal(kw, x.shape)
-             + ar1_noise(kc, x.shape[0], model.speed_colour_mps, model.speed_colour_time_s, dt))
+    noisy = (
+        x
+        + model.speed_white_mps * jax.random.normal(kw, x.shape)
+        + ar1_noise(kc, x.shape[0], model.speed_colour_mps, model.speed_colour_time_s, dt)
+    )
     return quantise(noisy, model.speed_quantum_mps)
 
 
 def measure(key, wheel_speed, vehicle_speed, torque, model: SensorModel, dt):
     """Recorded ``(wheel_speed, vehicle_speed, torque)`` from the true signals (each (n,)); pure."""
     kw, kv, kt = jax.random.split(key, 3)
-    torque = quantise(torque + model.torque_white_nm * jax.random.normal(kt, torque.shape),
-                      model.torque_quantum_nm)
-    return (speed_channel(kw, wheel_speed, model, dt), speed_channel(kv, vehicle_speed, model, dt),
-            torque)
+    torque = quantise(
+        torque + model.torque_white_nm * jax.random.normal(kt, torque.shape), model.torque_quantum_nm
+    )
+    return (speed_channel(kw, wheel_speed, model, dt), speed_channel(kv, vehicle_speed, model, dt), torque)

@@ -11,6 +11,7 @@ from .readers import _read_text
 from .validate import _fail
 from .vehicle import LOCO_22E, SIDECAR_KEYS
 
+
 def _brief(value) -> str:
     text = json.dumps(value)
     return text if len(text) <= 40 else text[:40] + "…"
@@ -31,19 +32,17 @@ def _check_sidecar_value(key, value, name):
     kind = SIDECAR_KEYS[key]
     if kind is str:
         if not isinstance(value, str):
-            raise _fail(name, f"{where}: expected a string, got {type(value).__name__} "
-                              f"{_brief(value)}")
+            raise _fail(name, f"{where}: expected a string, got {type(value).__name__} {_brief(value)}")
         return value
     if kind is list:  # contact_semi_axes_m
-        ok = (isinstance(value, list) and len(value) == 2
-              and all(_finite(x) and x > 0 for x in value))
+        ok = isinstance(value, list) and len(value) == 2 and all(_finite(x) and x > 0 for x in value)
         if not ok:
-            raise _fail(name, f"{where}: expected two positive numbers [a, b] in metres, got "
-                              f"{json.dumps(value)}")
+            raise _fail(
+                name, f"{where}: expected two positive numbers [a, b] in metres, got {json.dumps(value)}"
+            )
         return (float(value[0]), float(value[1]))
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise _fail(name, f"{where}: expected a number, got {type(value).__name__} "
-                          f"{_brief(value)}")
+        raise _fail(name, f"{where}: expected a number, got {type(value).__name__} {_brief(value)}")
     if not _finite(value):
         raise _fail(name, f"{where}: {_brief(value)} is not a finite number")
     if key == "poisson_ratio":
@@ -63,19 +62,24 @@ def _load_sidecar(csv_path: Path):
     try:
         data = json.loads(text)
     except json.JSONDecodeError as exc:
-        raise _fail(name, f"sidecar is not valid JSON (line {exc.lineno}, column {exc.colno}: "
-                          f"{exc.msg})") from None
+        raise _fail(
+            name, f"sidecar is not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})"
+        ) from None
     except RecursionError:
         raise _fail(name, "sidecar is not valid JSON (nested too deeply)") from None
     if not isinstance(data, dict):
-        raise _fail(name, f"sidecar must be a JSON object {{\"key\": value, ...}}, got a JSON "
-                          f"{type(data).__name__}")
+        raise _fail(
+            name, f'sidecar must be a JSON object {{"key": value, ...}}, got a JSON {type(data).__name__}'
+        )
     changes, notes = {}, []
     for key, value in data.items():
         if key == "columns" and value is not None:
             if not isinstance(value, dict) or not all(isinstance(v, str) for v in value.values()):
-                raise _fail(name, f"key 'columns': expected an object {{\"CANONICAL\": "
-                                  f"\"SOURCE[UNIT]\"}}, got {_brief(value)}")
+                raise _fail(
+                    name,
+                    f"key 'columns': expected an object {{\"CANONICAL\": "
+                    f'"SOURCE[UNIT]"}}, got {_brief(value)}',
+                )
             continue
         if key not in SIDECAR_KEYS:
             notes.append(f"{name}: unknown key {key!r} ignored")
@@ -84,4 +88,3 @@ def _load_sidecar(csv_path: Path):
             continue
         changes[key] = _check_sidecar_value(key, value, name)
     return path, data, LOCO_22E.replace(**changes), tuple(notes)
-

@@ -100,24 +100,46 @@ class SimulationResult:
     latent: dict
 
 
-def _constants(scenario, vehicle: Vehicle, mags, n_samples: int, sensors,
-               period: float = SAMPLE_PERIOD, braking: bool = False) -> dict:
+def _constants(
+    scenario,
+    vehicle: Vehicle,
+    mags,
+    n_samples: int,
+    sensors,
+    period: float = SAMPLE_PERIOD,
+    braking: bool = False,
+) -> dict:
     duration = (n_samples - 1) * period
     v_exc = scenario.max_slip / scenario.max_creep
     at = 0.5 + (v_exc / scenario.mean_speed - 1.0) / scenario.speed_ramp
     t_main = duration * float(np.clip(at, 0.1, 0.9))
-    c = dict(theta=np.asarray(scenario.params, dtype=float), k_eps=vehicle.k_eps(),
-             inertia=vehicle.wheelset_inertia_kgm2,
-             radius=vehicle.wheel_radius_m, axle_load=vehicle.axle_load_kg,
-             weight=vehicle.axle_weight_n, mass=vehicle.locomotive_mass_kg,
-             n_axles=float(vehicle.n_axles), t0=vehicle.observer_time_constant_s,
-             duration=duration, v_mean=scenario.mean_speed, speed_ramp=scenario.speed_ramp,
-             creep_base=scenario.creep_base, creep_start=scenario.creep_start,
-             ramp_time=scenario.ramp_fraction * duration, wander=scenario.wander,
-             exc_width=scenario.excursion_width_s, max_creep=scenario.max_creep, t_main=t_main,
-             minor_peak=scenario.minor_peak,
-             minor_mask=(np.arange(MAX_MINOR) < scenario.minor_excursions).astype(float),
-             sensors=sensors, mags=mags, period=period, sign=-1.0 if braking else 1.0)
+    c = dict(
+        theta=np.asarray(scenario.params, dtype=float),
+        k_eps=vehicle.k_eps(),
+        inertia=vehicle.wheelset_inertia_kgm2,
+        radius=vehicle.wheel_radius_m,
+        axle_load=vehicle.axle_load_kg,
+        weight=vehicle.axle_weight_n,
+        mass=vehicle.locomotive_mass_kg,
+        n_axles=float(vehicle.n_axles),
+        t0=vehicle.observer_time_constant_s,
+        duration=duration,
+        v_mean=scenario.mean_speed,
+        speed_ramp=scenario.speed_ramp,
+        creep_base=scenario.creep_base,
+        creep_start=scenario.creep_start,
+        ramp_time=scenario.ramp_fraction * duration,
+        wander=scenario.wander,
+        exc_width=scenario.excursion_width_s,
+        max_creep=scenario.max_creep,
+        t_main=t_main,
+        minor_peak=scenario.minor_peak,
+        minor_mask=(np.arange(MAX_MINOR) < scenario.minor_excursions).astype(float),
+        sensors=sensors,
+        mags=mags,
+        period=period,
+        sign=-1.0 if braking else 1.0,
+    )
     return jax.tree_util.tree_map(jnp.asarray, c)
 
 
@@ -128,8 +150,7 @@ def _profile(key, c):
     freqs = jnp.exp(jax.random.uniform(kf, (N_WANDER,), minval=math.log(lo), maxval=math.log(hi)))
     phases = jax.random.uniform(kp, (N_WANDER,), maxval=2 * jnp.pi)
     minor_t = c["duration"] * jax.random.uniform(kt, (MAX_MINOR,), minval=0.15, maxval=0.95)
-    minor_h = c["minor_peak"] * c["max_creep"] * jax.random.uniform(kh, (MAX_MINOR,), minval=0.5,
-                                                                     maxval=1.0)
+    minor_h = c["minor_peak"] * c["max_creep"] * jax.random.uniform(kh, (MAX_MINOR,), minval=0.5, maxval=1.0)
     times = jnp.concatenate([c["t_main"][None], minor_t])
     peaks = jnp.concatenate([c["max_creep"][None], minor_h * c["minor_mask"]])
     return dict(freqs=freqs, phases=phases, exc_times=times, exc_peaks=peaks)
@@ -167,7 +188,8 @@ def _reference(t, c, prof):
     v_ref, a_ref = _speed_ref(t, c)
     mu_plan = polach_adhesion(c["theta"], s_ref, s_ref * v_ref, c["k_eps"])
     t_ff = c["weight"] * c["radius"] * mu_plan + c["inertia"] / c["radius"] * (
-        a_ref * (1.0 + s_ref) + v_ref * ds_ref)
+        a_ref * (1.0 + s_ref) + v_ref * ds_ref
+    )
     f_plan = c["n_axles"] * c["weight"] * mu_plan - _resistance(v_ref, c) - c["mass"] * a_ref
     rail = fx.rail_factor(c["mags"][fx.INDEX["rail_change"]], t, fx.RAIL_CHANGE_AT * c["duration"])
     return dict(s_ref=s_ref, v_ref=v_ref, t_ff=t_ff, f_plan=f_plan, rail=rail)
@@ -188,8 +210,11 @@ def _contact(y, ref, torque, c):
     ratio = c["n_axles"] * torque / (radius * c["mass"] * GRAVITY)
     n1 = c["weight"] * fx.load_factor(m[fx.INDEX["load_transfer"]], ratio)
     k_eps = c["k_eps"] * (n1 / c["weight"]) ** (-1.0 / 3.0)
-    scale = (ref["rail"] * fx.speed_factor(m[fx.INDEX["speed_dependence"]], v, c["v_mean"])
-             * fx.thermal_factor(m[fx.INDEX["thermal_softening"]], heat))
+    scale = (
+        ref["rail"]
+        * fx.speed_factor(m[fx.INDEX["speed_dependence"]], v, c["v_mean"])
+        * fx.thermal_factor(m[fx.INDEX["thermal_softening"]], heat)
+    )
     theta = jnp.where(jnp.arange(5) == 2, c["theta"] * scale, c["theta"])
     slip = omega * radius - v
     s = creepage(slip, v)
@@ -201,12 +226,14 @@ def _rhs(y, ref, c):
     slip, _, mu, n1, radius = _contact(y, ref, torque, c)
     droop = jnp.sign(ref["f_plan"]) * (y[1] - ref["v_ref"]) / (LOAD_DROOP * ref["v_ref"])
     f_load = ref["f_plan"] * (1.0 + droop)  # a pushing load (braking, F_plan < 0) droops too
-    return jnp.stack([
-        (torque - mu * n1 * radius) / c["inertia"],
-        (c["n_axles"] * mu * c["weight"] - _resistance(y[1], c) - f_load) / c["mass"],
-        KI * error,
-        (mu * n1 * jnp.abs(slip) - y[3]) / fx.THERMAL_TIME_CONSTANT,
-    ])
+    return jnp.stack(
+        [
+            (torque - mu * n1 * radius) / c["inertia"],
+            (c["n_axles"] * mu * c["weight"] - _resistance(y[1], c) - f_load) / c["mass"],
+            KI * error,
+            (mu * n1 * jnp.abs(slip) - y[3]) / fx.THERMAL_TIME_CONSTANT,
+        ]
+    )
 
 
 def _lu(a):
@@ -214,9 +241,9 @@ def _lu(a):
     plus O(h) except on the stiff diagonal, where it is large, so its pivots stay ≥ ~0.9."""
     n = a.shape[0]
     for k in range(n - 1):
-        factors = a[k + 1:, k] / a[k, k]
-        a = a.at[k + 1:, k + 1:].add(-factors[:, None] * a[k, k + 1:][None, :])
-        a = a.at[k + 1:, k].set(factors)
+        factors = a[k + 1 :, k] / a[k, k]
+        a = a.at[k + 1 :, k + 1 :].add(-factors[:, None] * a[k, k + 1 :][None, :])
+        a = a.at[k + 1 :, k].set(factors)
     return a
 
 
@@ -271,25 +298,46 @@ def _simulate_core(key, c, n_samples: int, substeps: int = SUBSTEPS):
     torque, slip, s, mu = jax.vmap(latent)(ys, ref)
     m = c["mags"]
     wheel_speed, vehicle_speed, recorded_torque = measure(
-        k_noise, ys[:, 0] * c["radius"], ys[:, 1],
+        k_noise,
+        ys[:, 0] * c["radius"],
+        ys[:, 1],
         fx.delayed(time, torque, m[fx.INDEX["signal_delay"]])
-        + m[fx.INDEX["torque_offset"]] * c["weight"] * c["radius"], c["sensors"], c["period"])
-    mu_hat = observer_core(time, wheel_speed, recorded_torque, c["inertia"], c["radius"],
-                           c["axle_load"], c["t0"])
+        + m[fx.INDEX["torque_offset"]] * c["weight"] * c["radius"],
+        c["sensors"],
+        c["period"],
+    )
+    mu_hat = observer_core(
+        time, wheel_speed, recorded_torque, c["inertia"], c["radius"], c["axle_load"], c["t0"]
+    )
     rec_slip = wheel_speed - vehicle_speed
-    columns = dict(time=time, vehicle_speed=vehicle_speed, wheel_speed=wheel_speed,
-                   traction_torque=recorded_torque, creepage=creepage(rec_slip, vehicle_speed),
-                   slip_velocity=rec_slip, adhesion=mu_hat)
+    columns = dict(
+        time=time,
+        vehicle_speed=vehicle_speed,
+        wheel_speed=wheel_speed,
+        traction_torque=recorded_torque,
+        creepage=creepage(rec_slip, vehicle_speed),
+        slip_velocity=rec_slip,
+        adhesion=mu_hat,
+    )
     return columns, dict(creepage=s, slip_velocity=slip, adhesion=mu, torque=torque)
 
 
 #: One compiled program per (n_samples, substeps): a batch of seeds; single runs are batches of one.
-_simulate_jit = jax.jit(jax.vmap(_simulate_core, in_axes=(0, None, None, None)),
-                        static_argnums=(2, 3))
+_simulate_jit = jax.jit(jax.vmap(_simulate_core, in_axes=(0, None, None, None)), static_argnums=(2, 3))
 
 
-def _run(scenario, seeds, effects, n_samples, vehicle, noise, sensors, sensor_noise,
-         period=SAMPLE_PERIOD, braking=False):
+def _run(
+    scenario,
+    seeds,
+    effects,
+    n_samples,
+    vehicle,
+    noise,
+    sensors,
+    sensor_noise,
+    period=SAMPLE_PERIOD,
+    braking=False,
+):
     scenario = get_scenario(scenario)
     model = sensor_model(sensors, scenario.torque_noise, sensor_noise * float(noise))
     n = DEFAULT_SAMPLES if n_samples is None else int(n_samples)
@@ -307,8 +355,7 @@ def substeps_for(period: float) -> int:
     return max(1, round(period / INTERNAL_STEP))
 
 
-def _truth(scenario, seed, mags, vehicle, duration, model, period=SAMPLE_PERIOD,
-           braking=False) -> dict:
+def _truth(scenario, seed, mags, vehicle, duration, model, period=SAMPLE_PERIOD, braking=False) -> dict:
     active = {}
     for name, mag in zip(fx.EFFECT_NAMES, mags):
         if mag != 0.0:
@@ -319,44 +366,73 @@ def _truth(scenario, seed, mags, vehicle, duration, model, period=SAMPLE_PERIOD,
     if "speed_dependence" in active:
         active["speed_dependence"]["v_ref_mps"] = scenario.mean_speed
     if "thermal_softening" in active:
-        active["thermal_softening"].update(time_constant_s=fx.THERMAL_TIME_CONSTANT,
-                                           power_scale_w=fx.THERMAL_POWER_SCALE)
+        active["thermal_softening"].update(
+            time_constant_s=fx.THERMAL_TIME_CONSTANT, power_scale_w=fx.THERMAL_POWER_SCALE
+        )
     return {
-        "scenario": scenario.name, "seed": int(seed),
+        "scenario": scenario.name,
+        "seed": int(seed),
         "params": dict(zip(PARAM_NAMES, map(float, scenario.params))),
-        "k_eps": vehicle.k_eps(), "effects": active,
-        "noise": {"torque_nm": model.torque_white_nm, "speed_mps": model.speed_sd(),
-                  "sensors": model.as_dict()},
+        "k_eps": vehicle.k_eps(),
+        "effects": active,
+        "noise": {
+            "torque_nm": model.torque_white_nm,
+            "speed_mps": model.speed_sd(),
+            "sensors": model.as_dict(),
+        },
         "controller": {"kp": KP, "ki": KI, "load_droop": LOAD_DROOP},
-        "sample_period_s": period, "internal_step_s": period / substeps_for(period),
-        "rate_hz": 1.0 / period, "duration_s": duration, "test": "braking" if braking else "traction",
+        "sample_period_s": period,
+        "internal_step_s": period / substeps_for(period),
+        "rate_hz": 1.0 / period,
+        "duration_s": duration,
+        "test": "braking" if braking else "traction",
         "vehicle": vehicle_sidecar(vehicle),
     }
 
 
-def simulate_many(scenario, seeds: Sequence[int], effects=(), n_samples=None, *,
-                  vehicle: Vehicle = LOCO_22E, noise: bool = True, sensors="realistic",
-                  sensor_noise: float = 1.0, sample_period: float = SAMPLE_PERIOD,
-                  braking: bool = False) -> list:
+def simulate_many(
+    scenario,
+    seeds: Sequence[int],
+    effects=(),
+    n_samples=None,
+    *,
+    vehicle: Vehicle = LOCO_22E,
+    noise: bool = True,
+    sensors="realistic",
+    sensor_noise: float = 1.0,
+    sample_period: float = SAMPLE_PERIOD,
+    braking: bool = False,
+) -> list:
     """:func:`simulate` for several seeds in one vmapped call; a list of results."""
-    scenario, mags, c, columns, latent, model = _run(scenario, seeds, effects, n_samples, vehicle,
-                                                     noise, sensors, sensor_noise, sample_period,
-                                                     braking)
+    scenario, mags, c, columns, latent, model = _run(
+        scenario, seeds, effects, n_samples, vehicle, noise, sensors, sensor_noise, sample_period, braking
+    )
     results = []
     for i, seed in enumerate(seeds):
         result = SimulationResult(
-            columns={k: np.asarray(v[i]) for k, v in columns.items()}, vehicle=vehicle,
-            truth=_truth(scenario, seed, mags, vehicle, float(c["duration"]), model,
-                         sample_period, braking),
-            latent={k: np.asarray(v[i]) for k, v in latent.items()})
+            columns={k: np.asarray(v[i]) for k, v in columns.items()},
+            vehicle=vehicle,
+            truth=_truth(scenario, seed, mags, vehicle, float(c["duration"]), model, sample_period, braking),
+            latent={k: np.asarray(v[i]) for k, v in latent.items()},
+        )
         result.truth["envelope"] = envelope(result)
         results.append(result)
     return results
 
 
-def simulate(scenario, seed: int = 0, effects=(), n_samples=None, *, vehicle: Vehicle = LOCO_22E,
-             noise: bool = True, sensors="realistic", sensor_noise: float = 1.0,
-             sample_period: float = SAMPLE_PERIOD, braking: bool = False) -> SimulationResult:
+def simulate(
+    scenario,
+    seed: int = 0,
+    effects=(),
+    n_samples=None,
+    *,
+    vehicle: Vehicle = LOCO_22E,
+    noise: bool = True,
+    sensors="realistic",
+    sensor_noise: float = 1.0,
+    sample_period: float = SAMPLE_PERIOD,
+    braking: bool = False,
+) -> SimulationResult:
     """Simulate one traction test recording.
 
     Args:
@@ -377,21 +453,35 @@ def simulate(scenario, seed: int = 0, effects=(), n_samples=None, *, vehicle: Ve
     Raises:
         InputError: unknown scenario or effect, bad magnitude.
     """
-    return simulate_many(scenario, [seed], effects, n_samples, vehicle=vehicle, noise=noise,
-                         sensors=sensors, sensor_noise=sensor_noise, sample_period=sample_period,
-                         braking=braking)[0]
+    return simulate_many(
+        scenario,
+        [seed],
+        effects,
+        n_samples,
+        vehicle=vehicle,
+        noise=noise,
+        sensors=sensors,
+        sensor_noise=sensor_noise,
+        sample_period=sample_period,
+        braking=braking,
+    )[0]
 
 
 def _dataset(columns, k_eps) -> PolachDataset:
-    return PolachDataset(creep=columns["creepage"], slip=columns["slip_velocity"],
-                         adhesion=columns["adhesion"], vehicle_speed=columns["vehicle_speed"],
-                         k_eps=k_eps)
+    return PolachDataset(
+        creep=columns["creepage"],
+        slip=columns["slip_velocity"],
+        adhesion=columns["adhesion"],
+        vehicle_speed=columns["vehicle_speed"],
+        k_eps=k_eps,
+    )
 
 
 def result_dataset(result: SimulationResult) -> PolachDataset:
     """The fitting dataset of a simulated recording (recorded creep, slip, speed, observer output)."""
-    return _dataset({k: jnp.asarray(v) for k, v in result.columns.items()},
-                    jnp.asarray(result.truth["k_eps"]))
+    return _dataset(
+        {k: jnp.asarray(v) for k, v in result.columns.items()}, jnp.asarray(result.truth["k_eps"])
+    )
 
 
 def stack_datasets(results: Sequence[SimulationResult]) -> PolachDataset:
@@ -399,21 +489,35 @@ def stack_datasets(results: Sequence[SimulationResult]) -> PolachDataset:
     return jax.tree_util.tree_map(lambda *a: jnp.stack(a), *map(result_dataset, results))
 
 
-def simulate_dataset(scenario, seed: int = 0, effects=(), n_samples=None, *,
-                     vehicle: Vehicle = LOCO_22E, sensors="realistic",
-                     sensor_noise: float = 1.0) -> PolachDataset:
+def simulate_dataset(
+    scenario,
+    seed: int = 0,
+    effects=(),
+    n_samples=None,
+    *,
+    vehicle: Vehicle = LOCO_22E,
+    sensors="realistic",
+    sensor_noise: float = 1.0,
+) -> PolachDataset:
     """The fitting dataset (recorded creep, slip, speed and observer output) of one recording."""
-    data = simulate_batch(scenario, [seed], effects, n_samples, vehicle=vehicle, sensors=sensors,
-                          sensor_noise=sensor_noise)
+    data = simulate_batch(
+        scenario, [seed], effects, n_samples, vehicle=vehicle, sensors=sensors, sensor_noise=sensor_noise
+    )
     return jax.tree_util.tree_map(lambda a: a[0], data)
 
 
-def simulate_batch(scenario, seeds: Sequence[int], effects=(), n_samples=None, *,
-                   vehicle: Vehicle = LOCO_22E, sensors="realistic",
-                   sensor_noise: float = 1.0) -> PolachDataset:
+def simulate_batch(
+    scenario,
+    seeds: Sequence[int],
+    effects=(),
+    n_samples=None,
+    *,
+    vehicle: Vehicle = LOCO_22E,
+    sensors="realistic",
+    sensor_noise: float = 1.0,
+) -> PolachDataset:
     """Datasets for many seeds in one vmapped, jitted call: every field gains a leading seed axis
     (``k_eps`` too, shape (n_seeds,)), so the result vmaps straight into a fit. Creep and slip are
     the raw differences of the recorded speeds (:func:`.dataset.to_dataset` smooths them)."""
-    _, _, c, columns, _, _ = _run(scenario, seeds, effects, n_samples, vehicle, True, sensors,
-                                  sensor_noise)
+    _, _, c, columns, _, _ = _run(scenario, seeds, effects, n_samples, vehicle, True, sensors, sensor_noise)
     return _dataset(columns, jnp.full((len(seeds),), c["k_eps"]))

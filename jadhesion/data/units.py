@@ -45,15 +45,19 @@ def parse_column_spec(text: str, where: str) -> ColumnSpec:
     """Parse ``CANONICAL=SOURCE[UNIT]``; ``where`` (e.g. ``--column``) prefixes the error line."""
     match = _SPEC.match(text)
     if not match or not match.group(2):
-        raise RecordingError(f"{where} {text!r}: expected CANONICAL=SOURCE[UNIT], e.g. "
-                             f"vehicle_speed=v_Lok_kmh[km/h]")
+        raise RecordingError(
+            f"{where} {text!r}: expected CANONICAL=SOURCE[UNIT], e.g. vehicle_speed=v_Lok_kmh[km/h]"
+        )
     canonical, source, unit = match.group(1), match.group(2), match.group(3)
     if canonical not in UNITS:
-        raise RecordingError(f"{where} {text!r}: unknown canonical column {canonical!r}; expected "
-                             f"one of {', '.join(UNITS)}")
+        raise RecordingError(
+            f"{where} {text!r}: unknown canonical column {canonical!r}; expected one of {', '.join(UNITS)}"
+        )
     if unit is not None and unit.strip() not in UNITS[canonical]:
-        raise RecordingError(f"{where} {text!r}: unit {unit!r} is not a unit of {canonical}; "
-                             f"expected one of {', '.join(UNITS[canonical])}")
+        raise RecordingError(
+            f"{where} {text!r}: unit {unit!r} is not a unit of {canonical}; "
+            f"expected one of {', '.join(UNITS[canonical])}"
+        )
     return ColumnSpec(canonical, source, None if unit is None else unit.strip())
 
 

@@ -14,7 +14,9 @@ RAW_COLUMNS = ("time", "vehicle_speed", "wheel_speed", "traction_torque")
 DATASET_COLUMNS = ("vehicle_speed", "adhesion")
 CREEP_COLUMNS = ("creepage", "slip_velocity", "wheel_speed")
 #: Columns that are always validated when present; any other column is carried along unchecked.
-KNOWN_COLUMNS = frozenset(RAW_COLUMNS + DATASET_COLUMNS + CREEP_COLUMNS)#: Largest plausible |speed| [m/s] (252 km/h, above any locomotive traction test). A larger value
+KNOWN_COLUMNS = frozenset(
+    RAW_COLUMNS + DATASET_COLUMNS + CREEP_COLUMNS
+)  #: Largest plausible |speed| [m/s] (252 km/h, above any locomotive traction test). A larger value
 #: almost always means the column is in km/h.
 MAX_SPEED = 70.0
 #: Largest plausible |adhesion coefficient| [-] (a larger value is a force or a percentage).
@@ -23,6 +25,7 @@ MAX_ADHESION = 1.5
 MIN_TORQUE_MU = 1e-3
 #: Torque implying |mu| above this somewhere is implausible (even with the wheelset's inertia).
 MAX_TORQUE_MU = 3.0
+
 
 def _fail(name: str, what: str) -> RecordingError:
     return RecordingError(f"{name}: {what}")
@@ -54,9 +57,12 @@ def _check_layout(header, name):
         miss_ds.append("creepage' or 'slip_velocity")
     missing = miss_ds if ("adhesion" in present or len(miss_ds) < len(miss_raw)) else miss_raw
     listed = ", ".join(f"'{c}'" for c in missing)
-    raise _fail(name, f"missing column{'s' if len(missing) > 1 else ''} {listed}: a recording needs "
-                      f"{', '.join(RAW_COLUMNS)} (raw signals) or vehicle_speed, adhesion and creepage "
-                      f"or slip_velocity (fitting dataset); present: {', '.join(header)}")
+    raise _fail(
+        name,
+        f"missing column{'s' if len(missing) > 1 else ''} {listed}: a recording needs "
+        f"{', '.join(RAW_COLUMNS)} (raw signals) or vehicle_speed, adhesion and creepage "
+        f"or slip_velocity (fitting dataset); present: {', '.join(header)}",
+    )
 
 
 def _convert_column(cells: np.ndarray, col: str, lines, name: str, strict: bool):
@@ -77,8 +83,11 @@ def _convert_column(cells: np.ndarray, col: str, lines, name: str, strict: bool)
         bad = np.flatnonzero(~np.isfinite(values))
         if bad.size:
             i = int(bad[0])
-            raise _fail(name, f"column {col!r}, row {i + 1} (line {lines[i]}): {_show(cells[i].strip())}"
-                              f" is not a finite number (NaN and inf are not allowed)")
+            raise _fail(
+                name,
+                f"column {col!r}, row {i + 1} (line {lines[i]}): {_show(cells[i].strip())}"
+                f" is not a finite number (NaN and inf are not allowed)",
+            )
     return values
 
 
@@ -93,17 +102,23 @@ def _check_values(cols, vehicle: Vehicle, lines, name: str, max_speed: float, sh
         if bad.size:
             i = int(bad[0]) + 1
             t = cols["time"]
-            raise _fail(name, f"{_where('time', i, lines)}: time {t[i]:.10g} s is not after the "
-                              f"previous row's {t[i - 1]:.10g} s (time must strictly increase)")
+            raise _fail(
+                name,
+                f"{_where('time', i, lines)}: time {t[i]:.10g} s is not after the "
+                f"previous row's {t[i - 1]:.10g} s (time must strictly increase)",
+            )
     for col in ("vehicle_speed", "wheel_speed"):
         if col not in cols:
             continue
         bad = np.flatnonzero(np.abs(cols[col]) > max_speed)
         if bad.size:
             i = int(bad[0])
-            raise _fail(name, f"{_where(col, i, lines)}: {cols[col][i]:.6g} m/s exceeds the plausible "
-                              f"{max_speed:g} m/s; looks like km/h? map it with --column "
-                              f"{col}={shown.get(col, col)}[km/h] (or the sidecar's \"columns\")")
+            raise _fail(
+                name,
+                f"{_where(col, i, lines)}: {cols[col][i]:.6g} m/s exceeds the plausible "
+                f"{max_speed:g} m/s; looks like km/h? map it with --column "
+                f'{col}={shown.get(col, col)}[km/h] (or the sidecar\'s "columns")',
+            )
     if "vehicle_speed" in cols and "wheel_speed" in cols:
         v, vw = cols["vehicle_speed"], cols["wheel_speed"]
         moving = np.abs(v) > 0.5
@@ -113,32 +128,43 @@ def _check_values(cols, vehicle: Vehicle, lines, name: str, max_speed: float, sh
                 slow = "vehicle_speed" if ratio > 1 else "wheel_speed"
                 fast = "wheel_speed" if ratio > 1 else "vehicle_speed"
                 i = int(np.flatnonzero(moving)[0])
-                raise _fail(name, f"{_where(fast, i, lines)}: median wheel/vehicle speed ratio is "
-                                  f"{ratio:.3g} (creepage {ratio - 1:.3g}); {fast} looks like km/h "
-                                  f"while {slow} is m/s? map it with --column "
-                                  f"{fast}={shown.get(fast, fast)}[km/h]")
+                raise _fail(
+                    name,
+                    f"{_where(fast, i, lines)}: median wheel/vehicle speed ratio is "
+                    f"{ratio:.3g} (creepage {ratio - 1:.3g}); {fast} looks like km/h "
+                    f"while {slow} is m/s? map it with --column "
+                    f"{fast}={shown.get(fast, fast)}[km/h]",
+                )
     if "traction_torque" in cols:
         torque = np.abs(cols["traction_torque"])
         scale = vehicle.axle_weight_n * vehicle.wheel_radius_m  # N·m for mu = 1
         peak = float(np.max(torque))
         if 0.0 < peak < MIN_TORQUE_MU * scale:
             i = int(np.argmax(torque))
-            raise _fail(name, f"{_where('traction_torque', i, lines)}: the largest torque {peak:.4g} "
-                              f"implies mu = {peak / scale:.2g}; expected N·m at the wheelset — looks "
-                              f"like kN·m? map it with --column "
-                              f"traction_torque={shown.get('traction_torque', 'traction_torque')}[kN*m]")
+            raise _fail(
+                name,
+                f"{_where('traction_torque', i, lines)}: the largest torque {peak:.4g} "
+                f"implies mu = {peak / scale:.2g}; expected N·m at the wheelset — looks "
+                f"like kN·m? map it with --column "
+                f"traction_torque={shown.get('traction_torque', 'traction_torque')}[kN*m]",
+            )
         bad = np.flatnonzero(torque > MAX_TORQUE_MU * scale)
         if bad.size:
             i = int(bad[0])
-            raise _fail(name, f"{_where('traction_torque', i, lines)}: torque "
-                              f"{cols['traction_torque'][i]:.4g} N·m implies mu = "
-                              f"{torque[i] / scale:.3g}, implausible for this axle "
-                              f"({vehicle.axle_load_kg:g} kg, r = {vehicle.wheel_radius_m:g} m)")
+            raise _fail(
+                name,
+                f"{_where('traction_torque', i, lines)}: torque "
+                f"{cols['traction_torque'][i]:.4g} N·m implies mu = "
+                f"{torque[i] / scale:.3g}, implausible for this axle "
+                f"({vehicle.axle_load_kg:g} kg, r = {vehicle.wheel_radius_m:g} m)",
+            )
     if "adhesion" in cols:
         bad = np.flatnonzero(np.abs(cols["adhesion"]) > MAX_ADHESION)
         if bad.size:
             i = int(bad[0])
-            raise _fail(name, f"{_where('adhesion', i, lines)}: adhesion coefficient "
-                              f"{cols['adhesion'][i]:.4g} is implausible (|mu| <= {MAX_ADHESION:g}); "
-                              f"a force or a percentage?")
-
+            raise _fail(
+                name,
+                f"{_where('adhesion', i, lines)}: adhesion coefficient "
+                f"{cols['adhesion'][i]:.4g} is implausible (|mu| <= {MAX_ADHESION:g}); "
+                f"a force or a percentage?",
+            )

@@ -73,13 +73,20 @@ class Vehicle:
         if self.contact_semi_axes_m is not None:
             a, b = self.contact_semi_axes_m
             return Contact(jnp.asarray(float(a)), jnp.asarray(float(b)))
-        return hertz_semi_axes(self.wheel_radius_m, self.rail_head_radius_m, self.wheel_load,
-                               self.young_modulus_pa, self.poisson_ratio, self.wheel_profile_radius_m)
+        return hertz_semi_axes(
+            self.wheel_radius_m,
+            self.rail_head_radius_m,
+            self.wheel_load,
+            self.young_modulus_pa,
+            self.poisson_ratio,
+            self.wheel_profile_radius_m,
+        )
 
     def k_eps(self) -> float:
         """Polach gradient constant ``k_eps`` [-] (``eps = k_eps · s / mu``)."""
-        return float(gradient_constant(self.contact(), self.wheel_load, self.shear_modulus,
-                                       self.poisson_ratio))
+        return float(
+            gradient_constant(self.contact(), self.wheel_load, self.shear_modulus, self.poisson_ratio)
+        )
 
     def replace(self, **changes) -> "Vehicle":
         """A copy with fields changed."""
@@ -88,9 +95,16 @@ class Vehicle:
 
 #: Sidecar keys accepted in a recording's JSON (DESIGN §3), with their expected types.
 SIDECAR_KEYS = {
-    "axle_load_kg": float, "wheel_radius_m": float, "wheelset_inertia_kgm2": float,
-    "locomotive_mass_kg": float, "observer_time_constant_s": float, "rail_head_radius_m": float,
-    "name": str, "wheel_load_n": float, "contact_semi_axes_m": list, "shear_modulus_pa": float,
+    "axle_load_kg": float,
+    "wheel_radius_m": float,
+    "wheelset_inertia_kgm2": float,
+    "locomotive_mass_kg": float,
+    "observer_time_constant_s": float,
+    "rail_head_radius_m": float,
+    "name": str,
+    "wheel_load_n": float,
+    "contact_semi_axes_m": list,
+    "shear_modulus_pa": float,
     "poisson_ratio": float,
 }
 

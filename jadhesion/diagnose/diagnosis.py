@@ -79,14 +79,16 @@ def _merger(sets):
             for v in table.values():
                 v[i] = v[best]
         return {k: v[: len(sets)] for k, v in table.items()}
+
     return merge
 
 
 def _fit_round(sig, n, p0, sets):
     """Fit one round (:func:`_round_rows`) on the padded signals ``sig`` (``n`` valid samples)."""
     starts, idx, actives = _round_rows(p0, sets)
-    table = {k: np.array(v) for k, v in
-             fitting.fit_candidates(starts, idx, actives, sig, n)._asdict().items()}
+    table = {
+        k: np.array(v) for k, v in fitting.fit_candidates(starts, idx, actives, sig, n)._asdict().items()
+    }
     table["residual"] = table["residual"][:, :n]
     return _merger(sets)(table), actives[: len(sets)]
 
@@ -98,8 +100,7 @@ def _status(table: dict, i: int) -> str:
 
 def _n_extra(names) -> int:
     """Extra parameters of an effect set for BIC (thermal softening's grid-picked lag counts)."""
-    return sum(len(e.params) + (e.name == "thermal_softening") for e in ext.EFFECTS
-               if e.name in names)
+    return sum(len(e.params) + (e.name == "thermal_softening") for e in ext.EFFECTS if e.name in names)
 
 
 def _generic(sig, residual, mu_pred) -> dict:
@@ -115,14 +116,17 @@ def _generic(sig, residual, mu_pred) -> dict:
         held[w == 0] = (residual - features.stlsq_predict(phi, fit))[w == 0]
     fit = features.stlsq(phi, residual, weights[0])
     xi = fit[0]
-    return {"terms": {n: float(c) for n, c in zip(["const"] + names, xi) if c != 0.0},
-            "mae": float(np.mean(np.abs(residual - features.stlsq_predict(phi, fit)))),
-            "heldout_mae": float(np.mean(np.abs(held))),
-            "gain": float(1.0 - np.mean(np.abs(held)) / np.mean(np.abs(residual)))}
+    return {
+        "terms": {n: float(c) for n, c in zip(["const"] + names, xi) if c != 0.0},
+        "mae": float(np.mean(np.abs(residual - features.stlsq_predict(phi, fit)))),
+        "heldout_mae": float(np.mean(np.abs(held))),
+        "gain": float(1.0 - np.mean(np.abs(held)) / np.mean(np.abs(residual))),
+    }
 
 
-def diagnose(columns: dict, vehicle: Vehicle, name: str = "recording",
-             n_replicas: int = null.N_REPLICAS, seed: int = 0) -> dict:
+def diagnose(
+    columns: dict, vehicle: Vehicle, name: str = "recording", n_replicas: int = null.N_REPLICAS, seed: int = 0
+) -> dict:
     """Diagnose a recording's raw columns (time, vehicle_speed, wheel_speed, traction_torque);
     ``n_replicas`` clean re-synthesised replicas (seeded by ``seed``) form its null
     (:mod:`.null`; 0 skips it and every p-value is null)."""
@@ -150,21 +154,36 @@ def diagnose(columns: dict, vehicle: Vehicle, name: str = "recording",
     names1 = ["none"] + list(ext.NAMES)
     p_values, noise = [None] * len(sets1), None
     if n_replicas:
-        null_gain, noise = null.null_gains(columns, vehicle, p_base, tau_th, _round_rows(p0, sets1),
-                                           _merger(sets1), n_valid, n_replicas, seed)
+        null_gain, noise = null.null_gains(
+            columns,
+            vehicle,
+            p_base,
+            tau_th,
+            _round_rows(p0, sets1),
+            _merger(sets1),
+            n_valid,
+            n_replicas,
+            seed,
+        )
         ok = np.array([_status(t1, i) == "converged" for i in range(len(sets1))])
-        p_values = [None] + list(null.max_t_pvalues(np.where(ok[1:], gain1[1:], -np.inf),
-                                                    null_gain))
+        p_values = [None] + list(null.max_t_pvalues(np.where(ok[1:], gain1[1:], -np.inf), null_gain))
     candidates = []
     for i in np.argsort(t1["heldout_mae"][1:]) + 1:
         signal = features.REVEALING_SIGNAL[names1[i]]
-        candidates.append({
-            "name": names1[i], "params": _row(t1["params"][i], act1[i], sig, tau_th),
-            "mae": float(t1["mae"][i]), "heldout_mae": float(t1["heldout_mae"][i]),
-            "delta_bic": float(dbic1[i]), "gain": float(gain1[i]),
-            "status": _status(t1, i), "steps": int(t1["steps"][i]),
-            "p_value": None if p_values[i] is None else float(p_values[i]),
-            "evidence": {"signal": signal, "eta2_base_residual": sigs[signal]}})
+        candidates.append(
+            {
+                "name": names1[i],
+                "params": _row(t1["params"][i], act1[i], sig, tau_th),
+                "mae": float(t1["mae"][i]),
+                "heldout_mae": float(t1["heldout_mae"][i]),
+                "delta_bic": float(dbic1[i]),
+                "gain": float(gain1[i]),
+                "status": _status(t1, i),
+                "steps": int(t1["steps"][i]),
+                "p_value": None if p_values[i] is None else float(p_values[i]),
+                "evidence": {"signal": signal, "eta2_base_residual": sigs[signal]},
+            }
+        )
     leader, _ = select.effects_from(candidates, None, select.ROUND2_MIN)
     second_round, table, acts, final = None, t1, act1, 0
     if leader:
@@ -174,20 +193,29 @@ def diagnose(columns: dict, vehicle: Vehicle, name: str = "recording",
         sets2 = [(first,)] + [(first, n) for n in others]
         t2, act2 = _fit_round(padded, n_valid, t1["params"][i1], sets2)
         n_eff2 = select.effective_samples(t1["residual"][i1])
-        gain2, dbic2 = select.scores(t2["heldout_mae"], t2["sse"],
-                                     [_n_extra(s) for s in sets2], 0, n_eff2)
-        second_round = {"first": first, "candidates": [
-            {"name": n, "gain": float(gain2[j + 1]), "delta_bic": float(dbic2[j + 1]),
-             "heldout_mae": float(t2["heldout_mae"][j + 1]), "status": _status(t2, j + 1)}
-            for j, n in enumerate(others)]}
+        gain2, dbic2 = select.scores(t2["heldout_mae"], t2["sse"], [_n_extra(s) for s in sets2], 0, n_eff2)
+        second_round = {
+            "first": first,
+            "candidates": [
+                {
+                    "name": n,
+                    "gain": float(gain2[j + 1]),
+                    "delta_bic": float(dbic2[j + 1]),
+                    "heldout_mae": float(t2["heldout_mae"][j + 1]),
+                    "status": _status(t2, j + 1),
+                }
+                for j, n in enumerate(others)
+            ],
+        }
     effects, close = select.effects_from(candidates, second_round)
     if len(effects) == 2:
         table, acts, final = t2, act2, 1 + others.index(effects[1])
     elif effects:
         final = names1.index(effects[0])
     ext_params = _row(table["params"][final], acts[final], sig, tau_th)
-    seen = sensitivity.detectable_magnitudes(table["params"][final], acts[final], u_change, padded,
-                                             n_valid, effects)
+    seen = sensitivity.detectable_magnitudes(
+        table["params"][final], acts[final], u_change, padded, n_valid, effects
+    )
     t_ext, p_ext = (np.asarray(x) for x in _predict(table["params"][final], acts[final], sig))
     generic = _generic(sig, t_ext - p_ext, p_ext)
     generic["used"] = generic["gain"] >= select.GENERIC_THRESHOLD
@@ -196,26 +224,43 @@ def diagnose(columns: dict, vehicle: Vehicle, name: str = "recording",
         "verdict": effects[0] if effects else "none",
         "effects": effects,
         "candidates": candidates,
-        "indistinguishable": [{"name": c, "experiment": select.experiment(effects[0], c)}
-                              for c in close],
+        "indistinguishable": [{"name": c, "experiment": select.experiment(effects[0], c)} for c in close],
         "second_round": second_round,
-        "base": {"params": _row(p_base, none, sig, tau_th), "mae": float(t1["mae"][0]),
-                 "heldout_mae": float(t1["heldout_mae"][0]), "status": base_status.label,
-                 "cv_status": _status(t1, 0)},
-        "extended": {"effects": effects, "params": ext_params, "mae": float(table["mae"][final]),
-                     "heldout_mae": float(table["heldout_mae"][final]),
-                     "status": _status(table, final)},
+        "base": {
+            "params": _row(p_base, none, sig, tau_th),
+            "mae": float(t1["mae"][0]),
+            "heldout_mae": float(t1["heldout_mae"][0]),
+            "status": base_status.label,
+            "cv_status": _status(t1, 0),
+        },
+        "extended": {
+            "effects": effects,
+            "params": ext_params,
+            "mae": float(table["mae"][final]),
+            "heldout_mae": float(table["heldout_mae"][final]),
+            "status": _status(table, final),
+        },
         "generic": generic,
         "sensitivity": seen,
         "residual_signatures": sigs,
         "strongest_signal": strongest,
         "n_eff": n_eff,
-        "null": {"replicas": n_replicas, "alpha": null.ALPHA, "noise": noise,
-                 "method": "parametric bootstrap on this recording, max-T p-values"},
+        "null": {
+            "replicas": n_replicas,
+            "alpha": null.ALPHA,
+            "noise": noise,
+            "method": "parametric bootstrap on this recording, max-T p-values",
+        },
     }
     result["explanation"] = explain(result, vehicle)
     result["_series"] = {
-        "creep": lib["creep"], "target": target, "base_pred": pred, "extended_pred": p_ext,
-        "base_residual": r_base, "extended_residual": t_ext - p_ext, "signals": lib,
-        "revealing_signal": (features.REVEALING_SIGNAL[effects[0]] if effects else strongest)}
+        "creep": lib["creep"],
+        "target": target,
+        "base_pred": pred,
+        "extended_pred": p_ext,
+        "base_residual": r_base,
+        "extended_residual": t_ext - p_ext,
+        "signals": lib,
+        "revealing_signal": (features.REVEALING_SIGNAL[effects[0]] if effects else strongest),
+    }
     return result

@@ -88,8 +88,10 @@ EXTRA_NAMES = tuple(p for e in EFFECTS for p in e.params)
 N_EXTRA = len(EXTRA_NAMES)
 N_PARAMS = len(PARAM_NAMES) + N_EXTRA
 NEUTRAL = np.array([x for e in EFFECTS for x in e.neutral])
-BOUNDS = (np.concatenate([POLACH_BOUNDS[0], np.array([x for e in EFFECTS for x in e.lower])]),
-          np.concatenate([POLACH_BOUNDS[1], np.array([x for e in EFFECTS for x in e.upper])]))
+BOUNDS = (
+    np.concatenate([POLACH_BOUNDS[0], np.array([x for e in EFFECTS for x in e.lower])]),
+    np.concatenate([POLACH_BOUNDS[1], np.array([x for e in EFFECTS for x in e.upper])]),
+)
 
 
 def active_mask(names) -> jax.Array:
@@ -116,13 +118,16 @@ def predict(params, active, sig: Signals):
     creep = creepage(slip, sig.speed)
     t_change = sig.time[0] + e["u_change"] * sig.duration
     step = jax.nn.sigmoid((sig.time - t_change) / (STEP_WIDTH * sig.duration))
-    scale = ((1.0 - e["drop"] * step) * (1.0 - e["slope"] * (sig.speed - sig.speed_ref)
-                                           / sig.speed_ref)
-             / jnp.maximum(1.0 + e["softening"] * sig.heat / POWER_REF, 0.05))
+    scale = (
+        (1.0 - e["drop"] * step)
+        * (1.0 - e["slope"] * (sig.speed - sig.speed_ref) / sig.speed_ref)
+        / jnp.maximum(1.0 + e["softening"] * sig.heat / POWER_REF, 0.05)
+    )
     load = jnp.maximum(1.0 - e["load_m"] * sig.traction_ratio, 0.1)
     ones = jnp.ones_like(creep)
-    thetas = jnp.stack([theta[0] * ones, theta[1] * ones, theta[2] * scale, theta[3] * ones,
-                        theta[4] * ones], axis=-1)
+    thetas = jnp.stack(
+        [theta[0] * ones, theta[1] * ones, theta[2] * scale, theta[3] * ones, theta[4] * ones], axis=-1
+    )
     mu = polach_adhesion(thetas, creep, slip, sig.k_eps * load ** (-1.0 / 3.0))
     return target, gain_r * load * mu + e["offset"]
 

@@ -28,10 +28,16 @@ def library(sig: Signals, mu_pred) -> dict:
     adhesion (the base prediction) [-]."""
     v = np.asarray(sig.speed)
     slip = np.asarray(sig.wheel_speed) - v
-    return {"time": np.asarray(sig.time), "creep": slip / np.maximum(np.abs(v), 0.01), "speed": v,
-            "accel": np.asarray(sig.accel), "torque_rate": np.asarray(sig.torque_rate),
-            "heat": np.asarray(sig.heat), "traction_ratio": np.asarray(sig.traction_ratio),
-            "adhesion": np.asarray(mu_pred)}
+    return {
+        "time": np.asarray(sig.time),
+        "creep": slip / np.maximum(np.abs(v), 0.01),
+        "speed": v,
+        "accel": np.asarray(sig.accel),
+        "torque_rate": np.asarray(sig.torque_rate),
+        "heat": np.asarray(sig.heat),
+        "traction_ratio": np.asarray(sig.traction_ratio),
+        "adhesion": np.asarray(mu_pred),
+    }
 
 
 def explained_fraction(residual, x, bins: int = 10) -> float:
@@ -73,14 +79,17 @@ def starting_values(sig: Signals, residual, mu_pred) -> tuple:
         if gain > best[0]:
             best = (gain, c, u)
     _, drop, u_change = best
-    gains = [_ls_gain(r, -mu * np.asarray(lowpass_foh(sig.time, sig.power, tau)) / POWER_REF)[1]
-             for tau in THERMAL_LAGS]
+    gains = [
+        _ls_gain(r, -mu * np.asarray(lowpass_foh(sig.time, sig.power, tau)) / POWER_REF)[1]
+        for tau in THERMAL_LAGS
+    ]
     tau_th = THERMAL_LAGS[int(np.argmax(gains))]
     return float(np.clip(drop, -1.0, 0.9)), float(u_change), float(tau_th)
 
 
-def stlsq(features, residual, weights, threshold: float = STLSQ_THRESHOLD,
-          iterations: int = STLSQ_ITERATIONS):
+def stlsq(
+    features, residual, weights, threshold: float = STLSQ_THRESHOLD, iterations: int = STLSQ_ITERATIONS
+):
     """Sparse ``residual ≈ Φ ξ`` by sequentially thresholded least squares (SINDy, Brunton 2016).
 
     Columns of ``features`` (n, K) are standardised; coefficients with ``|ξ_k| < threshold·std(r)``

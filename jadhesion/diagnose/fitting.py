@@ -110,13 +110,15 @@ def pad_signals(sig: Signals) -> Signals:
     n = sig.time.shape[0]
     extra = padded_length(n) - n
     return jax.tree_util.tree_map(
-        lambda x: np.pad(np.asarray(x), (0, extra), mode="edge") if np.ndim(x) == 1 else x, sig)
+        lambda x: np.pad(np.asarray(x), (0, extra), mode="edge") if np.ndim(x) == 1 else x, sig
+    )
 
 
 def free_indices(names, width: int = WIDTH):
     """Indices of the Polach five and the extras of ``names`` in the padded superset vector."""
-    idx = list(range(5)) + [5 + ext.EXTRA_NAMES.index(p) for e in ext.EFFECTS if e.name in names
-                            for p in e.params]
+    idx = list(range(5)) + [
+        5 + ext.EXTRA_NAMES.index(p) for e in ext.EFFECTS if e.name in names for p in e.params
+    ]
     if len(idx) > width:
         raise ValueError(f"{names} need {len(idx)} free parameters, more than {width}")
     return idx + [PAD] * (width - len(idx))
@@ -130,17 +132,29 @@ def _free_residual(z, args):
 def status_code(result, max_steps: int):
     """int32 :class:`~jadhesion.status.Status` of a :class:`~jadhesion.identify.lm.LMResult`."""
     finite = jnp.isfinite(result.sse) & jnp.all(jnp.isfinite(result.params))
-    return jnp.where(~finite, int(Status.NONFINITE), jnp.where(
-        result.success, int(Status.CONVERGED),
-        jnp.where(result.steps >= max_steps, int(Status.MAX_STEPS), int(Status.STALLED))))
+    return jnp.where(
+        ~finite,
+        int(Status.NONFINITE),
+        jnp.where(
+            result.success,
+            int(Status.CONVERGED),
+            jnp.where(result.steps >= max_steps, int(Status.MAX_STEPS), int(Status.STALLED)),
+        ),
+    )
 
 
 def _solve(full, idx, active, weights, sig, max_steps):
     """Projected LM over the free entries ``idx`` of ``full`` (P + 1,); returns the updated
     ``full``, the fit's status code and its steps."""
     lo, hi = jnp.asarray(_LO)[idx], jnp.asarray(_HI)[idx]
-    result = box_lm(_free_residual, jnp.clip(full[idx], lo, hi), (full, idx, active, weights, sig),
-                    (lo, hi), OPTIONS, max_steps=max_steps)
+    result = box_lm(
+        _free_residual,
+        jnp.clip(full[idx], lo, hi),
+        (full, idx, active, weights, sig),
+        (lo, hi),
+        OPTIONS,
+        max_steps=max_steps,
+    )
     return full.at[idx].set(result.params), status_code(result, max_steps), result.steps
 
 
@@ -154,9 +168,11 @@ def screen_starts(sig: Signals, n_valid) -> jax.Array:
     slip = sig.wheel_speed - sig.speed
     creep = creepage(slip, sig.speed)
     valid = jnp.arange(sig.time.shape[0]) < n_valid
-    sse = jax.vmap(lambda th: jnp.sum(jnp.where(
-        valid, (sig.adhesion - polach_adhesion(th, creep, slip, sig.k_eps)) ** 2, 0.0)))(
-        jnp.asarray(BASE_STARTS))
+    sse = jax.vmap(
+        lambda th: jnp.sum(
+            jnp.where(valid, (sig.adhesion - polach_adhesion(th, creep, slip, sig.k_eps)) ** 2, 0.0)
+        )
+    )(jnp.asarray(BASE_STARTS))
     return jnp.where(jnp.isfinite(sse), sse, jnp.inf)
 
 
@@ -176,10 +192,12 @@ def fit_candidates(p0, idx, actives, sig: Signals, n_valid) -> FitTable:
     each CV fold warm-started from that fit; evaluate in-sample and held-out errors."""
     n = sig.time.shape[0]
     weights = fold_weights(n_valid, N_FOLDS, n)
-    full, status, steps = jax.vmap(
-        lambda p, i, a: _solve(_pad(p), i, a, weights[0], sig, MAX_STEPS))(p0, idx, actives)
-    folds, fold_status, _ = jax.vmap(lambda p, i, a: jax.vmap(
-        lambda w: _solve(p, i, a, w, sig, MAX_STEPS_FOLD))(weights[1:]))(full, idx, actives)
+    full, status, steps = jax.vmap(lambda p, i, a: _solve(_pad(p), i, a, weights[0], sig, MAX_STEPS))(
+        p0, idx, actives
+    )
+    folds, fold_status, _ = jax.vmap(
+        lambda p, i, a: jax.vmap(lambda w: _solve(p, i, a, w, sig, MAX_STEPS_FOLD))(weights[1:])
+    )(full, idx, actives)
 
     def resid(p, a):
         target, pred = ext.predict(p[:PAD], a, sig)
@@ -189,9 +207,16 @@ def fit_candidates(p0, idx, actives, sig: Signals, n_valid) -> FitTable:
     r_folds = jax.vmap(lambda ps, a: jax.vmap(lambda p: resid(p, a))(ps))(folds, actives)
     heldout = jnp.sum(jnp.abs(r_folds) * (1.0 - weights[None, 1:]), axis=(1, 2)) / n_valid
     sse = jnp.sum(r_full**2, axis=1)
-    return FitTable(full[:, :PAD], jnp.sum(jnp.abs(r_full), axis=1) / n_valid,
-                    jnp.where(jnp.isfinite(sse), sse, jnp.inf), heldout, r_full, status,
-                    jnp.max(fold_status, axis=1), steps)
+    return FitTable(
+        full[:, :PAD],
+        jnp.sum(jnp.abs(r_full), axis=1) / n_valid,
+        jnp.where(jnp.isfinite(sse), sse, jnp.inf),
+        heldout,
+        r_full,
+        status,
+        jnp.max(fold_status, axis=1),
+        steps,
+    )
 
 
 def fit_base(sig: Signals, n_valid=None) -> tuple:

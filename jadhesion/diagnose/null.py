@@ -53,11 +53,14 @@ GRID_SHARE = 0.9
 #: Tolerance [steps] of "on the grid" (CSV files keep a finite number of digits).
 GRID_TOL = 1e-3
 
+
 @jax.jit
 def _fit_batch(starts, idx, actives, batch, n_valid):
     """:func:`fitting.fit_candidates` of every replica in ``batch``, one after another."""
-    return jax.lax.map(lambda s: fitting.fit_candidates(starts, idx, actives, s, n_valid)._replace(
-        residual=jnp.zeros(0)), batch)
+    return jax.lax.map(
+        lambda s: fitting.fit_candidates(starts, idx, actives, s, n_valid)._replace(residual=jnp.zeros(0)),
+        batch,
+    )
 
 
 def local_mean(x, half: int = HALF) -> np.ndarray:
@@ -71,8 +74,7 @@ def _second_difference_acf(rho):
     c = np.array([1.0, -2.0, 1.0])
     lag = np.arange(-4, 5)
     gamma = rho[:, None] ** np.abs(lag)[None, :]
-    cov = [sum(c[i] * c[j] * gamma[:, 4 + k + i - j] for i in range(3) for j in range(3))
-           for k in (0, 1)]
+    cov = [sum(c[i] * c[j] * gamma[:, 4 + k + i - j] for i in range(3) for j in range(3)) for k in (0, 1)]
     return cov[0], cov[1] / cov[0]
 
 
@@ -103,8 +105,11 @@ def noise_model(x) -> dict:
 def _noisy(clean, model, rng):
     """``clean`` plus AR(1) noise of the model's level and colour, then quantised."""
     rho = model["rho"]
-    e = lfilter([1.0], [1.0, -rho], rng.standard_normal(clean.size)) * model["sigma"] * np.sqrt(
-        1.0 - rho * rho)
+    e = (
+        lfilter([1.0], [1.0, -rho], rng.standard_normal(clean.size))
+        * model["sigma"]
+        * np.sqrt(1.0 - rho * rho)
+    )
     x = clean + e
     return np.round(x / model["q"]) * model["q"] if model["q"] > 0 else x
 
@@ -126,7 +131,7 @@ def residual_model(raw, latent, floor: float = 0.0, q=None) -> dict:
     e = e - e.mean()
     q = _grid_step(np.asarray(raw, float)) if q is None else q
     rho = float(np.clip(np.dot(e[1:], e[:-1]) / max(np.dot(e, e), 1e-300), 0.0, 0.98))
-    sigma = float(np.sqrt(max(np.mean(e * e) - q * q / 12.0, 0.25 * np.mean(e * e), floor ** 2)))
+    sigma = float(np.sqrt(max(np.mean(e * e) - q * q / 12.0, 0.25 * np.mean(e * e), floor**2)))
     return {"sigma": sigma, "rho": rho, "q": q}
 
 
@@ -143,8 +148,10 @@ def replicas_measured(columns: dict, vehicle: Vehicle, p_base, n_replicas: int, 
     scale = vehicle.axle_load_kg * GRAVITY * vehicle.wheel_radius_m
     clean_torque = (np.asarray(mu) + np.asarray(measured.deriv_mu)) * scale
     rng = np.random.default_rng(seed)
-    out = [{**raw, "traction_torque": _noisy(clean_torque, models["traction_torque"], rng)}
-           for _ in range(n_replicas)]
+    out = [
+        {**raw, "traction_torque": _noisy(clean_torque, models["traction_torque"], rng)}
+        for _ in range(n_replicas)
+    ]
     return out, models
 
 
@@ -156,35 +163,53 @@ def replicas_latent(columns: dict, vehicle: Vehicle, p_base, n_replicas: int, se
     white torque noise at the Δ³ level."""
     t = np.asarray(columns["time"], float)
     raw = {k: np.asarray(columns[k], float) for k in RAW}
-    est = smooth_creep(t, raw["wheel_speed"], raw["vehicle_speed"], raw["traction_torque"],
-                       vehicle.wheelset_inertia_kgm2, vehicle.wheel_radius_m,
-                       vehicle.axle_load_kg)
+    est = smooth_creep(
+        t,
+        raw["wheel_speed"],
+        raw["vehicle_speed"],
+        raw["traction_torque"],
+        vehicle.wheelset_inertia_kgm2,
+        vehicle.wheel_radius_m,
+        vehicle.axle_load_kg,
+    )
     v_lat = np.asarray(est.vehicle_speed)
     w_lat = v_lat + np.asarray(est.slip)
     floor_w, floor_v = (float(x) for x in np.asarray(est.measurement_sd))
-    models = {"vehicle_speed": residual_model(raw["vehicle_speed"], v_lat, floor_v),
-              "wheel_speed": residual_model(raw["wheel_speed"], w_lat, floor_w)}
+    models = {
+        "vehicle_speed": residual_model(raw["vehicle_speed"], v_lat, floor_v),
+        "wheel_speed": residual_model(raw["wheel_speed"], w_lat, floor_w),
+    }
     scale = vehicle.axle_load_kg * GRAVITY * vehicle.wheel_radius_m
     none = np.zeros(ext.N_EXTRA, bool)
-    latent = from_columns({"time": t, "vehicle_speed": v_lat, "wheel_speed": w_lat,
-                           "traction_torque": raw["traction_torque"]}, vehicle)
+    latent = from_columns(
+        {"time": t, "vehicle_speed": v_lat, "wheel_speed": w_lat, "traction_torque": raw["traction_torque"]},
+        vehicle,
+    )
     _, mu = ext.predict(np.asarray(p_base), none, latent)
     clean_torque = (np.asarray(mu) + np.asarray(latent.deriv_mu)) * scale
     q_t = _grid_step(raw["traction_torque"])
     sd_t = float(difference_sd(raw["traction_torque"]))
-    models["traction_torque"] = {"sigma": float(np.sqrt(max(sd_t ** 2 - q_t ** 2 / 12, 0.25 * sd_t ** 2))),
-                                 "rho": 0.0, "q": q_t}
+    models["traction_torque"] = {
+        "sigma": float(np.sqrt(max(sd_t**2 - q_t**2 / 12, 0.25 * sd_t**2))),
+        "rho": 0.0,
+        "q": q_t,
+    }
     rng = np.random.default_rng(seed)
-    out = [{"time": t,
+    out = [
+        {
+            "time": t,
             "vehicle_speed": _noisy(v_lat, models["vehicle_speed"], rng),
             "wheel_speed": _noisy(w_lat, models["wheel_speed"], rng),
-            "traction_torque": _noisy(clean_torque, models["traction_torque"], rng)}
-           for _ in range(n_replicas)]
+            "traction_torque": _noisy(clean_torque, models["traction_torque"], rng),
+        }
+        for _ in range(n_replicas)
+    ]
     return out, models
 
 
-def null_gains(columns, vehicle, p_base, tau_heat, rows, merge, n_valid: int,
-               n_replicas: int = N_REPLICAS, seed: int = 0) -> tuple:
+def null_gains(
+    columns, vehicle, p_base, tau_heat, rows, merge, n_valid: int, n_replicas: int = N_REPLICAS, seed: int = 0
+) -> tuple:
     """Round-1 gains (R, C − 1) of every replica and the noise models.
 
     ``rows = (starts, idx, actives)`` are the observed recording's round-1 rows (base first) and

@@ -9,11 +9,16 @@ import numpy as np
 
 from .select import GAIN_THRESHOLD
 
-
-UNITS = {"time": "time [s]", "creep": "creepage [-]", "speed": "vehicle speed [m/s]",
-         "accel": "acceleration [m/s²]", "torque_rate": "torque rate d(T/mgr)/dt [1/s]",
-         "heat": "filtered frictional power [W]", "traction_ratio": "tractive effort F_t/(M g) [-]",
-         "adhesion": "predicted adhesion [-]"}
+UNITS = {
+    "time": "time [s]",
+    "creep": "creepage [-]",
+    "speed": "vehicle speed [m/s]",
+    "accel": "acceleration [m/s²]",
+    "torque_rate": "torque rate d(T/mgr)/dt [1/s]",
+    "heat": "filtered frictional power [W]",
+    "traction_ratio": "tractive effort F_t/(M g) [-]",
+    "adhesion": "predicted adhesion [-]",
+}
 
 
 def _binned(x, y, bins=20):
@@ -34,9 +39,10 @@ def figures(result: dict, series: dict, out: Path) -> list:
     names = []
     creep, target = series["creep"], series["target"]
     fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
-    for ax, key, title in ((axes[0], "base", "base Polach fit"),
-                           (axes[1], "extended", "extended: " + (" + ".join(result["effects"])
-                                                                 or "none"))):
+    for ax, key, title in (
+        (axes[0], "base", "base Polach fit"),
+        (axes[1], "extended", "extended: " + (" + ".join(result["effects"]) or "none")),
+    ):
         ax.plot(creep, target, ".", ms=2, color="0.6", label="observed μ̂")
         ax.plot(creep, series[f"{key}_pred"], ".", ms=2, color="C3", label="model")
         ax.set_xscale("symlog", linthresh=0.01)
@@ -54,8 +60,7 @@ def figures(result: dict, series: dict, out: Path) -> list:
     fig, ax = plt.subplots(figsize=(6.5, 4))
     ax.plot(x, series["base_residual"], ".", ms=2, color="0.65", label="base residual")
     ax.plot(*_binned(x, series["base_residual"]), "o-", color="C0", label="base, binned mean")
-    ax.plot(*_binned(x, series["extended_residual"]), "s-", color="C2",
-            label="extended, binned mean")
+    ax.plot(*_binned(x, series["extended_residual"]), "s-", color="C2", label="extended, binned mean")
     ax.axhline(0, color="k", lw=0.6)
     ax.set_xlabel(UNITS[signal])
     ax.set_ylabel("μ̂ − model [-]")
@@ -85,23 +90,27 @@ def write_report(result: dict, series: dict, directory) -> Path:
     out = Path(directory)
     out.mkdir(parents=True, exist_ok=True)
     figs = figures(result, series, out)
-    rows = "\n".join(f"| {c['name']} | {c['heldout_mae']:.5f} | {100 * c['gain']:+.1f} % | "
-                     f"{c['delta_bic']:+.1f} | {c['p_value']} | {c['status']} | "
-                     f"{c['evidence']['signal']} |"
-                     for c in result["candidates"])
+    rows = "\n".join(
+        f"| {c['name']} | {c['heldout_mae']:.5f} | {100 * c['gain']:+.1f} % | "
+        f"{c['delta_bic']:+.1f} | {c['p_value']} | {c['status']} | "
+        f"{c['evidence']['signal']} |"
+        for c in result["candidates"]
+    )
     params = ", ".join(f"{k} = {v:.4g}" for k, v in result["extended"]["params"].items())
-    seen = "\n".join(f"| {n} | {s['min_detectable']:.3g} | {100 * s['absorbed']:.0f} % | "
-                     f"{'yes' if s['visible'] else 'no: ' + s['experiment']} |"
-                     for n, s in result["sensitivity"].items())
-    text = f"""# Diagnosis: {result['verdict']}
+    seen = "\n".join(
+        f"| {n} | {s['min_detectable']:.3g} | {100 * s['absorbed']:.0f} % | "
+        f"{'yes' if s['visible'] else 'no: ' + s['experiment']} |"
+        for n, s in result["sensitivity"].items()
+    )
+    text = f"""# Diagnosis: {result["verdict"]}
 
-{result['explanation']}
+{result["explanation"]}
 
 | model | MAE | held-out MAE |
 |---|---|---|
-| base Polach | {result['base']['mae']:.5f} | {result['base']['heldout_mae']:.5f} |
-| extended ({' + '.join(result['effects']) or 'none'}) | {result['extended']['mae']:.5f} | \
-{result['extended']['heldout_mae']:.5f} |
+| base Polach | {result["base"]["mae"]:.5f} | {result["base"]["heldout_mae"]:.5f} |
+| extended ({" + ".join(result["effects"]) or "none"}) | {result["extended"]["mae"]:.5f} | \
+{result["extended"]["heldout_mae"]:.5f} |
 
 Extended parameters: {params}.
 
@@ -118,9 +127,9 @@ Extended parameters: {params}.
 ![candidate ranking]({figs[2]})
 
 Decision: an effect is accepted when it has the best held-out error, its gain exceeds the
-calibrated {100 * GAIN_THRESHOLD:.1f} %, its max-T p-value against {result['null']['replicas']}
-clean re-synthesised replicas of this recording is ≤ {result['null']['alpha']}, its fits converged
-and ΔBIC < 0 (n_eff = {result['n_eff']:.0f}).
+calibrated {100 * GAIN_THRESHOLD:.1f} %, its max-T p-value against {result["null"]["replicas"]}
+clean re-synthesised replicas of this recording is ≤ {result["null"]["alpha"]}, its fits converged
+and ΔBIC < 0 (n_eff = {result["n_eff"]:.0f}).
 
 ## What this recording can see
 

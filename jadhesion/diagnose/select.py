@@ -44,21 +44,22 @@ SEPARATING_EXPERIMENT = {
     frozenset({"torque_offset", "rail_change"}): "a coasting run (zero torque) reads the bias",
     frozenset({"torque_offset", "speed_dependence"}): "a coasting run (zero torque) reads the bias",
     frozenset({"torque_offset", "load_transfer"}): "a coasting run (zero torque) reads the bias",
-    frozenset({"torque_offset", "thermal_softening"}):
-        "a coasting run (zero torque) reads the bias",
-    frozenset({"speed_dependence", "rail_change"}):
-        "a speed sweep at constant creep on one rail section",
-    frozenset({"speed_dependence", "wheel_radius_error"}):
-        "a coasting run at two speeds (a radius error shows as creep ∝ speed without torque)",
-    frozenset({"thermal_softening", "rail_change"}):
-        "a repeat run after a pause: a thermal drop recovers as the rail cools, a rail change "
-        "does not",
-    frozenset({"thermal_softening", "speed_dependence"}):
-        "a speed sweep at low creep (little frictional heating)",
+    frozenset({"torque_offset", "thermal_softening"}): "a coasting run (zero torque) reads the bias",
+    frozenset({"speed_dependence", "rail_change"}): "a speed sweep at constant creep on one rail section",
+    frozenset(
+        {"speed_dependence", "wheel_radius_error"}
+    ): "a coasting run at two speeds (a radius error shows as creep ∝ speed without torque)",
+    frozenset(
+        {"thermal_softening", "rail_change"}
+    ): "a repeat run after a pause: a thermal drop recovers as the rail cools, a rail change does not",
+    frozenset(
+        {"thermal_softening", "speed_dependence"}
+    ): "a speed sweep at low creep (little frictional heating)",
     frozenset({"signal_delay", "load_transfer"}): "a torque step: compare its timing with the "
-                                                  "wheel acceleration",
-    frozenset({"wheel_radius_error", "torque_offset"}):
-        "a coasting run (radius error: creep ∝ speed; torque bias: torque ≠ 0)",
+    "wheel acceleration",
+    frozenset(
+        {"wheel_radius_error", "torque_offset"}
+    ): "a coasting run (radius error: creep ∝ speed; torque bias: torque ≠ 0)",
 }
 GENERIC_EXPERIMENT = "a coasting run and a slow speed sweep at constant creep"
 
@@ -86,21 +87,30 @@ def decide(names, gain, dbic, threshold: float = GAIN_THRESHOLD) -> tuple:
     i = int(np.argmax(gain))
     if not (gain[i] >= threshold and dbic[i] < 0.0):
         return None, []
-    close = [names[j] for j in np.argsort(-gain)
-             if j != i and gain[j] >= max(AMBIGUITY * gain[i], threshold) and dbic[j] < 0.0]
+    close = [
+        names[j]
+        for j in np.argsort(-gain)
+        if j != i and gain[j] >= max(AMBIGUITY * gain[i], threshold) and dbic[j] < 0.0
+    ]
     return names[i], close
 
 
 def effects_from(candidates: list, second_round, threshold: float = GAIN_THRESHOLD) -> tuple:
     """Accepted effects (0–2, greedy) and the set indistinguishable from the first, from the
     candidate lists of a diagnosis (each entry with ``name``, ``gain``, ``delta_bic``)."""
+
     def pick(rows):
-        rows = [c for c in rows if c.get("status", "converged") == "converged"
-                and (c.get("p_value") is None or c["p_value"] <= ALPHA)]
+        rows = [
+            c
+            for c in rows
+            if c.get("status", "converged") == "converged"
+            and (c.get("p_value") is None or c["p_value"] <= ALPHA)
+        ]
         if not rows:
             return None, []
-        return decide([c["name"] for c in rows], [c["gain"] for c in rows],
-                      [c["delta_bic"] for c in rows], threshold)
+        return decide(
+            [c["name"] for c in rows], [c["gain"] for c in rows], [c["delta_bic"] for c in rows], threshold
+        )
 
     first, close = pick(candidates)
     if first is None:

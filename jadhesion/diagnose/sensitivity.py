@@ -47,15 +47,18 @@ EXPOSING_EXPERIMENT = {name: spec.exposing_run for name, spec in EFFECTS.items()
 @jax.jit
 def _linearise(params, active, sig):
     """Residual ``target − pred`` (n,) and its Jacobian ``∂r/∂params`` (n, N_PARAMS)."""
+
     def residual(p):
         target, pred = ext.predict(p, active, sig)
         return target - pred, target - pred
+
     jac, r = jax.jacfwd(residual, has_aux=True)(params)
     return r, jac
 
 
-def detectable_magnitudes(params, active, u_change, sig, n_valid: int, accepted=(),
-                          threshold: float = GAIN_THRESHOLD) -> dict:
+def detectable_magnitudes(
+    params, active, u_change, sig, n_valid: int, accepted=(), threshold: float = GAIN_THRESHOLD
+) -> dict:
     """Per effect: ``min_detectable`` (|magnitude| in the catalogue's units, ``inf`` when the fitted
     model absorbs the signature entirely), ``absorbed`` (share of the signature the fitted model
     takes up), ``visible`` (``min_detectable`` within the catalogue's typical range,
@@ -76,8 +79,12 @@ def detectable_magnitudes(params, active, u_change, sig, n_valid: int, accepted=
     sse = float(np.sum(r * r))
     out = {}
     for effect in ext.EFFECTS:
-        fitted = [5 + ext.EXTRA_NAMES.index(p) for e in ext.EFFECTS
-                  if e.name in accepted and e.name != effect.name for p in e.params]
+        fitted = [
+            5 + ext.EXTRA_NAMES.index(p)
+            for e in ext.EFFECTS
+            if e.name in accepted and e.name != effect.name
+            for p in e.params
+        ]
         model = jac[:, list(range(5)) + fitted]
         j = jac[:, 5 + ext.EXTRA_NAMES.index(MAGNITUDE_PARAM[effect.name])]
         coef, *_ = np.linalg.lstsq(model, j, rcond=None)
@@ -88,5 +95,6 @@ def detectable_magnitudes(params, active, u_change, sig, n_valid: int, accepted=
             "min_detectable": m_min,
             "absorbed": float(np.clip(1.0 - q2 / spread, 0.0, 1.0)) if spread > 0 else 1.0,
             "visible": m_min <= EFFECTS[effect.name].typical[1],
-            "experiment": EXPOSING_EXPERIMENT[effect.name]}
+            "experiment": EXPOSING_EXPERIMENT[effect.name],
+        }
     return out

@@ -75,11 +75,9 @@ def smooth_derivative(time: np.ndarray, x: np.ndarray) -> np.ndarray:
 def from_columns(columns: dict, vehicle: Vehicle, name: str = "recording") -> Signals:
     """Build :class:`Signals` from raw recording columns (time, vehicle_speed, wheel_speed,
     traction_torque) and the vehicle's constants; raises :class:`InputError` if they are missing."""
-    missing = [c for c in ("time", "vehicle_speed", "wheel_speed", "traction_torque")
-               if c not in columns]
+    missing = [c for c in ("time", "vehicle_speed", "wheel_speed", "traction_torque") if c not in columns]
     if missing:
-        raise InputError(f"{name}: diagnosis needs the raw signals; missing column(s) "
-                         f"{', '.join(missing)}")
+        raise InputError(f"{name}: diagnosis needs the raw signals; missing column(s) {', '.join(missing)}")
     t = np.asarray(columns["time"], float)
     if t.size < 50:
         raise InputError(f"{name}: diagnosis needs at least 50 samples, got {t.size}")
@@ -87,21 +85,40 @@ def from_columns(columns: dict, vehicle: Vehicle, name: str = "recording") -> Si
     vw = np.asarray(columns["wheel_speed"], float)
     torque = np.asarray(columns["traction_torque"], float)
     scale = vehicle.axle_load_kg * GRAVITY * vehicle.wheel_radius_m
-    deriv_mu = -np.asarray(observer_core(
-        jnp.asarray(t), jnp.asarray(vw), jnp.zeros_like(jnp.asarray(vw)),
-        vehicle.wheelset_inertia_kgm2, vehicle.wheel_radius_m, vehicle.axle_load_kg,
-        vehicle.observer_time_constant_s))
+    deriv_mu = -np.asarray(
+        observer_core(
+            jnp.asarray(t),
+            jnp.asarray(vw),
+            jnp.zeros_like(jnp.asarray(vw)),
+            vehicle.wheelset_inertia_kgm2,
+            vehicle.wheel_radius_m,
+            vehicle.axle_load_kg,
+            vehicle.observer_time_constant_s,
+        )
+    )
     torque_mu = torque / scale
     adhesion = torque_mu - deriv_mu
     slip = np.asarray(kinematics.slip_velocity(vw, v))
     power = np.abs(adhesion * slip) * vehicle.axle_weight_n
     dt = float(np.median(np.diff(t)))
-    traction = vehicle.n_axles * smooth(torque, dt) / (vehicle.wheel_radius_m
-                                                       * vehicle.locomotive_mass_kg * GRAVITY)
+    traction = (
+        vehicle.n_axles * smooth(torque, dt) / (vehicle.wheel_radius_m * vehicle.locomotive_mass_kg * GRAVITY)
+    )
     f = jnp.asarray
     return Signals(
-        time=f(t), speed=f(v), wheel_speed=f(vw), torque_mu=f(torque_mu), deriv_mu=f(deriv_mu),
-        adhesion=f(adhesion), accel=f(smooth_derivative(t, v)),
-        torque_rate=f(smooth_derivative(t, torque_mu)), power=f(power),
-        heat=lowpass_foh(f(t), f(power), THERMAL_LAG_S), traction_ratio=f(traction), dt=f(dt),
-        speed_ref=f(np.mean(v)), duration=f(t[-1] - t[0]), k_eps=f(vehicle.k_eps()))
+        time=f(t),
+        speed=f(v),
+        wheel_speed=f(vw),
+        torque_mu=f(torque_mu),
+        deriv_mu=f(deriv_mu),
+        adhesion=f(adhesion),
+        accel=f(smooth_derivative(t, v)),
+        torque_rate=f(smooth_derivative(t, torque_mu)),
+        power=f(power),
+        heat=lowpass_foh(f(t), f(power), THERMAL_LAG_S),
+        traction_ratio=f(traction),
+        dt=f(dt),
+        speed_ref=f(np.mean(v)),
+        duration=f(t[-1] - t[0]),
+        k_eps=f(vehicle.k_eps()),
+    )

@@ -44,9 +44,13 @@ RAILS = ("dry", "normal", "wet")
 NOISE = 0.002
 TRACK_TOL = 0.05
 WINDOW = 200
-PAPER = {"k_p1_1pct": 30, "k_p2_1pct": 250, "k_mumax_01pct": 230,
-         "claim": "Algorithm 1 converges faster, fluctuates less and tracks rail changes faster "
-                  "than Algorithm 2 (Figs 4-6; noise level, Kp and SNR interval not published)"}
+PAPER = {
+    "k_p1_1pct": 30,
+    "k_p2_1pct": 250,
+    "k_mumax_01pct": 230,
+    "claim": "Algorithm 1 converges faster, fluctuates less and tracks rail changes faster "
+    "than Algorithm 2 (Figs 4-6; noise level, Kp and SNR interval not published)",
+}
 
 
 class Scenario(NamedTuple):
@@ -57,8 +61,9 @@ class Scenario(NamedTuple):
     truth: jax.Array
 
 
-def scenario(key, runs=None, n_steps=N_STEPS, changes=CHANGES, rails=RAILS, noise=NOISE,
-             a_s=DEFAULT_SLOPE) -> Scenario:
+def scenario(
+    key, runs=None, n_steps=N_STEPS, changes=CHANGES, rails=RAILS, noise=NOISE, a_s=DEFAULT_SLOPE
+) -> Scenario:
     """The module docstring's scenario; ``runs`` noise realisations (leading axis) from ``key``."""
     k = jnp.arange(1, n_steps + 1)
     lam = 0.135 + 0.115 * jnp.sin(2.0 * jnp.pi * k / 100.0)
@@ -84,7 +89,7 @@ def calibrate_snr(key, runs=200, kp=ol.DEFAULT_KP, q=(0.025, 0.975)):
     """The default SNR interval: element-wise quantiles ``q`` of ``S`` over the dry segment
     (``k > 5``) of Algorithm 1 without its SNR step — ``S``'s range when only noise is acting."""
     sc = scenario(key, runs)
-    s = run_batch(ol.make_params(0.251, 1.0, 1.0, 0.0, kp=kp), sc).snr[:, 5:CHANGES[0]]
+    s = run_batch(ol.make_params(0.251, 1.0, 1.0, 0.0, kp=kp), sc).snr[:, 5 : CHANGES[0]]
     lo, hi = jnp.quantile(s.reshape(-1, 2, 2), jnp.asarray(q), axis=0)
     return lo, hi
 
@@ -104,14 +109,19 @@ def run_metrics(trace: ol.OnlineInfo, truth, a_s=DEFAULT_SLOPE) -> dict:
     """Per-run metrics (arrays over runs; ``inf`` = never) of the module docstring."""
     truth = np.asarray(truth)
     mu_true = a_s / (truth[:, 0] + 2.0 * np.sqrt(truth[:, 1]))
-    err = {"p1": np.abs(np.asarray(trace.p1) / truth[:, 0] - 1.0),
-           "p2": np.abs(np.asarray(trace.p2) / truth[:, 1] - 1.0),
-           "mumax": np.abs(np.asarray(trace.mu_max) / mu_true - 1.0)}
+    err = {
+        "p1": np.abs(np.asarray(trace.p1) / truth[:, 0] - 1.0),
+        "p2": np.abs(np.asarray(trace.p2) / truth[:, 1] - 1.0),
+        "mumax": np.abs(np.asarray(trace.mu_max) / mu_true - 1.0),
+    }
     err = {k: np.nan_to_num(v, nan=np.inf) for k, v in err.items()}
     c0 = CHANGES[0]
     out = {}
-    for name, tol, label in (("p1", 0.01, "k_p1_1pct"), ("p2", 0.01, "k_p2_1pct"),
-                             ("mumax", 0.001, "k_mumax_01pct")):
+    for name, tol, label in (
+        ("p1", 0.01, "k_p1_1pct"),
+        ("p2", 0.01, "k_p2_1pct"),
+        ("mumax", 0.001, "k_mumax_01pct"),
+    ):
         ok = err[name][:, :c0] <= tol
         out[label] = _stay_index(ok) + 1.0
         out[label + "_first"] = _first_index(ok) + 1.0
@@ -123,7 +133,7 @@ def run_metrics(trace: ol.OnlineInfo, truth, a_s=DEFAULT_SLOPE) -> dict:
     windows = np.concatenate([np.arange(b - WINDOW, b) for b in bounds])
     for name, label in (("mumax", "fluctuation"), ("p1", "fluctuation_p1"), ("p2", "fluctuation_p2")):
         out[label] = np.sqrt(np.mean(err[name][:, windows] ** 2, -1))
-    out["fluctuation_dry"] = np.sqrt(np.mean(err["mumax"][:, c0 - WINDOW:c0] ** 2, -1))
+    out["fluctuation_dry"] = np.sqrt(np.mean(err["mumax"][:, c0 - WINDOW : c0] ** 2, -1))
     return out
 
 
@@ -151,56 +161,87 @@ def batch_ls(sc: Scenario, a_s=DEFAULT_SLOPE) -> dict:
     rel = []
     for a, b in zip(bounds[:-1], bounds[1:]):
         uu, zz = u[:, a:b], z[:, a:b]
-        x = jnp.linalg.solve(jnp.einsum("rki,rkj->rij", uu, uu),
-                             jnp.einsum("rki,rk->ri", uu, zz)[..., None])[..., 0]
+        x = jnp.linalg.solve(jnp.einsum("rki,rkj->rij", uu, uu), jnp.einsum("rki,rk->ri", uu, zz)[..., None])[
+            ..., 0
+        ]
         true = np.asarray(sc.truth[a])
         mu = np.asarray(ol.peak_adhesion(x, a_s))
-        rel.append(np.abs(np.stack([x[:, 0] / true[0], x[:, 1] / true[1],
-                                    mu * (true[0] + 2 * np.sqrt(true[1])) / a_s], -1) - 1.0))
+        rel.append(
+            np.abs(
+                np.stack(
+                    [x[:, 0] / true[0], x[:, 1] / true[1], mu * (true[0] + 2 * np.sqrt(true[1])) / a_s], -1
+                )
+                - 1.0
+            )
+        )
     med = np.median(np.stack(rel, 1), 0)
-    return {"segments": list(RAILS),
-            **{f"{n}_relerr": med[:, i].tolist() for i, n in enumerate(("p1", "p2", "mu_max"))}}
+    return {
+        "segments": list(RAILS),
+        **{f"{n}_relerr": med[:, i].tolist() for i, n in enumerate(("p1", "p2", "mu_max"))},
+    }
 
 
 def ablation_params() -> dict:
     """Algorithm 2 plus each of Algorithm 1's three ingredients, and Algorithm 1 minus each."""
     lo, hi = (0.251, 1.0), (0.971, 1.0)
-    return {"A2": ol.make_params(*hi, 0.0, 0.0), "A2+range": ol.make_params(*lo, 0.0, 0.0),
-            "A2+weight": ol.make_params(*hi, 1.0, 0.0), "A2+snr": ol.make_params(*hi, 0.0, 1.0),
-            "A1": ol.make_params(*lo, 1.0, 1.0), "A1-range": ol.make_params(*hi, 1.0, 1.0),
-            "A1-weight": ol.make_params(*lo, 0.0, 1.0), "A1-snr": ol.make_params(*lo, 1.0, 0.0)}
+    return {
+        "A2": ol.make_params(*hi, 0.0, 0.0),
+        "A2+range": ol.make_params(*lo, 0.0, 0.0),
+        "A2+weight": ol.make_params(*hi, 1.0, 0.0),
+        "A2+snr": ol.make_params(*hi, 0.0, 1.0),
+        "A1": ol.make_params(*lo, 1.0, 1.0),
+        "A1-range": ol.make_params(*hi, 1.0, 1.0),
+        "A1-weight": ol.make_params(*lo, 0.0, 1.0),
+        "A1-snr": ol.make_params(*lo, 1.0, 0.0),
+    }
 
 
-def run(runs=1000, plot_dir=None, progress: Optional[Callable[[int, int], None]] = None,
-        seed=0) -> dict:
+def run(runs=1000, plot_dir=None, progress: Optional[Callable[[int, int], None]] = None, seed=0) -> dict:
     """Monte Carlo over ``runs`` noise seeds per configuration; JSON-ready dict (module docstring).
 
     ``progress(done, total)`` (optional) is called after each configuration and the batch LS.
     """
     sc = scenario(jax.random.key(seed), runs)
-    configs = {"1": ol.algorithm1_params(), "2": ol.algorithm2_params(), **ablation_params(),
-               "rls_0.98": ol.rls_params(0.98)}
+    configs = {
+        "1": ol.algorithm1_params(),
+        "2": ol.algorithm2_params(),
+        **ablation_params(),
+        "rls_0.98": ol.rls_params(0.98),
+    }
     total = len(configs) + 1
     summaries, bands = {}, {}
     for done, (name, params) in enumerate(configs.items(), 1):
         trace = run_batch(params, sc)
         summaries[name] = summarise(run_metrics(trace, sc.truth))
         if name in ("1", "2"):
-            bands[name] = {f: np.quantile(np.asarray(getattr(trace, f)), [0.05, 0.5, 0.95], axis=0)
-                           for f in ("p1", "p2", "mu_max", "eta")}
+            bands[name] = {
+                f: np.quantile(np.asarray(getattr(trace, f)), [0.05, 0.5, 0.95], axis=0)
+                for f in ("p1", "p2", "mu_max", "eta")
+            }
         if progress:
             progress(done, total)
     batch = batch_ls(sc)
     if progress:
         progress(total, total)
-    result = {"algorithms": {"1": summaries["1"], "2": summaries["2"]}, "paper": PAPER,
-              "ablation": {k: summaries[k] for k in ablation_params()},
-              "baselines": {"rls_0.98": summaries["rls_0.98"], "batch_ls": batch},
-              "setup": {"runs": runs, "steps": N_STEPS, "changes": list(CHANGES),
-                        "rails": list(RAILS), "noise_sigma": NOISE, "track_tol": TRACK_TOL,
-                        "window": WINDOW, "kp": ol.DEFAULT_KP, "a_s": DEFAULT_SLOPE,
-                        "snr_lo": np.asarray(ol.DEFAULT_SNR_LO).tolist(),
-                        "snr_hi": np.asarray(ol.DEFAULT_SNR_HI).tolist()}}
+    result = {
+        "algorithms": {"1": summaries["1"], "2": summaries["2"]},
+        "paper": PAPER,
+        "ablation": {k: summaries[k] for k in ablation_params()},
+        "baselines": {"rls_0.98": summaries["rls_0.98"], "batch_ls": batch},
+        "setup": {
+            "runs": runs,
+            "steps": N_STEPS,
+            "changes": list(CHANGES),
+            "rails": list(RAILS),
+            "noise_sigma": NOISE,
+            "track_tol": TRACK_TOL,
+            "window": WINDOW,
+            "kp": ol.DEFAULT_KP,
+            "a_s": DEFAULT_SLOPE,
+            "snr_lo": np.asarray(ol.DEFAULT_SNR_LO).tolist(),
+            "snr_hi": np.asarray(ol.DEFAULT_SNR_HI).tolist(),
+        },
+    }
     if plot_dir is not None:
         os.makedirs(plot_dir, exist_ok=True)
         path = os.path.join(plot_dir, "online_kiencke.png")
@@ -218,19 +259,30 @@ def _verdict(claim, key, a1, a2):
     never = "never_" + key[2:]
     ok = a1[key] is not None and (a2[key] is None or a1[key] < a2[key])
     ok = ok and a1.get(never, 0.0) <= a2.get(never, 0.0)
-    tail = (f" (never: A1 {100 * a1[never]:.0f} %, A2 {100 * a2[never]:.0f} %)"
-            if never in a1 else "")
-    return (f"  {'holds' if ok else 'DOES NOT HOLD'}: {claim} ({key}) A1 {_fmt(a1[key])} vs A2 "
-            f"{_fmt(a2[key])}{tail}")
+    tail = f" (never: A1 {100 * a1[never]:.0f} %, A2 {100 * a2[never]:.0f} %)" if never in a1 else ""
+    return (
+        f"  {'holds' if ok else 'DOES NOT HOLD'}: {claim} ({key}) A1 {_fmt(a1[key])} vs A2 "
+        f"{_fmt(a2[key])}{tail}"
+    )
 
 
 def format_text(result: dict) -> str:
     """Human-readable report: ours vs the paper, verdicts on its claims, ablation and baselines."""
-    keys = ("k_p1_1pct", "k_p2_1pct", "k_mumax_01pct", "k_track_change1", "k_track_change2",
-            "fluctuation", "fluctuation_dry")
+    keys = (
+        "k_p1_1pct",
+        "k_p2_1pct",
+        "k_mumax_01pct",
+        "k_track_change1",
+        "k_track_change2",
+        "fluctuation",
+        "fluctuation_dry",
+    )
     rows = []
-    for name, m in [*(("alg " + k, v) for k, v in result["algorithms"].items()),
-                    *result["ablation"].items(), ("rls_0.98", result["baselines"]["rls_0.98"])]:
+    for name, m in [
+        *(("alg " + k, v) for k, v in result["algorithms"].items()),
+        *result["ablation"].items(),
+        ("rls_0.98", result["baselines"]["rls_0.98"]),
+    ]:
         row = {"config": name}
         for k in keys:
             iqr = m[k + "_iqr"]
@@ -239,24 +291,38 @@ def format_text(result: dict) -> str:
     rows.append({"config": "paper (A1)", **{k: str(result["paper"].get(k, "")) for k in keys}})
     a1, a2 = result["algorithms"]["1"], result["algorithms"]["2"]
     s = result["setup"]
-    lines = [f"Paper 000 online identification: {s['runs']} runs x {s['steps']} steps, "
-             f"rails {'->'.join(s['rails'])}, noise sigma {s['noise_sigma']}; median [IQR], "
-             "'never' = more runs failed than the quantile allows",
-             table(rows, ["config", *keys]),
-             "Paper's claims (A1 alone, then A1 vs A2):"]
+    lines = [
+        f"Paper 000 online identification: {s['runs']} runs x {s['steps']} steps, "
+        f"rails {'->'.join(s['rails'])}, noise sigma {s['noise_sigma']}; median [IQR], "
+        "'never' = more runs failed than the quantile allows",
+        table(rows, ["config", *keys]),
+        "Paper's claims (A1 alone, then A1 vs A2):",
+    ]
     for k in ("k_p1_1pct", "k_p2_1pct", "k_mumax_01pct"):
         ours = a1[k]
         ok = ours is not None and ours <= 1.2 * result["paper"][k]
-        lines.append(f"  {'holds' if ok else 'DOES NOT HOLD'}: {k} paper {result['paper'][k]}, "
-                     f"ours {_fmt(ours)} (never in {100 * a1['never_' + k[2:]]:.0f} % of runs; "
-                     f"first reached {_fmt(a1[k + '_first'])})")
-    lines += [_verdict(claim, key, a1, a2) for claim, key in (
-        ("faster convergence of p2", "k_p2_1pct"), ("faster tracking, dry->normal", "k_track_change1"),
-        ("faster tracking, normal->wet", "k_track_change2"),
-        ("smaller fluctuation, RMS rel. mu_m error, all segments", "fluctuation"),
-        ("smaller fluctuation, dry segment only", "fluctuation_dry"))]
+        lines.append(
+            f"  {'holds' if ok else 'DOES NOT HOLD'}: {k} paper {result['paper'][k]}, "
+            f"ours {_fmt(ours)} (never in {100 * a1['never_' + k[2:]]:.0f} % of runs; "
+            f"first reached {_fmt(a1[k + '_first'])})"
+        )
+    lines += [
+        _verdict(claim, key, a1, a2)
+        for claim, key in (
+            ("faster convergence of p2", "k_p2_1pct"),
+            ("faster tracking, dry->normal", "k_track_change1"),
+            ("faster tracking, normal->wet", "k_track_change2"),
+            ("smaller fluctuation, RMS rel. mu_m error, all segments", "fluctuation"),
+            ("smaller fluctuation, dry segment only", "fluctuation_dry"),
+        )
+    ]
     b = result["baselines"]["batch_ls"]
-    lines.append("Batch LS per segment (" + ", ".join(b["segments"]) + "): median rel. error p1 "
-                 + ", ".join(f"{v:.2g}" for v in b["p1_relerr"]) + "; p2 "
-                 + ", ".join(f"{v:.2g}" for v in b["p2_relerr"]))
+    lines.append(
+        "Batch LS per segment ("
+        + ", ".join(b["segments"])
+        + "): median rel. error p1 "
+        + ", ".join(f"{v:.2g}" for v in b["p1_relerr"])
+        + "; p2 "
+        + ", ".join(f"{v:.2g}" for v in b["p2_relerr"])
+    )
     return "\n".join(lines)

@@ -49,8 +49,12 @@ PAPER = {
     ("dry", "tlbo"): {"error": 0.0114, "iterations": 724, "seconds": 884},
     ("dry", "itlbo"): {"error": 0.0108, "iterations": 31, "seconds": 50},
     ("wet", "tlbo"): {"error": 0.01193, "iterations": 981, "seconds": 1197},
-    ("wet", "itlbo"): {"error": 0.01194, "iterations": 28, "seconds": 45,
-                       "later": {"error": 0.01188, "iterations": 421, "seconds": 695}},
+    ("wet", "itlbo"): {
+        "error": 0.01194,
+        "iterations": 28,
+        "seconds": 45,
+        "later": {"error": 0.01188, "iterations": 421, "seconds": 695},
+    },
     ("sand", "tlbo"): {"error": 0.0180, "iterations": 958, "seconds": 1169},
     ("sand", "itlbo"): {"error": 0.0167, "iterations": 44, "seconds": 70},
 }
@@ -73,10 +77,14 @@ def _median_iqr(values):
 
 def _timed_fits(datasets, method, keys, targets, max_iter):
     """Single warm fits to the target, one per dataset: (fits, seconds, compile_seconds)."""
+
     def one(i):
         data = jax.tree_util.tree_map(lambda a: a[i], datasets)
-        kw = {} if method == "lm" else {"target": float(targets[i]), "max_iter": max_iter,
-                                         "pop_size": POP_SIZE}
+        kw = (
+            {}
+            if method == "lm"
+            else {"target": float(targets[i]), "max_iter": max_iter, "pop_size": POP_SIZE}
+        )
         t0 = time.perf_counter()
         fit = jax.block_until_ready(fit_polach(data, method, keys[i], **kw))
         return fit, time.perf_counter() - t0
@@ -90,8 +98,13 @@ def _timed_fits(datasets, method, keys, targets, max_iter):
 def _history_runner(method, history_iter):
     """One compiled fixed-budget run per (method, budget), reused across scenarios."""
     bounds = (jnp.zeros(5), jnp.ones(5))
-    return jax.jit(jax.vmap(lambda d, k: run_population(
-        ALGORITHMS[method], polach_mae, bounds, k, POP_SIZE, history_iter, args=d)))
+    return jax.jit(
+        jax.vmap(
+            lambda d, k: run_population(
+                ALGORITHMS[method], polach_mae, bounds, k, POP_SIZE, history_iter, args=d
+            )
+        )
+    )
 
 
 def _histories(datasets, method, keys, history_iter):
@@ -100,8 +113,9 @@ def _histories(datasets, method, keys, history_iter):
     return np.asarray(out.history.best_f), np.asarray(out.history.best_x), np.asarray(out.best_x)
 
 
-def mcmc_row(sim, data, theta_lm, *, likelihood=MCMC_LIKELIHOOD, walkers=MCMC_WALKERS,
-             steps=MCMC_STEPS, seed=0) -> dict:
+def mcmc_row(
+    sim, data, theta_lm, *, likelihood=MCMC_LIKELIHOOD, walkers=MCMC_WALKERS, steps=MCMC_STEPS, seed=0
+) -> dict:
     """The ``mcmc`` row of one simulated recording ``sim`` (its dataset ``data``), walkers started
     at the LM fit ``theta_lm`` — for the observer likelihood polished by a projected LM on the
     observer's view of the curve (:func:`jadhesion.identify.lm.box_lm`)."""
@@ -118,17 +132,33 @@ def mcmc_row(sim, data, theta_lm, *, likelihood=MCMC_LIKELIHOOD, walkers=MCMC_WA
         theta0 = box_lm(observer_residual, theta0, (data, obs), BOUNDS).params
     spread = np.asarray(initial_spread(theta0, data, obs=obs))
     start_seconds = time.perf_counter() - t0
-    row = table2_row(data, np.asarray(theta0), walkers=walkers, steps=steps, seed=seed,
-                     likelihood=likelihood, obs=obs, spread=spread, burn=steps // 3,
-                     truth=np.asarray(get_scenario(sim.truth["scenario"]).params))
+    row = table2_row(
+        data,
+        np.asarray(theta0),
+        walkers=walkers,
+        steps=steps,
+        seed=seed,
+        likelihood=likelihood,
+        obs=obs,
+        spread=spread,
+        burn=steps // 3,
+        truth=np.asarray(get_scenario(sim.truth["scenario"]).params),
+    )
     row["start_seconds"] = start_seconds
     row["compile_seconds"] = row.pop("log_prob_compile_seconds")
     row["iterations"] = row["steps"]
     return row
 
 
-def run_scenario(scenario, seeds=20, max_iter=1000, history_iter=300,
-                 progress: Optional[Callable[[], None]] = None, mcmc=True, mcmc_steps=MCMC_STEPS):
+def run_scenario(
+    scenario,
+    seeds=20,
+    max_iter=1000,
+    history_iter=300,
+    progress: Optional[Callable[[], None]] = None,
+    mcmc=True,
+    mcmc_steps=MCMC_STEPS,
+):
     """Table 2 rows and convergence histories for one scenario; ``progress()`` after each cell."""
     truth = np.asarray(get_scenario(scenario).params)
     sims = simulate_many(scenario, list(range(seeds)))
@@ -159,8 +189,9 @@ def run_scenario(scenario, seeds=20, max_iter=1000, history_iter=300,
         row["floor"] = float(np.median(floors))
         row["compile_seconds"] = float(compile_s)
         row["params"] = dict(zip(PARAM_NAMES, np.median(final_params, axis=0).tolist()))
-        row["param_abs_error"] = dict(zip(PARAM_NAMES,
-                                          np.median(np.abs(final_params - truth), axis=0).tolist()))
+        row["param_abs_error"] = dict(
+            zip(PARAM_NAMES, np.median(np.abs(final_params - truth), axis=0).tolist())
+        )
         row["paper"] = PAPER.get((scenario, method))
         rows.append(row)
         if method == "lm":
@@ -171,7 +202,7 @@ def run_scenario(scenario, seeds=20, max_iter=1000, history_iter=300,
         data0 = jax.tree_util.tree_map(lambda a: a[0], datasets)
         t0 = time.perf_counter()
         row = {"scenario": scenario, **mcmc_row(sims[0], data0, theta_lm, steps=mcmc_steps)}
-        row["row_wall_seconds"] = time.perf_counter() - t0   # start, compiles and the run itself
+        row["row_wall_seconds"] = time.perf_counter() - t0  # start, compiles and the run itself
         row["floor"] = float(floors[0])
         row["reached"] = float(row["error"] <= targets[0])
         row["paper"] = None
@@ -181,8 +212,15 @@ def run_scenario(scenario, seeds=20, max_iter=1000, history_iter=300,
     return rows, {"histories": histories, "truth": truth, "floor": floors}
 
 
-def run(seeds=20, plot_dir=None, progress: Optional[Callable[[int, int], None]] = None,
-        max_iter=1000, history_iter=300, mcmc=True, mcmc_steps=None) -> dict:
+def run(
+    seeds=20,
+    plot_dir=None,
+    progress: Optional[Callable[[int, int], None]] = None,
+    max_iter=1000,
+    history_iter=300,
+    mcmc=True,
+    mcmc_steps=None,
+) -> dict:
     """The whole Table 2: ``{"rows": [...], "seeds": N, ...}``; figures into ``plot_dir``.
     ``mcmc``: add the :func:`mcmc_row` of each scenario, chains of ``mcmc_steps`` (default
     :data:`MCMC_STEPS`) steps. ``progress(done, total)``: called with the cells finished so far
@@ -200,17 +238,28 @@ def run(seeds=20, plot_dir=None, progress: Optional[Callable[[int, int], None]] 
     rows, traces = [], {}
     t0 = time.perf_counter()
     for scenario in SCENARIOS:
-        r, traces[scenario] = run_scenario(scenario, seeds, max_iter, history_iter, cell_done, mcmc,
-                                           mcmc_steps)
+        r, traces[scenario] = run_scenario(
+            scenario, seeds, max_iter, history_iter, cell_done, mcmc, mcmc_steps
+        )
         rows += r
-    result = {"rows": rows, "seeds": seeds, "pop_size": POP_SIZE, "max_iter": max_iter,
-              "history_iter": history_iter, "target": "1.01 x error of the true parameters",
-              "wall_seconds": time.perf_counter() - t0}
+    result = {
+        "rows": rows,
+        "seeds": seeds,
+        "pop_size": POP_SIZE,
+        "max_iter": max_iter,
+        "history_iter": history_iter,
+        "target": "1.01 x error of the true parameters",
+        "wall_seconds": time.perf_counter() - t0,
+    }
     if mcmc:
-        result["mcmc"] = {"likelihood": MCMC_LIKELIHOOD, "walkers": MCMC_WALKERS,
-                          "steps_run": mcmc_steps, "data_seed": 0,
-                          "note": "one posterior per scenario (seed 0); iterations = steps to a "
-                                  "converged chain (burn-in + 50 tau_max), seconds scaled to it"}
+        result["mcmc"] = {
+            "likelihood": MCMC_LIKELIHOOD,
+            "walkers": MCMC_WALKERS,
+            "steps_run": mcmc_steps,
+            "data_seed": 0,
+            "note": "one posterior per scenario (seed 0); iterations = steps to a "
+            "converged chain (burn-in + 50 tau_max), seconds scaled to it",
+        }
     if plot_dir is not None:
         from pathlib import Path
 
@@ -227,33 +276,66 @@ def run(seeds=20, plot_dir=None, progress: Optional[Callable[[int, int], None]] 
 
 def format_text(result) -> str:
     """Table 2 as text, our medians beside the paper's numbers."""
-    lines = [f"Paper 001, Table 2 — medians over {result['seeds']} seeds; target = "
-             f"{result['target']}; population size {result['pop_size']}.", ""]
+    lines = [
+        f"Paper 001, Table 2 — medians over {result['seeds']} seeds; target = "
+        f"{result['target']}; population size {result['pop_size']}.",
+        "",
+    ]
     rows = []
     for r in result["rows"]:
         paper = r["paper"] or {}
-        rows.append({
-            "scenario": r["scenario"], "method": r["method"], "floor": r["floor"],
-            "error": r["error"], "reached": f"{100 * r['reached']:.0f}%",
-            "iter": "-" if r["iterations"] is None else f"{r['iterations']:.0f}",
-            "evals": "-" if r["evaluations"] is None else f"{r['evaluations']:.0f}",
-            "ms": "-" if r["seconds"] is None else f"{1e3 * r['seconds']:.1f}",
-            "paper err": paper.get("error", "-"), "paper iter": paper.get("iterations", "-"),
-            "paper s": paper.get("seconds", "-"),
-        })
-    cols = ["scenario", "method", "floor", "error", "reached", "iter", "evals", "ms",
-            "paper err", "paper iter", "paper s"]
+        rows.append(
+            {
+                "scenario": r["scenario"],
+                "method": r["method"],
+                "floor": r["floor"],
+                "error": r["error"],
+                "reached": f"{100 * r['reached']:.0f}%",
+                "iter": "-" if r["iterations"] is None else f"{r['iterations']:.0f}",
+                "evals": "-" if r["evaluations"] is None else f"{r['evaluations']:.0f}",
+                "ms": "-" if r["seconds"] is None else f"{1e3 * r['seconds']:.1f}",
+                "paper err": paper.get("error", "-"),
+                "paper iter": paper.get("iterations", "-"),
+                "paper s": paper.get("seconds", "-"),
+            }
+        )
+    cols = [
+        "scenario",
+        "method",
+        "floor",
+        "error",
+        "reached",
+        "iter",
+        "evals",
+        "ms",
+        "paper err",
+        "paper iter",
+        "paper s",
+    ]
     lines.append(table(rows, cols))
     mc = [r for r in result["rows"] if r["method"] == "mcmc"]
     if mc:
         info = result.get("mcmc", {})
-        lines += ["", f"mcmc: emcee posterior of seed 0 ({info.get('likelihood', mc[0].get('likelihood'))} "
-                      f"likelihood, {mc[0]['walkers']} walkers); error = MAE of the posterior "
-                      f"medians; iter/evals/ms = steps/log-density evaluations/time of a converged "
-                      f"chain (burn-in + 50 tau); 90 % interval widths:"]
+        lines += [
+            "",
+            f"mcmc: emcee posterior of seed 0 ({info.get('likelihood', mc[0].get('likelihood'))} "
+            f"likelihood, {mc[0]['walkers']} walkers); error = MAE of the posterior "
+            f"medians; iter/evals/ms = steps/log-density evaluations/time of a converged "
+            f"chain (burn-in + 50 tau); 90 % interval widths:",
+        ]
         names = ["kA", "kS", "mu0", "A", "B", "mu_max", "creep_opt"]
-        lines.append(table([{"scenario": r["scenario"], **{n: r["width90"][n] for n in names},
-                             "tau": f"{r['tau_max']:.0f}",
-                             "converged": "yes" if r["converged"] else "estimate"} for r in mc],
-                           ["scenario", *names, "tau", "converged"]))
+        lines.append(
+            table(
+                [
+                    {
+                        "scenario": r["scenario"],
+                        **{n: r["width90"][n] for n in names},
+                        "tau": f"{r['tau_max']:.0f}",
+                        "converged": "yes" if r["converged"] else "estimate",
+                    }
+                    for r in mc
+                ],
+                ["scenario", *names, "tau", "converged"],
+            )
+        )
     return "\n".join(lines)

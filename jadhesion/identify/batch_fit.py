@@ -88,8 +88,15 @@ class Fitted(NamedTuple):
     seconds: float
 
 
-def fit_datasets(datasets: Sequence[PolachDataset], method: str, key, *, pop_size: int = 50,
-                 max_iter: int = 300, fit: Callable | None = None) -> list[Fitted]:
+def fit_datasets(
+    datasets: Sequence[PolachDataset],
+    method: str,
+    key,
+    *,
+    pop_size: int = 50,
+    max_iter: int = 300,
+    fit: Callable | None = None,
+) -> list[Fitted]:
     """Fit every dataset, padded to its bucket, with the same ``key`` (as one file at a time);
     ``fit`` is :func:`.polach_fit.fit_polach` or a drop-in (the command line's kept program,
     :func:`jadhesion.cli.fit_program.fit_polach`). One compiled program per method and bucket."""
@@ -99,8 +106,7 @@ def fit_datasets(datasets: Sequence[PolachDataset], method: str, key, *, pop_siz
     for data in datasets:
         padded = pad_dataset(data)
         start = time.perf_counter()
-        result = jax.block_until_ready(fit(padded, method, key, pop_size=pop_size,
-                                           max_iter=max_iter))
+        result = jax.block_until_ready(fit(padded, method, key, pop_size=pop_size, max_iter=max_iter))
         out.append(Fitted(result, time.perf_counter() - start))
     return out
 
@@ -115,8 +121,9 @@ def buckets(datasets: Sequence[PolachDataset]) -> dict:
     return groups
 
 
-def fit_datasets_vmapped(datasets: Sequence[PolachDataset], method: str, key, *,
-                         pop_size: int = 50, max_iter: int = 300) -> list:
+def fit_datasets_vmapped(
+    datasets: Sequence[PolachDataset], method: str, key, *, pop_size: int = 50, max_iter: int = 300
+) -> list:
     """Fit every dataset, stacked per bucket, with one vmapped program per method and bucket
     (:func:`.polach_fit.fit_polach_batch`; the same ``key`` for every dataset). Agrees with
     :func:`fit_datasets` to round-off, not bit for bit (the batch changes XLA's reductions)."""
@@ -124,11 +131,11 @@ def fit_datasets_vmapped(datasets: Sequence[PolachDataset], method: str, key, *,
 
     results: list = [None] * len(datasets)
     for (length, _), idx in buckets(datasets).items():
-        stacked = jax.tree.map(lambda *a: jnp.stack(a),
-                               *[pad_dataset(datasets[i], length) for i in idx])
+        stacked = jax.tree.map(lambda *a: jnp.stack(a), *[pad_dataset(datasets[i], length) for i in idx])
         keys = jnp.stack([key] * len(idx))
-        batch = jax.block_until_ready(fit_polach_batch(stacked, method, keys, pop_size=pop_size,
-                                                       max_iter=max_iter))
+        batch = jax.block_until_ready(
+            fit_polach_batch(stacked, method, keys, pop_size=pop_size, max_iter=max_iter)
+        )
         for j, i in enumerate(idx):
             results[i] = jax.tree.map(lambda a: a[j], batch)
     return results

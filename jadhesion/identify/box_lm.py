@@ -33,7 +33,6 @@ from ..status import Status
 from .lm_optx import safe_residual
 from .lm_result import LMResult, status_code
 
-
 #: Inward probe (box-scaled) of variables on a face with a vanishing Jacobian column.
 PROBE = 0.01
 #: A stop counts as converged only if the undamped Gauss–Newton step would lower the cost by less
@@ -80,19 +79,31 @@ def _box_lm_stepper(residual, bounds, options):
 
     def linearise(u, args):
         """``½‖r‖²``, ``Jᵀr``, ``JᵀJ`` and ``max |r|`` at ``u``."""
+
         def f(v):
             r = res(lo + width * v, args)
             return r, r
+
         jac, r = jax.jacfwd(f, has_aux=True)(u)
         return 0.5 * jnp.sum(r * r), jac.T @ r, jac.T @ jac, jnp.max(jnp.abs(r))
 
     def init(p0):
         dtype = p0.dtype
         scalar = lambda v: jnp.asarray(v, dtype)  # noqa: E731
-        return _BoxState(jnp.clip((p0 - lo) / width, 0.0, 1.0), scalar(jnp.inf), jnp.zeros(d, dtype),
-                         jnp.zeros((d, d), dtype), scalar(0.0), jnp.zeros(d, dtype), scalar(1e-3),
-                         scalar(2.0), jnp.asarray(0), jnp.asarray(False), jnp.asarray(False),
-                         jnp.asarray(True))
+        return _BoxState(
+            jnp.clip((p0 - lo) / width, 0.0, 1.0),
+            scalar(jnp.inf),
+            jnp.zeros(d, dtype),
+            jnp.zeros((d, d), dtype),
+            scalar(0.0),
+            jnp.zeros(d, dtype),
+            scalar(1e-3),
+            scalar(2.0),
+            jnp.asarray(0),
+            jnp.asarray(False),
+            jnp.asarray(False),
+            jnp.asarray(True),
+        )
 
     def step(st, args):
         u, g, h, c, fresh = st.u, st.g, st.h, st.cost, st.fresh
@@ -107,14 +118,23 @@ def _box_lm_stepper(residual, bounds, options):
         predicted = -(g @ s) - 0.5 * (s @ (h @ s))
         rho = (c - c_new) / jnp.where(predicted > 0, predicted, jnp.inf)
         accept = fresh | ((rho > 1e-4) & jnp.isfinite(c_new))
-        small = ((c - c_new <= options.ftol * c)
-                 & (jnp.max(jnp.abs(s)) <= options.xtol * (options.xtol + jnp.max(jnp.abs(u)))))
+        small = (c - c_new <= options.ftol * c) & (
+            jnp.max(jnp.abs(s)) <= options.xtol * (options.xtol + jnp.max(jnp.abs(u)))
+        )
         pick = lambda new, old: jnp.where(accept, new, old)  # noqa: E731
-        u, g, h, c, rmax = (pick(u_new, u), pick(g_new, g), pick(h_new, h), pick(c_new, c),
-                            pick(rmax_new, st.rmax))
+        u, g, h, c, rmax = (
+            pick(u_new, u),
+            pick(g_new, g),
+            pick(h_new, h),
+            pick(c_new, c),
+            pick(rmax_new, st.rmax),
+        )
         stationary = jnp.max(jnp.abs(jnp.clip(u - g, 0.0, 1.0) - u)) <= options.gtol
-        lam = jnp.where(fresh, st.lam, jnp.where(
-            accept, st.lam * jnp.maximum(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3), st.lam * st.nu))
+        lam = jnp.where(
+            fresh,
+            st.lam,
+            jnp.where(accept, st.lam * jnp.maximum(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3), st.lam * st.nu),
+        )
         nu = jnp.where(accept, 2.0, 2.0 * st.nu)
         # MINPACK's ftol test: neither the model nor the trial can lower the cost by more than
         # ftol·C, so the iterate is a minimum to that precision even if the trial was rejected
@@ -125,37 +145,35 @@ def _box_lm_stepper(residual, bounds, options):
         # curve off; A = 1 with B = 0 makes both invisible) pass every test on a plateau. Probe:
         # move them jointly PROBE inwards; if that lowers the cost the point is no minimum, and
         # the run continues from the probe (a descent step the linear model cannot see).
-        flat_face = (((u <= 0.0) | (u >= 1.0))
-                     & (jnp.diag(h) <= jnp.finfo(u.dtype).eps * jnp.max(jnp.diag(h))))
+        flat_face = ((u <= 0.0) | (u >= 1.0)) & (jnp.diag(h) <= jnp.finfo(u.dtype).eps * jnp.max(jnp.diag(h)))
         u_probe = jnp.where(flat_face, jnp.abs(u - PROBE), u)
-        c_p, g_p, h_p, rmax_p = jax.lax.cond(stopped & jnp.any(flat_face),
-                                             lambda: linearise(u_probe, args),
-                                             lambda: (c, g, h, rmax))
+        c_p, g_p, h_p, rmax_p = jax.lax.cond(
+            stopped & jnp.any(flat_face), lambda: linearise(u_probe, args), lambda: (c, g, h, rmax)
+        )
         escape = stopped & (c_p < c)
         pick = lambda new, old: jnp.where(escape, new, old)  # noqa: E731
-        u, g, h, c, rmax = (pick(u_probe, u), pick(g_p, g), pick(h_p, h), pick(c_p, c),
-                            pick(rmax_p, rmax))
+        u, g, h, c, rmax = (pick(u_probe, u), pick(g_p, g), pick(h_p, h), pick(c_p, c), pick(rmax_p, rmax))
         stopped = stopped & ~escape
         # A test may pass only because heavy damping (λ·D, D a running maximum of diag H) made
         # the model flat: it is a minimum only if even the undamped Gauss–Newton step promises
         # less than GN_GAIN·C; otherwise the run stopped stalled.
         free_g = (~(((u <= 0.0) & (g > 0.0)) | ((u >= 1.0) & (g < 0.0)))).astype(u.dtype)
         a_gn = h * free_g[:, None] * free_g[None, :] + jnp.diag(
-            jnp.where(free_g > 0, 1e-12 * jnp.max(jnp.diag(h)) + jnp.finfo(u.dtype).tiny, 1.0))
+            jnp.where(free_g > 0, 1e-12 * jnp.max(jnp.diag(h)) + jnp.finfo(u.dtype).tiny, 1.0)
+        )
         gn_gain = 0.5 * (g * free_g) @ jnp.linalg.solve(a_gn, g * free_g)
         converged = stopped & (stationary | (gn_gain <= GN_GAIN * c))
         done = stopped | (lam > 1e16)
         steps = st.steps + jnp.where(fresh, 0, 1)
-        return _BoxState(u, c, g, h, rmax, dmax, lam, nu, steps, done, converged,
-                         jnp.asarray(False))
+        return _BoxState(u, c, g, h, rmax, dmax, lam, nu, steps, done, converged, jnp.asarray(False))
 
     def result(st):
         p = lo + width * st.u
         finite = (st.rmax < jnp.finfo(st.rmax.dtype).max ** 0.25) & jnp.isfinite(st.cost)
-        code = status_code(st.converged, st.done & ~st.converged,
-                           finite & jnp.all(jnp.isfinite(p)))
-        return LMResult(p, jnp.where(finite, 2.0 * st.cost, jnp.inf), st.steps,
-                        code == int(Status.CONVERGED), code)
+        code = status_code(st.converged, st.done & ~st.converged, finite & jnp.all(jnp.isfinite(p)))
+        return LMResult(
+            p, jnp.where(finite, 2.0 * st.cost, jnp.inf), st.steps, code == int(Status.CONVERGED), code
+        )
 
     return init, step, result
 
@@ -172,6 +190,7 @@ def box_lm(residual, p0, args, bounds, options=BoxLMOptions(), *, max_steps=100)
     ``steps`` counts iterations; each costs one residual and one forward Jacobian."""
     p0, bounds, options = _prepare(p0, bounds, options)
     init, step, result = _box_lm_stepper(residual, bounds, options)
-    final = jax.lax.while_loop(lambda st: ~st.done & (st.steps < max_steps),
-                               lambda st: step(st, args), init(p0))
+    final = jax.lax.while_loop(
+        lambda st: ~st.done & (st.steps < max_steps), lambda st: step(st, args), init(p0)
+    )
     return result(final)

@@ -17,11 +17,11 @@ import jax.numpy as jnp
 
 from ..status import Status
 from .driver import STALL_FTOL, run_until
-from .polach_fit import check_float64
 from .lm import lm_solve, sse_objective
-from .uncertainty import covariance as param_covariance
 from .methods import NAMES as METHODS
 from .methods import POPULATION
+from .polach_fit import check_float64
+from .uncertainty import covariance as param_covariance
 
 
 class CurveFitResult(NamedTuple):
@@ -53,29 +53,59 @@ def _residual(f):
     def residual(p, data):
         x, y = data
         return (f(x, p) - y).ravel()
+
     return residual
 
 
-@functools.partial(jax.jit, static_argnames=("f", "method", "pop_size", "max_iter", "use_target",
-                                             "max_steps"))
-def _fit(f, method, pop_size, max_iter, use_target, max_steps, x, y, p0, bounds, key, target,
-         rtol, atol):
+@functools.partial(
+    jax.jit, static_argnames=("f", "method", "pop_size", "max_iter", "use_target", "max_steps")
+)
+def _fit(f, method, pop_size, max_iter, use_target, max_steps, x, y, p0, bounds, key, target, rtol, atol):
     residual = _residual(f)
     if method == "lm":
         out = lm_solve(residual, p0, (x, y), bounds, rtol=rtol, atol=atol, max_steps=max_steps)
         p, iterations, evaluations = out.params, out.steps, out.steps + 1
     else:
-        out = run_until(POPULATION[method], sse_objective(residual), bounds, key, pop_size,
-                        max_iter, target if use_target else None, args=(x, y),
-                        ftol=None if use_target else STALL_FTOL)
+        out = run_until(
+            POPULATION[method],
+            sse_objective(residual),
+            bounds,
+            key,
+            pop_size,
+            max_iter,
+            target if use_target else None,
+            args=(x, y),
+            ftol=None if use_target else STALL_FTOL,
+        )
         p, iterations, evaluations = out.best_x, out.iterations, out.n_evals
     r = residual(p, (x, y))
-    return (p, covariance(f, x, y, p), jnp.sum(r * r), jnp.mean(jnp.abs(r)), iterations,
-            evaluations, out.status)
+    return (
+        p,
+        covariance(f, x, y, p),
+        jnp.sum(r * r),
+        jnp.mean(jnp.abs(r)),
+        iterations,
+        evaluations,
+        out.status,
+    )
 
 
-def curve_fit(f, x, y, p0, *, bounds=None, method="lm", key=None, pop_size=50, max_iter=500,
-              target=None, rtol=1e-12, atol=1e-12, max_steps=2000) -> CurveFitResult:
+def curve_fit(
+    f,
+    x,
+    y,
+    p0,
+    *,
+    bounds=None,
+    method="lm",
+    key=None,
+    pop_size=50,
+    max_iter=500,
+    target=None,
+    rtol=1e-12,
+    atol=1e-12,
+    max_steps=2000,
+) -> CurveFitResult:
     """Fit ``f(x, params) -> y`` (JAX-traceable, ``params`` 1-D) by least squares.
 
     Args:
@@ -104,8 +134,21 @@ def curve_fit(f, x, y, p0, *, bounds=None, method="lm", key=None, pop_size=50, m
     key = jax.random.key(0) if key is None else key
     target = jnp.asarray(jnp.nan if target is None else target, p0.dtype)
     start = time.perf_counter()
-    out = _fit(f, method, pop_size, max_iter, not bool(jnp.isnan(target)), max_steps,
-               jnp.asarray(x), jnp.asarray(y), p0, bounds, key, target, rtol, atol)
+    out = _fit(
+        f,
+        method,
+        pop_size,
+        max_iter,
+        not bool(jnp.isnan(target)),
+        max_steps,
+        jnp.asarray(x),
+        jnp.asarray(y),
+        p0,
+        bounds,
+        key,
+        target,
+        rtol,
+        atol,
+    )
     jax.block_until_ready(out)
-    return CurveFitResult(*out[:6], time.perf_counter() - start, out[6] == int(Status.CONVERGED),
-                          out[6])
+    return CurveFitResult(*out[:6], time.perf_counter() - start, out[6] == int(Status.CONVERGED), out[6])

@@ -85,15 +85,27 @@ def _stalled(f_old, f_new, ftol):
 
 
 def _status(best_f, converged):
-    return jnp.where(~jnp.isfinite(best_f), int(Status.NONFINITE),
-                     jnp.where(converged, int(Status.CONVERGED), int(Status.MAX_STEPS))
-                     ).astype(jnp.int32)
+    return jnp.where(
+        ~jnp.isfinite(best_f),
+        int(Status.NONFINITE),
+        jnp.where(converged, int(Status.CONVERGED), int(Status.MAX_STEPS)),
+    ).astype(jnp.int32)
 
 
-@functools.partial(jax.jit, static_argnames=("algorithm", "objective", "pop_size", "max_iter",
-                                             "window"))
-def run(algorithm, objective, bounds, key, pop_size, max_iter, target=None, params=None, args=None,
-        ftol=STALL_FTOL, window=STALL_WINDOW):
+@functools.partial(jax.jit, static_argnames=("algorithm", "objective", "pop_size", "max_iter", "window"))
+def run(
+    algorithm,
+    objective,
+    bounds,
+    key,
+    pop_size,
+    max_iter,
+    target=None,
+    params=None,
+    args=None,
+    ftol=STALL_FTOL,
+    window=STALL_WINDOW,
+):
     """Run ``max_iter`` iterations under ``lax.scan``, keeping the best-so-far history; the
     status is ``CONVERGED`` when the target was hit or the last ``window`` iterations pass the
     stall test."""
@@ -111,17 +123,34 @@ def run(algorithm, objective, bounds, key, pop_size, max_iter, target=None, para
     first = jnp.argmax(hit)
     reached = jnp.any(hit)
     back = min(window, max_iter)
-    stalled = (max_iter >= window) & _stalled(f_all[-1 - back], f_all[-1],
-                                              _ftol(ftol, f_all.dtype))
-    return RunResult(state.best_x, state.best_f, jnp.asarray(max_iter), state.n_evals,
-                     jnp.where(reached, first, -1), jnp.where(reached, e_all[first], -1), state, hist,
-                     _status(state.best_f, reached | stalled))
+    stalled = (max_iter >= window) & _stalled(f_all[-1 - back], f_all[-1], _ftol(ftol, f_all.dtype))
+    return RunResult(
+        state.best_x,
+        state.best_f,
+        jnp.asarray(max_iter),
+        state.n_evals,
+        jnp.where(reached, first, -1),
+        jnp.where(reached, e_all[first], -1),
+        state,
+        hist,
+        _status(state.best_f, reached | stalled),
+    )
 
 
-@functools.partial(jax.jit, static_argnames=("algorithm", "objective", "pop_size", "max_iter",
-                                             "window"))
-def run_until(algorithm, objective, bounds, key, pop_size, max_iter, target=None, params=None,
-              args=None, ftol=None, window=STALL_WINDOW):
+@functools.partial(jax.jit, static_argnames=("algorithm", "objective", "pop_size", "max_iter", "window"))
+def run_until(
+    algorithm,
+    objective,
+    bounds,
+    key,
+    pop_size,
+    max_iter,
+    target=None,
+    params=None,
+    args=None,
+    ftol=None,
+    window=STALL_WINDOW,
+):
     """Iterate under a bounded ``lax.while_loop`` until ``best_f ≤ target``, the stall test
     (``ftol`` over ``window`` iterations; ``ftol=None`` switches it off) passes, or ``max_iter``.
 
@@ -144,9 +173,16 @@ def run_until(algorithm, objective, bounds, key, pop_size, max_iter, target=None
         stalled = (i + 1 >= window) & _stalled(ring[slot], state.best_f, ftol)
         return i + 1, state, ring.at[slot].set(state.best_f), stalled
 
-    i, state, _, stalled = jax.lax.while_loop(cond, body,
-                                              (jnp.asarray(0), state0, ring0, jnp.asarray(False)))
+    i, state, _, stalled = jax.lax.while_loop(cond, body, (jnp.asarray(0), state0, ring0, jnp.asarray(False)))
     reached = state.best_f <= target
-    return RunResult(state.best_x, state.best_f, i, state.n_evals, jnp.where(reached, i, -1),
-                     jnp.where(reached, state.n_evals, -1), state, None,
-                     _status(state.best_f, reached | stalled))
+    return RunResult(
+        state.best_x,
+        state.best_f,
+        i,
+        state.n_evals,
+        jnp.where(reached, i, -1),
+        jnp.where(reached, state.n_evals, -1),
+        state,
+        None,
+        _status(state.best_f, reached | stalled),
+    )

@@ -27,16 +27,16 @@ class ChainTooShortWarning(UserWarning):
 class Diagnostics(NamedTuple):
     """Sampler diagnostics; ``tau`` and ``ess`` per sampled coordinate."""
 
-    acceptance: float        # mean acceptance fraction of the walkers
-    tau: np.ndarray          # integrated autocorrelation time [kept (thinned) steps]
-    ess: np.ndarray          # effective sample size = n_samples / tau
-    n_samples: int           # walkers × kept steps
-    steps: int               # total steps run (burn-in included)
+    acceptance: float  # mean acceptance fraction of the walkers
+    tau: np.ndarray  # integrated autocorrelation time [kept (thinned) steps]
+    ess: np.ndarray  # effective sample size = n_samples / tau
+    n_samples: int  # walkers × kept steps
+    steps: int  # total steps run (burn-in included)
     burn: int
     thin: int
-    seconds: float           # wall time of the sampling loop [s]
-    warnings: tuple          # messages (e.g. chain too short)
-    compile_seconds: float = 0.0   # first (compiling) log-probability calls, outside ``seconds``
+    seconds: float  # wall time of the sampling loop [s]
+    warnings: tuple  # messages (e.g. chain too short)
+    compile_seconds: float = 0.0  # first (compiling) log-probability calls, outside ``seconds``
 
 
 def integrated_time(chain: np.ndarray) -> np.ndarray:
@@ -45,9 +45,17 @@ def integrated_time(chain: np.ndarray) -> np.ndarray:
     return emcee.autocorr.integrated_time(chain, tol=0)
 
 
-def run_ensemble(log_prob: Callable[[np.ndarray], np.ndarray], p0: np.ndarray, steps: int,
-                 seed: int | np.random.Generator, *, burn: int = 0, thin: int = 1,
-                 callback: Optional[Callable[[int], None]] = None, callback_every: int = 100):
+def run_ensemble(
+    log_prob: Callable[[np.ndarray], np.ndarray],
+    p0: np.ndarray,
+    steps: int,
+    seed: int | np.random.Generator,
+    *,
+    burn: int = 0,
+    thin: int = 1,
+    callback: Optional[Callable[[int], None]] = None,
+    callback_every: int = 100,
+):
     """Run emcee from walkers ``p0`` (W, d); returns ``(chain, diagnostics)`` with ``chain`` of shape
     (kept steps, W, d) after discarding ``burn`` steps and keeping every ``thin``-th.
 
@@ -71,10 +79,21 @@ def run_ensemble(log_prob: Callable[[np.ndarray], np.ndarray], p0: np.ndarray, s
     tau = integrated_time(chain)
     messages = []
     if chain.shape[0] < MIN_TAU_MULTIPLE * np.max(tau):
-        messages.append(f"chain of {chain.shape[0]} kept steps is shorter than {MIN_TAU_MULTIPLE} "
-                        f"autocorrelation times (tau_max = {np.max(tau):.1f} steps): run at least "
-                        f"{int(math.ceil(MIN_TAU_MULTIPLE * np.max(tau) * thin + burn))} steps")
+        messages.append(
+            f"chain of {chain.shape[0]} kept steps is shorter than {MIN_TAU_MULTIPLE} "
+            f"autocorrelation times (tau_max = {np.max(tau):.1f} steps): run at least "
+            f"{int(math.ceil(MIN_TAU_MULTIPLE * np.max(tau) * thin + burn))} steps"
+        )
         warnings.warn(messages[-1], ChainTooShortWarning, stacklevel=3)
     n = chain.shape[0] * walkers
-    return chain, Diagnostics(float(np.mean(sampler.acceptance_fraction)), tau, n / tau, n, steps,
-                              burn, thin, seconds, tuple(messages))
+    return chain, Diagnostics(
+        float(np.mean(sampler.acceptance_fraction)),
+        tau,
+        n / tau,
+        n,
+        steps,
+        burn,
+        thin,
+        seconds,
+        tuple(messages),
+    )

@@ -29,9 +29,20 @@ def seed_starts(residual, bounds, key, args=None, *, n_starts=4, pop_size=20, se
     return population[jnp.argsort(fitness)[:n_starts]], n_evals
 
 
-def global_lm(residual, bounds, key, args=None, *, n_starts=4, pop_size=20, search_iter=5,
-              search_args=None, max_steps=100, options=BoxLMOptions()):
-    """"Global LM": :func:`seed_starts` (a search on ``‖r‖²``) seeds ``n_starts`` :func:`box_lm`
+def global_lm(
+    residual,
+    bounds,
+    key,
+    args=None,
+    *,
+    n_starts=4,
+    pop_size=20,
+    search_iter=5,
+    search_args=None,
+    max_steps=100,
+    options=BoxLMOptions(),
+):
+    """ "Global LM": :func:`seed_starts` (a search on ``‖r‖²``) seeds ``n_starts`` :func:`box_lm`
     runs from its best members; the lowest-SSE answer is returned.
 
     With ``search_args`` (e.g. a subsample of the data) the search *and* the multi-start LM use
@@ -39,8 +50,9 @@ def global_lm(residual, bounds, key, args=None, *, n_starts=4, pop_size=20, sear
     full-data Jacobians are then paid once, not ``n_starts`` times. Returns ``(LMResult,
     population evaluations)``; ``steps`` sums every LM run's steps."""
     sub = args if search_args is None else search_args
-    starts, n_evals = seed_starts(residual, bounds, key, sub, n_starts=n_starts,
-                                  pop_size=pop_size, search_iter=search_iter)
+    starts, n_evals = seed_starts(
+        residual, bounds, key, sub, n_starts=n_starts, pop_size=pop_size, search_iter=search_iter
+    )
     solve = lambda p, a: box_lm(residual, p, a, bounds, options, max_steps=max_steps)  # noqa: E731
     out = best_of(jax.vmap(solve, in_axes=(0, None))(starts, sub))
     if search_args is not None:

@@ -78,7 +78,7 @@ class KienckeFit(NamedTuple):
 def to_params(z):
     """``[p1, p2, a_s]`` of search coordinates ``z = (log10 a_s, log10 λ_m, μ_m)``."""
     a_s, lam_m, mu_m = 10.0 ** z[..., 0], 10.0 ** z[..., 1], z[..., 2]
-    return jnp.stack([a_s / mu_m - 2.0 / lam_m, lam_m ** -2.0, a_s], axis=-1)
+    return jnp.stack([a_s / mu_m - 2.0 / lam_m, lam_m**-2.0, a_s], axis=-1)
 
 
 def to_search(params):
@@ -90,8 +90,12 @@ def to_search(params):
 
 def informative(data: PolachDataset):
     """Weights (n,) 1.0/0.0: finite creep and μ̂, ``|v| ≥ MIN_SPEED``, ``|μ̂| ≥ MIN_ADHESION``."""
-    ok = (jnp.isfinite(data.creep) & jnp.isfinite(data.adhesion)
-          & (jnp.abs(data.vehicle_speed) >= MIN_SPEED) & (jnp.abs(data.adhesion) >= MIN_ADHESION))
+    ok = (
+        jnp.isfinite(data.creep)
+        & jnp.isfinite(data.adhesion)
+        & (jnp.abs(data.vehicle_speed) >= MIN_SPEED)
+        & (jnp.abs(data.adhesion) >= MIN_ADHESION)
+    )
     return ok.astype(data.adhesion.dtype)
 
 
@@ -119,8 +123,16 @@ def _bounds(dtype):
 def _fit(method, pop_size, max_iter, data, key):
     bounds = _bounds(data.adhesion.dtype)
     if method == "lm":
-        out, n_pop = global_lm(kiencke_residual, bounds, key, data, n_starts=LM_STARTS,
-                               pop_size=LM_POP, search_iter=0, max_steps=LM_MAX_STEPS)
+        out, n_pop = global_lm(
+            kiencke_residual,
+            bounds,
+            key,
+            data,
+            n_starts=LM_STARTS,
+            pop_size=LM_POP,
+            search_iter=0,
+            max_steps=LM_MAX_STEPS,
+        )
         z, iterations, evaluations = out.params, out.steps, n_pop + out.steps
         status = jnp.where(out.success, Status.CONVERGED, Status.MAX_STEPS)
     else:
@@ -138,12 +150,22 @@ def _fit(method, pop_size, max_iter, data, key):
     finite = jnp.all(jnp.isfinite(params)) & jnp.isfinite(mae)
     status = jnp.where(finite, status, Status.NONFINITE)
     status = jnp.where(n_used < MIN_SAMPLES, Status.NOT_RUN, status).astype(jnp.int32)
-    return KienckeFit(params, mae, jnp.sum(r * r), creep_opt, mu_max, iterations, evaluations,
-                      n_used.astype(jnp.int32), status)
+    return KienckeFit(
+        params,
+        mae,
+        jnp.sum(r * r),
+        creep_opt,
+        mu_max,
+        iterations,
+        evaluations,
+        n_used.astype(jnp.int32),
+        status,
+    )
 
 
-def fit_kiencke(dataset: PolachDataset, method: str = "lm", key=None, *, pop_size: int = 50,
-                max_iter: int = 300) -> KienckeFit:
+def fit_kiencke(
+    dataset: PolachDataset, method: str = "lm", key=None, *, pop_size: int = 50, max_iter: int = 300
+) -> KienckeFit:
     """Fit ``[p1, p2, a_s]`` of Kiencke's model to one dataset (module docstring).
 
     ``method``: ``"lm"`` (default; deterministic given ``key``), ``"itlbo"``, ``"tlbo"`` or
@@ -167,7 +189,15 @@ def fit_document(fit: KienckeFit) -> dict:
         v = float(v)
         return v if math.isfinite(v) else None
 
-    return {"model": "kiencke", "params": dict(zip(PARAM_NAMES, map(num, fit.params))),
-            "mae": num(fit.mae), "mu_max": num(fit.mu_max), "creep_opt": num(fit.creep_opt),
-            "iterations": int(fit.iterations), "evaluations": int(fit.evaluations),
-            "n_used": int(fit.n_used), "status": status.label, "converged": status.converged}
+    return {
+        "model": "kiencke",
+        "params": dict(zip(PARAM_NAMES, map(num, fit.params))),
+        "mae": num(fit.mae),
+        "mu_max": num(fit.mu_max),
+        "creep_opt": num(fit.creep_opt),
+        "iterations": int(fit.iterations),
+        "evaluations": int(fit.evaluations),
+        "n_used": int(fit.n_used),
+        "status": status.label,
+        "converged": status.converged,
+    }

@@ -17,17 +17,21 @@ import numpy as np
 
 from ..data.dataset import PolachDataset
 from ..models.polach import BOUNDS
-from .likelihood import ObserverTerms, prediction
 from .box_lm import box_lm
+from .likelihood import ObserverTerms, prediction
 from .lm_result import best_of
-from .uncertainty import covariance
 from .polach_fit import polach_residual
+from .uncertainty import covariance
 
 #: Multi-start points of :func:`lm_optimum` (rows of [kA, kS, mu0, A, B]).
-STARTS = np.array([[0.5, 0.5, 0.35, 0.5, 0.3],
-                    [0.2, 0.8, 0.30, 0.2, 0.1],
-                    [0.9, 0.3, 0.40, 0.7, 0.6],
-                    [0.6, 0.9, 0.35, 0.4, 0.2]])
+STARTS = np.array(
+    [
+        [0.5, 0.5, 0.35, 0.5, 0.3],
+        [0.2, 0.8, 0.30, 0.2, 0.1],
+        [0.9, 0.3, 0.40, 0.7, 0.6],
+        [0.6, 0.9, 0.35, 0.4, 0.2],
+    ]
+)
 
 
 def observer_residual(theta, args):
@@ -67,8 +71,9 @@ def _laplace_covariance(theta_hat, data, obs):
     return covariance(jac, r, hac=False)[0]
 
 
-def initial_spread(theta_hat, data: PolachDataset, floor: float = 1e-4, cap: float = 0.05,
-                   obs: ObserverTerms | None = None):
+def initial_spread(
+    theta_hat, data: PolachDataset, floor: float = 1e-4, cap: float = 0.05, obs: ObserverTerms | None = None
+):
     """Per-parameter walker-ball radius (fraction of the unit box): half the Laplace standard
     deviation, kept within ``[floor, cap]`` (the cap also covers a singular ``JᵀJ``)."""
     std = jnp.sqrt(jnp.diag(laplace_covariance(theta_hat, data, obs)))

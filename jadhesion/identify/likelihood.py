@@ -93,9 +93,9 @@ _GH_W = _GH_W / _GH_W.sum()
 
 class ObserverTerms(NamedTuple):
     """What the ``"observer"`` likelihood needs besides the dataset (a pytree, arrays float64):
-        torque_term: ``(T − LP[T]) / (m g r)`` [-], shape (n,) (zeros for ``filtered_torque``).
-        alpha, gain0, gain1: first-order-hold low-pass coefficients per step, shape (n − 1,):
-            ``x_{k+1} = alpha x_k + gain0 u_k + gain1 u_{k+1}``, ``x_0 = u_0``.
+    torque_term: ``(T − LP[T]) / (m g r)`` [-], shape (n,) (zeros for ``filtered_torque``).
+    alpha, gain0, gain1: first-order-hold low-pass coefficients per step, shape (n − 1,):
+        ``x_{k+1} = alpha x_k + gain0 u_k + gain1 u_{k+1}``, ``x_0 = u_0``.
     """
 
     torque_term: jax.Array
@@ -104,14 +104,22 @@ class ObserverTerms(NamedTuple):
     gain1: jax.Array
 
 
-def observer_terms(time, torque, axle_load_kg: float, wheel_radius_m: float, t0: float,
-                   variant: str = "paper", gravity: float = GRAVITY) -> ObserverTerms:
+def observer_terms(
+    time,
+    torque,
+    axle_load_kg: float,
+    wheel_radius_m: float,
+    t0: float,
+    variant: str = "paper",
+    gravity: float = GRAVITY,
+) -> ObserverTerms:
     """:class:`ObserverTerms` of a recording: ``time`` [s] (n,), recorded ``torque`` [N·m] (n,),
     the observer's axle load [kg], nominal radius [m] and time constant ``T0`` [s]."""
     time, torque = jnp.asarray(time, jnp.float64), jnp.asarray(torque, jnp.float64)
     if time.ndim != 1 or time.shape != torque.shape or time.shape[0] < 3:
-        raise ValueError(f"time and torque must be 1-D of equal length >= 3, got {time.shape}, "
-                         f"{torque.shape}")
+        raise ValueError(
+            f"time and torque must be 1-D of equal length >= 3, got {time.shape}, {torque.shape}"
+        )
     if variant == "paper":
         term = (torque - lowpass_foh(time, torque, t0)) / (axle_load_kg * gravity * wheel_radius_m)
     elif variant == "filtered_torque":
@@ -129,11 +137,19 @@ def recording_observer_terms(recording, variant: str = "paper") -> ObserverTerms
     cols = recording.columns
     missing = [c for c in ("time", "traction_torque") if c not in cols]
     if missing:
-        raise ValueError(f"the observer likelihood needs the column(s) {', '.join(missing)} "
-                         f"(a raw recording, not a creepage-only dataset)")
+        raise ValueError(
+            f"the observer likelihood needs the column(s) {', '.join(missing)} "
+            f"(a raw recording, not a creepage-only dataset)"
+        )
     v = recording.vehicle
-    return observer_terms(cols["time"], cols["traction_torque"], v.axle_load_kg, v.wheel_radius_m,
-                          v.observer_time_constant_s, variant)
+    return observer_terms(
+        cols["time"],
+        cols["traction_torque"],
+        v.axle_load_kg,
+        v.wheel_radius_m,
+        v.observer_time_constant_s,
+        variant,
+    )
 
 
 def lowpass(u, obs: ObserverTerms):
@@ -180,8 +196,7 @@ def _predict(theta, data, likelihood, obs):
     return lowpass(mean, obs) + obs.torque_term, var
 
 
-def prediction(theta, data: PolachDataset, likelihood: str = "gauss",
-               obs: Optional[ObserverTerms] = None):
+def prediction(theta, data: PolachDataset, likelihood: str = "gauss", obs: Optional[ObserverTerms] = None):
     """The predicted ``mu_hat`` (n,) of a likelihood (the observer's view for ``"observer"``; the
     expectation over the slip's uncertainty when the dataset has ``slip_sd``)."""
     return _predict(theta, data, likelihood, obs)[0]
@@ -193,12 +208,22 @@ def ar1_log_likelihood(r, log_sigma, rho):
     one_m = 1.0 - rho * rho
     e = r[1:] - rho * r[:-1]
     sse = one_m * r[0] ** 2 + jnp.sum(e * e)
-    return (-n * log_sigma - 0.5 * n * math.log(2.0 * math.pi) + 0.5 * jnp.log(one_m)
-            - 0.5 * sse * jnp.exp(-2.0 * log_sigma))
+    return (
+        -n * log_sigma
+        - 0.5 * n * math.log(2.0 * math.pi)
+        + 0.5 * jnp.log(one_m)
+        - 0.5 * sse * jnp.exp(-2.0 * log_sigma)
+    )
 
 
-def log_likelihood(theta, log_scale, data: PolachDataset, likelihood: str = "gauss", rho=0.0,
-                   obs: Optional[ObserverTerms] = None):
+def log_likelihood(
+    theta,
+    log_scale,
+    data: PolachDataset,
+    likelihood: str = "gauss",
+    rho=0.0,
+    obs: Optional[ObserverTerms] = None,
+):
     """Log-likelihood of the dataset's adhesion samples given ``theta`` (5,), ``log_scale`` and,
     for ``"ar1"``/``"observer"``, the AR(1) coefficient ``rho`` and (observer) ``obs``."""
     if likelihood not in LIKELIHOODS:
@@ -212,8 +237,12 @@ def log_likelihood(theta, log_scale, data: PolachDataset, likelihood: str = "gau
         return ar1_log_likelihood(r, log_scale, rho) - jnp.sum(log_lam)
     scale = jnp.exp(log_scale)
     if likelihood == "gauss":
-        return (-n * log_scale - 0.5 * jnp.sum(r * r) / scale**2 - 0.5 * n * math.log(2.0 * math.pi)
-                - jnp.sum(log_lam))
+        return (
+            -n * log_scale
+            - 0.5 * jnp.sum(r * r) / scale**2
+            - 0.5 * n * math.log(2.0 * math.pi)
+            - jnp.sum(log_lam)
+        )
     return -n * (log_scale + math.log(2.0)) - jnp.sum(jnp.abs(r)) / scale - jnp.sum(log_lam)
 
 
@@ -223,8 +252,10 @@ def _split(phi, likelihood: str):
     has_rho = likelihood in AUTOREGRESSIVE
     expected = {False: (0, 1), True: (1, 2)}[has_rho]
     if n_noise not in expected:
-        raise ValueError(f"phi for likelihood {likelihood!r} must have {5 + expected[0]} or "
-                         f"{5 + expected[1]} entries, got shape {phi.shape}")
+        raise ValueError(
+            f"phi for likelihood {likelihood!r} must have {5 + expected[0]} or "
+            f"{5 + expected[1]} entries, got shape {phi.shape}"
+        )
     return phi[:5], phi[5] if n_noise == expected[1] else None, phi[-1] if has_rho else None
 
 
@@ -239,8 +270,15 @@ def log_prior(phi, lower, upper, likelihood: str = "gauss"):
     return jnp.where(inside, 0.0, -jnp.inf)
 
 
-def log_posterior(phi, data: PolachDataset, lower, upper, fixed_log_scale=0.0,
-                  likelihood: str = "gauss", obs: Optional[ObserverTerms] = None):
+def log_posterior(
+    phi,
+    data: PolachDataset,
+    lower,
+    upper,
+    fixed_log_scale=0.0,
+    likelihood: str = "gauss",
+    obs: Optional[ObserverTerms] = None,
+):
     """Unnormalised log-posterior of one parameter vector ``phi`` (see the module docstring for its
     layout; the scale fixed at ``exp(fixed_log_scale)`` when left out). ``-inf`` outside the prior
     support or when not finite."""
@@ -255,15 +293,28 @@ def log_posterior(phi, data: PolachDataset, lower, upper, fixed_log_scale=0.0,
 
 
 @partial(jax.jit, static_argnames=("likelihood",))
-def batch_log_posterior(phis, data: PolachDataset, lower, upper, fixed_log_scale=0.0,
-                        likelihood: str = "gauss", obs: Optional[ObserverTerms] = None):
+def batch_log_posterior(
+    phis,
+    data: PolachDataset,
+    lower,
+    upper,
+    fixed_log_scale=0.0,
+    likelihood: str = "gauss",
+    obs: Optional[ObserverTerms] = None,
+):
     """:func:`log_posterior` of a whole ensemble ``phis`` (W, d) in one jitted, vmapped call."""
     return jax.vmap(log_posterior, in_axes=(0, None, None, None, None, None, None))(
-        phis, data, lower, upper, fixed_log_scale, likelihood, obs)
+        phis, data, lower, upper, fixed_log_scale, likelihood, obs
+    )
 
 
-def ensemble_log_prob(data: PolachDataset, likelihood: str = "gauss", bounds=None,
-                      fixed_scale: float | None = None, obs: Optional[ObserverTerms] = None):
+def ensemble_log_prob(
+    data: PolachDataset,
+    likelihood: str = "gauss",
+    bounds=None,
+    fixed_scale: float | None = None,
+    obs: Optional[ObserverTerms] = None,
+):
     """A NumPy-in/NumPy-out log-probability for ``emcee.EnsembleSampler(vectorize=True)``.
 
     The dataset, box and observer terms become float64 device arrays once; each call is one
@@ -282,8 +333,9 @@ def ensemble_log_prob(data: PolachDataset, likelihood: str = "gauss", bounds=Non
         if obs is None:
             raise ValueError("the observer likelihood needs ObserverTerms (observer_terms(...))")
         if obs.torque_term.shape != data.adhesion.shape:
-            raise ValueError(f"observer terms for {obs.torque_term.shape[0]} samples, dataset has "
-                             f"{data.adhesion.shape[0]}")
+            raise ValueError(
+                f"observer terms for {obs.torque_term.shape[0]} samples, dataset has {data.adhesion.shape[0]}"
+            )
     else:
         obs = None
     lower, upper = (np.zeros(5), np.ones(5)) if bounds is None else bounds
@@ -294,7 +346,8 @@ def ensemble_log_prob(data: PolachDataset, likelihood: str = "gauss", bounds=Non
     fixed = f64(0.0 if fixed_scale is None else math.log(fixed_scale))
 
     def log_prob(phis: np.ndarray) -> np.ndarray:
-        return np.asarray(batch_log_posterior(np.asarray(phis, np.float64), data, lower, upper,
-                                              fixed, likelihood, obs))
+        return np.asarray(
+            batch_log_posterior(np.asarray(phis, np.float64), data, lower, upper, fixed, likelihood, obs)
+        )
 
     return log_prob

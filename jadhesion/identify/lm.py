@@ -13,6 +13,21 @@ from .lm_optx import from_box, lm_solve, multistart, safe_residual, to_box
 from .lm_queue import box_lm_queue
 from .lm_result import LMResult, best_of, sse_objective, status_code
 
-__all__ = ["GN_GAIN", "PROBE", "BoxLMOptions", "LMResult", "best_of", "box_lm", "box_lm_queue",
-           "from_box", "global_lm", "lm_solve", "multistart", "safe_residual", "seed_starts",
-           "sse_objective", "status_code", "to_box"]
+__all__ = [
+    "GN_GAIN",
+    "PROBE",
+    "BoxLMOptions",
+    "LMResult",
+    "best_of",
+    "box_lm",
+    "box_lm_queue",
+    "from_box",
+    "global_lm",
+    "lm_solve",
+    "multistart",
+    "safe_residual",
+    "seed_starts",
+    "sse_objective",
+    "status_code",
+    "to_box",
+]

@@ -29,10 +29,12 @@ from .lm_result import LMResult, best_of
 
 def safe_residual(residual):
     """``residual`` with non-finite components replaced by ``finfo.max^¼`` (zero derivative)."""
+
     def fn(p, args):
         r = residual(p, args)
         big = jnp.finfo(r.dtype).max ** 0.25
         return jnp.where(jnp.isfinite(r), r, big)
+
     return fn
 
 
@@ -57,15 +59,21 @@ def _solve(fn, y0, args, rtol, atol, max_steps):
 
 def _optx_status(result):
     """optimistix's result as a :class:`Status` code (finiteness is checked by the caller)."""
-    return jnp.where(result == optx.RESULTS.successful, int(Status.CONVERGED), jnp.where(
-        result == optx.RESULTS.max_steps_reached, int(Status.MAX_STEPS),
-        jnp.where(result == optx.RESULTS.nonfinite, int(Status.NONFINITE),
-                  int(Status.STALLED)))).astype(jnp.int32)
+    return jnp.where(
+        result == optx.RESULTS.successful,
+        int(Status.CONVERGED),
+        jnp.where(
+            result == optx.RESULTS.max_steps_reached,
+            int(Status.MAX_STEPS),
+            jnp.where(result == optx.RESULTS.nonfinite, int(Status.NONFINITE), int(Status.STALLED)),
+        ),
+    ).astype(jnp.int32)
 
 
 def _solve_unbounded(res, p0, args, rtol, atol, max_steps):
     """Three passes of one (traced-once) solve in ``u = p / scale``: ``scale = 1`` and
     ``scale = |p0|`` from ``p0``, then a polish rescaled at the best so far; the lowest SSE wins."""
+
     def sse(p):
         r = res(p, args)
         return jnp.sum(r * r)
@@ -106,8 +114,7 @@ def lm_solve(residual, p0, args=None, bounds=None, *, rtol=1e-12, atol=1e-12, ma
     sse = jnp.sum(r * r)
     finite = jnp.isfinite(sse) & jnp.all(jnp.isfinite(p))
     code = jnp.where(finite, ok, int(Status.NONFINITE)).astype(jnp.int32)
-    return LMResult(p, jnp.where(jnp.isfinite(sse), sse, jnp.inf), steps,
-                    code == int(Status.CONVERGED), code)
+    return LMResult(p, jnp.where(jnp.isfinite(sse), sse, jnp.inf), steps, code == int(Status.CONVERGED), code)
 
 
 def multistart(residual, starts, args=None, bounds=None, **options):

@@ -15,8 +15,7 @@ from .box_lm import BoxLMOptions, _box_lm_stepper, _prepare
 
 
 @functools.partial(jax.jit, static_argnames=("residual", "max_steps", "lanes"))
-def box_lm_queue(residual, starts, args, bounds, options=BoxLMOptions(), *, max_steps=100,
-                 lanes=8):
+def box_lm_queue(residual, starts, args, bounds, options=BoxLMOptions(), *, max_steps=100, lanes=8):
     """:func:`box_lm` on many problems — row ``i`` of ``starts`` (N, d) with the ``i``-th slice of
     the stacked pytree ``args`` — as a work queue: ``lanes`` problems iterate side by side (one
     vmapped step) and a lane that converges takes the next waiting problem at once. A plain
@@ -35,16 +34,21 @@ def box_lm_queue(residual, starts, args, bounds, options=BoxLMOptions(), *, max_
         live = index < n_problems
         lane_args = take(jnp.minimum(index, n_problems - 1))
         stepped = jax.vmap(step)(states, lane_args)
-        states = jax.tree.map(lambda new, old: jnp.where(
-            live.reshape((-1,) + (1,) * (new.ndim - 1)), new, old), stepped, states)
+        states = jax.tree.map(
+            lambda new, old: jnp.where(live.reshape((-1,) + (1,) * (new.ndim - 1)), new, old), stepped, states
+        )
         ending = live & jax.vmap(finished)(states)
-        out = jax.tree.map(lambda o, v: o.at[jnp.where(ending, index, n_problems)].set(v, mode="drop"),
-                           out, jax.vmap(result)(states))
+        out = jax.tree.map(
+            lambda o, v: o.at[jnp.where(ending, index, n_problems)].set(v, mode="drop"),
+            out,
+            jax.vmap(result)(states),
+        )
         new_index = next_index + jnp.cumsum(ending) - 1
         index = jnp.where(ending, jnp.where(new_index < n_problems, new_index, n_problems), index)
         fresh = jax.vmap(init)(starts[jnp.minimum(index, n_problems - 1)])
-        states = jax.tree.map(lambda f, s: jnp.where(
-            ending.reshape((-1,) + (1,) * (f.ndim - 1)), f, s), fresh, states)
+        states = jax.tree.map(
+            lambda f, s: jnp.where(ending.reshape((-1,) + (1,) * (f.ndim - 1)), f, s), fresh, states
+        )
         return states, index, next_index + jnp.sum(ending), out
 
     first = jnp.arange(lanes)

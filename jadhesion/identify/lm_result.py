@@ -27,9 +27,13 @@ class LMResult(NamedTuple):
 def status_code(converged, stalled, finite):
     """The int32 :class:`Status` code of a solver that stopped: ``NONFINITE`` before
     ``CONVERGED`` before ``STALLED`` before ``MAX_STEPS``."""
-    return jnp.where(~finite, int(Status.NONFINITE), jnp.where(
-        converged, int(Status.CONVERGED),
-        jnp.where(stalled, int(Status.STALLED), int(Status.MAX_STEPS)))).astype(jnp.int32)
+    return jnp.where(
+        ~finite,
+        int(Status.NONFINITE),
+        jnp.where(
+            converged, int(Status.CONVERGED), jnp.where(stalled, int(Status.STALLED), int(Status.MAX_STEPS))
+        ),
+    ).astype(jnp.int32)
 
 
 def best_of(results: LMResult) -> LMResult:
@@ -44,7 +48,9 @@ def best_of(results: LMResult) -> LMResult:
 @functools.cache
 def sse_objective(residual):
     """``p, args -> ‖residual(p, args)‖²`` (cached per residual, so jit caches stay warm)."""
+
     def sse(p, args):
         r = residual(p, args)
         return jnp.sum(r * r)
+
     return sse

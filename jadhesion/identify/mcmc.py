@@ -13,10 +13,9 @@ likelihoods are documented there. Walkers start in a small ball around an optimu
 
 from __future__ import annotations
 
-from typing import Callable, NamedTuple, Optional
-
 import time
 import warnings
+from typing import Callable, NamedTuple, Optional
 
 import jax
 import jax.numpy as jnp
@@ -25,8 +24,15 @@ import numpy as np
 from ..data.dataset import PolachDataset
 from ..models.polach import PARAM_NAMES, adhesion_peak, polach_adhesion
 from .ensemble import MIN_TAU_MULTIPLE, ChainTooShortWarning, Diagnostics, run_ensemble  # noqa: F401
-from .likelihood import (AUTOREGRESSIVE, LOG_SCALE_BOUNDS, RHO_MAX, ObserverTerms,
-                         ensemble_log_prob, noise_names, prediction)
+from .likelihood import (
+    AUTOREGRESSIVE,
+    LOG_SCALE_BOUNDS,
+    RHO_MAX,
+    ObserverTerms,
+    ensemble_log_prob,
+    noise_names,
+    prediction,
+)
 
 QUANTILES = (0.05, 0.5, 0.95)
 
@@ -40,15 +46,15 @@ class PosteriorResult(NamedTuple):
     ``"rho"`` (AR(1) coefficient) for the ``"ar1"`` and ``"observer"`` likelihoods.
     """
 
-    samples: np.ndarray      # (n_samples, d) after burn-in and thinning
-    chain: np.ndarray        # (kept steps, walkers, d), same coordinates as ``samples``
+    samples: np.ndarray  # (n_samples, d) after burn-in and thinning
+    chain: np.ndarray  # (kept steps, walkers, d), same coordinates as ``samples``
     names: tuple
     params: dict
     derived: dict
-    derived_samples: dict    # name -> (m,) samples of mu_max and creep_opt
+    derived_samples: dict  # name -> (m,) samples of mu_max and creep_opt
     diagnostics: Diagnostics
     likelihood: str
-    vehicle_speed: float     # speed [m/s] at which the derived quantities are evaluated
+    vehicle_speed: float  # speed [m/s] at which the derived quantities are evaluated
 
     def theta(self) -> np.ndarray:
         """Samples of the five Polach parameters, (n_samples, 5)."""
@@ -73,8 +79,15 @@ def summarise(samples: np.ndarray) -> dict:
     return {"median": float(median), "q05": float(q05), "q95": float(q95)}
 
 
-def initial_ball(theta0, log_scale0: Optional[float], walkers: int, rng: np.random.Generator,
-                 bounds, spread=1e-3, rho0: Optional[float] = None) -> np.ndarray:
+def initial_ball(
+    theta0,
+    log_scale0: Optional[float],
+    walkers: int,
+    rng: np.random.Generator,
+    bounds,
+    spread=1e-3,
+    rho0: Optional[float] = None,
+) -> np.ndarray:
     """Walker positions: ``theta0`` (clipped into the box) plus Gaussian jitter of ``spread`` × box
     width (a scalar or one value per parameter), reflected back into the box, so walkers at a box
     face stay distinct and the ensemble keeps full rank. ``log_scale0``: the 6th coordinate;
@@ -93,8 +106,7 @@ def initial_ball(theta0, log_scale0: Optional[float], walkers: int, rng: np.rand
     return np.concatenate(columns, axis=1)
 
 
-def initial_noise(data: PolachDataset, theta0, likelihood: str,
-                  obs: Optional[ObserverTerms] = None) -> tuple:
+def initial_noise(data: PolachDataset, theta0, likelihood: str, obs: Optional[ObserverTerms] = None) -> tuple:
     """``(log_scale, rho or None)`` of the residuals at ``theta0``: RMS (``"gauss"``), mean
     absolute value (``"laplace"``), or lag-1 autocorrelation and innovation RMS (AR(1))."""
     r = np.asarray(data.adhesion) - np.asarray(prediction(jnp.asarray(theta0), data, likelihood, obs))
@@ -107,12 +119,24 @@ def initial_noise(data: PolachDataset, theta0, likelihood: str,
     return float(np.log(max(scale, 1e-4))), rho
 
 
-def sample_posterior(data: PolachDataset, theta0, *, walkers: int = 32, steps: int = 5000,
-                     likelihood: str = "gauss", seed: int = 0, burn: Optional[int] = None,
-                     thin: int = 1, bounds=None, fixed_scale: Optional[float] = None,
-                     spread=1e-3, max_derived: int = 4000,
-                     callback: Optional[Callable[[int], None]] = None,
-                     callback_every: int = 100, obs: Optional[ObserverTerms] = None) -> PosteriorResult:
+def sample_posterior(
+    data: PolachDataset,
+    theta0,
+    *,
+    walkers: int = 32,
+    steps: int = 5000,
+    likelihood: str = "gauss",
+    seed: int = 0,
+    burn: Optional[int] = None,
+    thin: int = 1,
+    bounds=None,
+    fixed_scale: Optional[float] = None,
+    spread=1e-3,
+    max_derived: int = 4000,
+    callback: Optional[Callable[[int], None]] = None,
+    callback_every: int = 100,
+    obs: Optional[ObserverTerms] = None,
+) -> PosteriorResult:
     """Sample the posterior of ``[kA, kS, mu0, A, B]`` (and the noise scale) with emcee.
 
     Args:
@@ -141,14 +165,16 @@ def sample_posterior(data: PolachDataset, theta0, *, walkers: int = 32, steps: i
     names = PARAM_NAMES + noise_names(likelihood, fixed_scale is not None)
     log_prob = ensemble_log_prob(data, likelihood, bounds, fixed_scale, obs)
     log_scale0, rho0 = initial_noise(data, theta0, likelihood, obs)
-    p0 = initial_ball(theta0, None if fixed_scale is not None else log_scale0, walkers, rng,
-                      bounds, spread, rho0)
+    p0 = initial_ball(
+        theta0, None if fixed_scale is not None else log_scale0, walkers, rng, bounds, spread, rho0
+    )
     t0 = time.perf_counter()
-    log_prob(p0)                     # emcee calls it on the whole ensemble, then on halves:
-    log_prob(p0[: walkers // 2])     # compile both shapes here, outside the timed loop
+    log_prob(p0)  # emcee calls it on the whole ensemble, then on halves:
+    log_prob(p0[: walkers // 2])  # compile both shapes here, outside the timed loop
     compile_seconds = time.perf_counter() - t0
-    chain, diagnostics = run_ensemble(log_prob, p0, steps, rng, burn=burn, thin=thin,
-                                      callback=callback, callback_every=callback_every)
+    chain, diagnostics = run_ensemble(
+        log_prob, p0, steps, rng, burn=burn, thin=thin, callback=callback, callback_every=callback_every
+    )
     diagnostics = diagnostics._replace(compile_seconds=compile_seconds)
     if fixed_scale is None:
         chain = np.concatenate([chain[..., :5], np.exp(chain[..., 5:6]), chain[..., 6:]], axis=-1)
@@ -159,11 +185,16 @@ def sample_posterior(data: PolachDataset, theta0, *, walkers: int = 32, steps: i
     mu_max, creep_opt = _peaks(jnp.asarray(samples[idx, :5]), jnp.asarray(data.k_eps, float), speed)
     derived_samples = {"mu_max": np.asarray(mu_max), "creep_opt": np.asarray(creep_opt)}
     return PosteriorResult(
-        samples=samples, chain=chain, names=names,
+        samples=samples,
+        chain=chain,
+        names=names,
         params={n: summarise(samples[:, i]) for i, n in enumerate(names)},
         derived={k: summarise(v) for k, v in derived_samples.items()},
-        derived_samples=derived_samples, diagnostics=diagnostics, likelihood=likelihood,
-        vehicle_speed=speed)
+        derived_samples=derived_samples,
+        diagnostics=diagnostics,
+        likelihood=likelihood,
+        vehicle_speed=speed,
+    )
 
 
 @jax.jit
@@ -175,19 +206,27 @@ def posterior_curves(theta_samples, creep, vehicle_speed, k_eps):
 class NutsResult(NamedTuple):
     """Draws of :func:`sample_nuts` (constrained; the scale itself, not its log) and costs."""
 
-    samples: np.ndarray      # (samples, d)
+    samples: np.ndarray  # (samples, d)
     names: tuple
-    tau: np.ndarray          # integrated autocorrelation time per coordinate [draws]
-    ess: np.ndarray          # samples / tau
-    seconds: float           # warm wall time of warm-up + sampling [s]
+    tau: np.ndarray  # integrated autocorrelation time per coordinate [draws]
+    ess: np.ndarray  # samples / tau
+    seconds: float  # warm wall time of warm-up + sampling [s]
     compile_seconds: float
-    integration_steps: int   # leapfrog steps (gradient evaluations) after warm-up
+    integration_steps: int  # leapfrog steps (gradient evaluations) after warm-up
     step_size: float
 
 
-def sample_nuts(data: PolachDataset, theta0, *, likelihood: str = "gauss",
-                obs: Optional[ObserverTerms] = None, warmup: int = 500, samples: int = 1000,
-                seed: int = 0, bounds=None) -> NutsResult:
+def sample_nuts(
+    data: PolachDataset,
+    theta0,
+    *,
+    likelihood: str = "gauss",
+    obs: Optional[ObserverTerms] = None,
+    warmup: int = 500,
+    samples: int = 1000,
+    seed: int = 0,
+    bounds=None,
+) -> NutsResult:
     """The same posterior as :func:`sample_posterior` with NUTS (blackjax, an optional extra:
     ``pip install 'jadhesion[nuts]'``), for comparison.
 
@@ -199,13 +238,17 @@ def sample_nuts(data: PolachDataset, theta0, *, likelihood: str = "gauss",
     try:
         import blackjax
     except ImportError:  # pragma: no cover - depends on the environment
-        raise ImportError("sample_nuts needs the optional dependency blackjax "
-                          "(pip install 'jadhesion[nuts]' or pip install blackjax)") from None
+        raise ImportError(
+            "sample_nuts needs the optional dependency blackjax "
+            "(pip install 'jadhesion[nuts]' or pip install blackjax)"
+        ) from None
     from .ensemble import integrated_time
     from .likelihood import log_posterior
 
     names = PARAM_NAMES + noise_names(likelihood)
-    lower, upper = (np.zeros(5), np.ones(5)) if bounds is None else tuple(np.asarray(b, float) for b in bounds)
+    lower, upper = (
+        (np.zeros(5), np.ones(5)) if bounds is None else tuple(np.asarray(b, float) for b in bounds)
+    )
     lo = np.concatenate([lower, [LOG_SCALE_BOUNDS[0]], [-RHO_MAX] if likelihood in AUTOREGRESSIVE else []])
     hi = np.concatenate([upper, [LOG_SCALE_BOUNDS[1]], [RHO_MAX] if likelihood in AUTOREGRESSIVE else []])
     log_scale0, rho0 = initial_noise(data, theta0, likelihood, obs)
@@ -243,5 +286,6 @@ def sample_nuts(data: PolachDataset, theta0, *, likelihood: str = "gauss",
     draws = np.array(draws)
     draws[:, 5] = np.exp(draws[:, 5])
     tau = integrated_time(draws[:, None, :])
-    return NutsResult(draws, names, tau, samples / tau, seconds, compile_seconds, int(n_steps),
-                      float(step_size))
+    return NutsResult(
+        draws, names, tau, samples / tau, seconds, compile_seconds, int(n_steps), float(step_size)
+    )

@@ -32,8 +32,13 @@ METHODS = {
     "itlbo": Method("itlbo", "improved TLBO (paper 001 §3.2)", ITLBO, "class iterations", _POP),
     "tlbo": Method("tlbo", "TLBO (Rao)", TLBO, "class iterations", _POP),
     "pso": Method("pso", "particle swarm (constriction)", PSO, "swarm iterations", _POP),
-    "lm": Method("lm", "global Levenberg–Marquardt (projected, box [0, 1]^5)", None,
-                 "LM steps, seeding and polish together", {}),
+    "lm": Method(
+        "lm",
+        "global Levenberg–Marquardt (projected, box [0, 1]^5)",
+        None,
+        "LM steps, seeding and polish together",
+        {},
+    ),
 }
 #: Method names.
 NAMES = tuple(METHODS)

@@ -82,13 +82,24 @@ DEFAULT_DELTA = 1e-10
 DEFAULT_X0 = (100.0, 100.0)
 
 
-def make_params(eta_min, eta_max, weight_slope, snr, *, kp=DEFAULT_KP, snr_lo=DEFAULT_SNR_LO,
-                snr_hi=DEFAULT_SNR_HI, a_s=DEFAULT_SLOPE, delta=DEFAULT_DELTA,
-                x0=DEFAULT_X0) -> OnlineParams:
+def make_params(
+    eta_min,
+    eta_max,
+    weight_slope,
+    snr,
+    *,
+    kp=DEFAULT_KP,
+    snr_lo=DEFAULT_SNR_LO,
+    snr_hi=DEFAULT_SNR_HI,
+    a_s=DEFAULT_SLOPE,
+    delta=DEFAULT_DELTA,
+    x0=DEFAULT_X0,
+) -> OnlineParams:
     """Build :class:`OnlineParams` with every leaf a float array (default float dtype)."""
     f = lambda v: jnp.asarray(v, dtype=float)  # noqa: E731
-    return OnlineParams(f(eta_min), f(eta_max), f(kp), f(weight_slope), f(snr), f(snr_lo),
-                        f(snr_hi), f(a_s), f(delta), f(x0))
+    return OnlineParams(
+        f(eta_min), f(eta_max), f(kp), f(weight_slope), f(snr), f(snr_lo), f(snr_hi), f(a_s), f(delta), f(x0)
+    )
 
 
 def algorithm1_params(**kw) -> OnlineParams:
@@ -103,8 +114,9 @@ def algorithm2_params(**kw) -> OnlineParams:
 
 def rls_params(forgetting=0.98, **kw) -> OnlineParams:
     """Classic recursive least squares with constant forgetting (``Kp = 0``, ``w = 1``, no SNR)."""
-    return make_params(**{"eta_min": forgetting, "eta_max": forgetting, "weight_slope": 0.0,
-                          "snr": 0.0, "kp": 0.0, **kw})
+    return make_params(
+        **{"eta_min": forgetting, "eta_max": forgetting, "weight_slope": 0.0, "snr": 0.0, "kp": 0.0, **kw}
+    )
 
 
 def stack_params(params) -> OnlineParams:
@@ -139,8 +151,7 @@ def init(params: OnlineParams) -> OnlineState:
     """Empty information (H = 0, f = 0) and the initial estimate ``x0``."""
     x0 = params.x0
     zero = jnp.zeros((2, 2), x0.dtype)
-    return OnlineState(zero, jnp.zeros_like(x0), x0, jnp.zeros((5, 2, 2), x0.dtype),
-                       jnp.zeros((), jnp.int32))
+    return OnlineState(zero, jnp.zeros_like(x0), x0, jnp.zeros((5, 2, 2), x0.dtype), jnp.zeros((), jnp.int32))
 
 
 def snr_matrix(info, h_hist):
@@ -192,14 +203,16 @@ def step(params: OnlineParams, state: OnlineState, obs):
     new = OnlineState(h, f, x, hist, state.k + 1)
     new = jax.tree.map(lambda a, b: jnp.where(valid, a, b), new, state)
     eta = jnp.where(valid, eta, 1.0)
-    return new, OnlineInfo(new.x[0], new.x[1], peak_adhesion(new.x, params.a_s),
-                           optimum_creep(new.x), eta, s, hit & valid)
+    return new, OnlineInfo(
+        new.x[0], new.x[1], peak_adhesion(new.x, params.a_s), optimum_creep(new.x), eta, s, hit & valid
+    )
 
 
 @jax.jit
 def run(params: OnlineParams, lam, mu, valid) -> tuple[OnlineState, OnlineInfo]:
     """The identifier over ``λ (K,)``, ``μ (K,)``, ``valid (K,)`` (bool) with one ``lax.scan``;
     returns the final state and the per-step trace (K, …)."""
+
     def body(state, obs):
         return step(params, state, obs)
 
@@ -228,8 +241,9 @@ def final_status(state: OnlineState):
     finite = jnp.all(jnp.isfinite(state.h)) & jnp.all(jnp.isfinite(state.x))
     ev = jnp.linalg.eigvalsh(jnp.where(finite, state.h, 0.0))
     well = (ev[0] > 0) & (ev[0] >= MIN_RCOND * ev[-1])
-    return jnp.where(~finite, Status.NONFINITE,
-                     jnp.where(well, Status.CONVERGED, Status.SINGULAR)).astype(jnp.int32)
+    return jnp.where(~finite, Status.NONFINITE, jnp.where(well, Status.CONVERGED, Status.SINGULAR)).astype(
+        jnp.int32
+    )
 
 
 #: The identifiers offered on recordings: the paper's two algorithms and a classic RLS (λ = 0.98).

@@ -19,13 +19,14 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..data.dataset import PolachDataset
-from ..models.polach import polach_adhesion
 from ..errors import InputError
+from ..models.polach import polach_adhesion
 from .driver import STALL_FTOL, run_until
 from .likelihood import curve_moments
 from .lm import best_of, box_lm_queue, global_lm, seed_starts
 from .methods import NAMES as METHODS
 from .methods import POPULATION as ALGORITHMS
+
 #: Global LM for Polach: ``LM_POP`` uniform random points scored on a subsample of at most
 #: :data:`SEED_SAMPLES` rows seed ``LM_STARTS`` projected-LM runs (:func:`.lm.box_lm`, ``ftol =
 #: 1e-10`` on the cost, ``xtol = 1e-8`` on the box-scaled parameters — far below the noise, whose
@@ -115,28 +116,52 @@ def subsample(data: PolachDataset, n_max: int = SEED_SAMPLES) -> PolachDataset:
     if data.weight is not None:
         valid = jnp.sum(data.weight).astype(jnp.int32)
         idx = jnp.round(jnp.arange(n_max) * ((valid - 1) / (n_max - 1))).astype(jnp.int32)
-        return data._replace(creep=data.creep[idx], slip=data.slip[idx],
-                             adhesion=data.adhesion[idx], vehicle_speed=data.vehicle_speed[idx],
-                             weight=data.weight[idx])
+        return data._replace(
+            creep=data.creep[idx],
+            slip=data.slip[idx],
+            adhesion=data.adhesion[idx],
+            vehicle_speed=data.vehicle_speed[idx],
+            weight=data.weight[idx],
+        )
     idx = np.linspace(0, n - 1, n_max).round().astype(np.int32)
     sd = {k: getattr(data, k)[idx] for k in ("slip_sd", "creep_sd") if getattr(data, k) is not None}
-    return data._replace(creep=data.creep[idx], slip=data.slip[idx], adhesion=data.adhesion[idx],
-                         vehicle_speed=data.vehicle_speed[idx], **sd)
+    return data._replace(
+        creep=data.creep[idx],
+        slip=data.slip[idx],
+        adhesion=data.adhesion[idx],
+        vehicle_speed=data.vehicle_speed[idx],
+        **sd,
+    )
 
 
 def _fit(method, pop_size, max_iter, use_target, data, key, target):
     bounds = _box(data.adhesion.dtype)
     if method == "lm":
         seed_data = subsample(data)
-        out, n_pop = global_lm(LM_RESIDUAL, bounds, key, data, n_starts=LM_STARTS,
-                               pop_size=LM_POP, search_iter=LM_SEARCH_ITER,
-                               search_args=None if seed_data is data else seed_data,
-                               max_steps=LM_MAX_STEPS)
+        out, n_pop = global_lm(
+            LM_RESIDUAL,
+            bounds,
+            key,
+            data,
+            n_starts=LM_STARTS,
+            pop_size=LM_POP,
+            search_iter=LM_SEARCH_ITER,
+            search_args=None if seed_data is data else seed_data,
+            max_steps=LM_MAX_STEPS,
+        )
         theta, iterations, evaluations = out.params, out.steps, n_pop + out.steps
     else:
-        out = run_until(ALGORITHMS[method], polach_mae, bounds, key, pop_size, max_iter,
-                        target if use_target else None, args=data,
-                        ftol=None if use_target else STALL_FTOL)
+        out = run_until(
+            ALGORITHMS[method],
+            polach_mae,
+            bounds,
+            key,
+            pop_size,
+            max_iter,
+            target if use_target else None,
+            args=data,
+            ftol=None if use_target else STALL_FTOL,
+        )
         theta, iterations, evaluations = out.best_x, out.iterations, out.n_evals
     r = polach_residual(theta, data)
     mae = dataset_mae(r, data)
@@ -152,8 +177,7 @@ _fit_one = jax.jit(_fit, static_argnames=_STATIC)
 def _fit_many(method, pop_size, max_iter, use_target, data, keys, target):
     if method == "lm" and data.adhesion.shape[-1] > SEED_SAMPLES:
         return _global_lm_many(data, keys, target, use_target)
-    return jax.vmap(lambda d, k, t: _fit(method, pop_size, max_iter, use_target, d, k, t))(
-        data, keys, target)
+    return jax.vmap(lambda d, k, t: _fit(method, pop_size, max_iter, use_target, d, k, t))(data, keys, target)
 
 
 def _global_lm_many(data, keys, target, use_target):
@@ -164,21 +188,30 @@ def _global_lm_many(data, keys, target, use_target):
     :func:`fit_polach`'s per dataset."""
     bounds = _box(data.adhesion.dtype)
     seed_data = jax.vmap(subsample)(data)
-    starts, n_pop = jax.vmap(lambda d, k: seed_starts(
-        LM_RESIDUAL, bounds, k, d, n_starts=LM_STARTS, pop_size=LM_POP,
-        search_iter=LM_SEARCH_ITER))(seed_data, keys)
+    starts, n_pop = jax.vmap(
+        lambda d, k: seed_starts(
+            LM_RESIDUAL, bounds, k, d, n_starts=LM_STARTS, pop_size=LM_POP, search_iter=LM_SEARCH_ITER
+        )
+    )(seed_data, keys)
     n = starts.shape[0]
     repeated = jax.tree.map(lambda a: jnp.repeat(a, LM_STARTS, axis=0), seed_data)
-    seeded = box_lm_queue(LM_RESIDUAL, starts.reshape(n * LM_STARTS, -1), repeated, bounds,
-                          max_steps=LM_MAX_STEPS, lanes=SEED_LANES)
+    seeded = box_lm_queue(
+        LM_RESIDUAL,
+        starts.reshape(n * LM_STARTS, -1),
+        repeated,
+        bounds,
+        max_steps=LM_MAX_STEPS,
+        lanes=SEED_LANES,
+    )
     seeded = jax.vmap(best_of)(jax.tree.map(lambda a: a.reshape((n, LM_STARTS) + a.shape[1:]), seeded))
     polish = box_lm_queue(LM_RESIDUAL, seeded.params, data, bounds, max_steps=LM_MAX_STEPS)
     r = jax.vmap(polach_residual)(polish.params, data)
     mae = mean_abs(r) if data.weight is None else jax.vmap(dataset_mae)(r, data)
     steps = seeded.steps + polish.steps
     reached = (mae <= target) if use_target else jnp.zeros(mae.shape, bool)
-    return PolachFit(polish.params, mae, jnp.sum(r * r, axis=-1), steps, n_pop + steps, reached,
-                     polish.status)
+    return PolachFit(
+        polish.params, mae, jnp.sum(r * r, axis=-1), steps, n_pop + steps, reached, polish.status
+    )
 
 
 #: Fewest samples a Polach fit accepts: twice the five parameters (fewer cannot identify the
@@ -194,8 +227,10 @@ def check_float64(name, *arrays):
     fit run silently in float32: enable it with ``jax.config.update("jax_enable_x64", True)``)."""
     for a in jax.tree.leaves(arrays):
         if jnp.issubdtype(jnp.asarray(a).dtype, jnp.floating) and jnp.asarray(a).dtype != jnp.float64:
-            raise InputError(f"{name}: float64 input required, got {jnp.asarray(a).dtype} "
-                             "(enable JAX's x64 mode: jax.config.update('jax_enable_x64', True))")
+            raise InputError(
+                f"{name}: float64 input required, got {jnp.asarray(a).dtype} "
+                "(enable JAX's x64 mode: jax.config.update('jax_enable_x64', True))"
+            )
 
 
 def require_samples(dataset: PolachDataset, source: str = "dataset") -> None:
@@ -203,8 +238,10 @@ def require_samples(dataset: PolachDataset, source: str = "dataset") -> None:
     :data:`MIN_SAMPLES` samples."""
     n = dataset.adhesion.shape[-1]
     if n < MIN_SAMPLES:
-        raise InputError(f"{source}: {n} samples cannot identify Polach's 5 parameters "
-                         f"(at least {MIN_SAMPLES} needed, {RECOMMENDED_SAMPLES} recommended)")
+        raise InputError(
+            f"{source}: {n} samples cannot identify Polach's 5 parameters "
+            f"(at least {MIN_SAMPLES} needed, {RECOMMENDED_SAMPLES} recommended)"
+        )
 
 
 def _check(method, dataset, pop_size, max_iter, target):
@@ -220,8 +257,15 @@ def _check(method, dataset, pop_size, max_iter, target):
         raise InputError(f"fit_polach: target MAE must be >= 0, got {target}")
 
 
-def fit_polach(dataset: PolachDataset, method: str, key, *, pop_size: int = 50,
-               max_iter: int = 300, target: Optional[float] = None) -> PolachFit:
+def fit_polach(
+    dataset: PolachDataset,
+    method: str,
+    key,
+    *,
+    pop_size: int = 50,
+    max_iter: int = 300,
+    target: Optional[float] = None,
+) -> PolachFit:
     """Identify Polach's parameters from one dataset.
 
     ``method``: ``"itlbo"`` (improved TLBO, paper §3.2), ``"tlbo"``, ``"pso"`` or ``"lm"``. With a
@@ -239,8 +283,15 @@ def fit_polach(dataset: PolachDataset, method: str, key, *, pop_size: int = 50,
     return _fit_one(method, pop_size, max_iter, target is not None, dataset, key, target_)
 
 
-def fit_polach_batch(datasets: PolachDataset, method: str, keys, *, pop_size: int = 50,
-                     max_iter: int = 300, target: Optional[float] = None) -> PolachFit:
+def fit_polach_batch(
+    datasets: PolachDataset,
+    method: str,
+    keys,
+    *,
+    pop_size: int = 50,
+    max_iter: int = 300,
+    target: Optional[float] = None,
+) -> PolachFit:
     """:func:`fit_polach` vmapped over a leading axis of stacked ``datasets`` and ``keys``;
     ``target`` is a scalar or one MAE per dataset.
 
@@ -249,6 +300,7 @@ def fit_polach_batch(datasets: PolachDataset, method: str, keys, *, pop_size: in
     stops; batched LM polishes through a work queue and costs the batch's total LM steps.
     """
     _check(method, datasets, pop_size, max_iter, target)
-    target_ = jnp.broadcast_to(jnp.asarray(0.0 if target is None else target,
-                                           datasets.adhesion.dtype), datasets.adhesion.shape[:1])
+    target_ = jnp.broadcast_to(
+        jnp.asarray(0.0 if target is None else target, datasets.adhesion.dtype), datasets.adhesion.shape[:1]
+    )
     return _fit_many(method, pop_size, max_iter, target is not None, datasets, keys, target_)

@@ -58,8 +58,11 @@ def step(key, state, objective, bounds, params=PSOParams()):
     r1 = jax.random.uniform(k1, x.shape, dtype=x.dtype)
     r2 = jax.random.uniform(k2, x.shape, dtype=x.dtype)
     v_max = (params.velocity_clamp * (bounds[1] - bounds[0]))[None]
-    v = (params.inertia * state.velocity + params.cognitive * r1 * (state.personal_x - x)
-         + params.social * r2 * (state.best_x[None] - x))
+    v = (
+        params.inertia * state.velocity
+        + params.cognitive * r1 * (state.personal_x - x)
+        + params.social * r2 * (state.best_x[None] - x)
+    )
     v = jnp.clip(v, -v_max, v_max)
     moved = x + v
     x = clip(moved, bounds)

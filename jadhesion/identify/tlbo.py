@@ -84,6 +84,7 @@ def _teacher_learner(key, state, objective, bounds, teaching_factor):
 def _classic_factor(n):
     def factor(key, teacher, mean):
         return jnp.round(1.0 + jax.random.uniform(key, (n, 1), dtype=mean.dtype))
+
     return factor
 
 
@@ -116,7 +117,9 @@ def improved_step(key, state, objective, bounds, params=TLBOParams()):
     x_old, f_old = x[worst], f[worst]
     teacher = x[jnp.argmin(f)]
     lower, upper = bounds
-    tutored = x_old + (0.5 + 0.5 * jax.random.uniform(k_tutor, (m, 1), dtype=x.dtype)) * (teacher[None] - x_old)
+    tutored = x_old + (0.5 + 0.5 * jax.random.uniform(k_tutor, (m, 1), dtype=x.dtype)) * (
+        teacher[None] - x_old
+    )
     studied = x_old + (upper - lower)[None] * (jax.random.uniform(k_self, (m, d), dtype=x.dtype) - 0.5)
     trial = clip(jnp.concatenate([tutored, studied]), bounds)
     f_trial = evaluate(objective, trial)

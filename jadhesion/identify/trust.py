@@ -55,35 +55,57 @@ def fit_report(data, fit) -> dict:
             uncertainty[name] = {"stderr": None if fixed[i] else float("inf"), "ci95": None}
             continue
         lo, hi = theta[i] - Z95 * sd[i], theta[i] + Z95 * sd[i]
-        uncertainty[name] = {"stderr": float(sd[i]),
-                             "ci95": [float(max(lo, 0.0)), float(min(hi, 1.0))]}
+        uncertainty[name] = {"stderr": float(sd[i]), "ci95": [float(max(lo, 0.0)), float(min(hi, 1.0))]}
     on_bound = [n for n, f in zip(PARAM_NAMES, fixed) if f]
     if on_bound:
         where = ", ".join(f"{n} = {theta[PARAM_NAMES.index(n)]:.3g}" for n in on_bound)
-        warnings.append(_warning("at_bound", on_bound, (
-            f"{where} on the bound of [0, 1]: no local standard error (null); the other "
-            "parameters' errors are conditional on it")))
-    weak = [n for i, n in enumerate(PARAM_NAMES)
-            if not fixed[i] and not (2 * Z95 * sd[i] <= WEAK_WIDTH)]
+        warnings.append(
+            _warning(
+                "at_bound",
+                on_bound,
+                (
+                    f"{where} on the bound of [0, 1]: no local standard error (null); the other "
+                    "parameters' errors are conditional on it"
+                ),
+            )
+        )
+    weak = [n for i, n in enumerate(PARAM_NAMES) if not fixed[i] and not (2 * Z95 * sd[i] <= WEAK_WIDTH)]
     if weak:
         w_max = float(np.max(np.abs(np.asarray(data.slip))))
         if {"A", "B"} <= set(weak):
-            message = (f"only (1 − A)·B is determined at these slip velocities (|w| ≤ {w_max:.3g}"
-                       " m/s, where μ ≈ μ0·(1 − (1 − A)·B·|w|)): A and B separately are not")
+            message = (
+                f"only (1 − A)·B is determined at these slip velocities (|w| ≤ {w_max:.3g}"
+                " m/s, where μ ≈ μ0·(1 − (1 − A)·B·|w|)): A and B separately are not"
+            )
         else:
-            message = (f"{', '.join(weak)}: 95 % interval wider than {WEAK_WIDTH} of the box or "
-                       "undetermined (singular direction); the data do not pin "
-                       f"{'it' if len(weak) == 1 else 'them'} down")
+            message = (
+                f"{', '.join(weak)}: 95 % interval wider than {WEAK_WIDTH} of the box or "
+                "undetermined (singular direction); the data do not pin "
+                f"{'it' if len(weak) == 1 else 'them'} down"
+            )
         warnings.append(_warning("weakly_identified", weak, message))
     status = status_of(fit.status)
     if not status.converged:
-        warnings.append(_warning("not_converged", [], (
-            f"the solver stopped with status {status.label}: the parameters may not be a minimum")))
+        warnings.append(
+            _warning(
+                "not_converged",
+                [],
+                (f"the solver stopped with status {status.label}: the parameters may not be a minimum"),
+            )
+        )
     n = int(r.shape[0])
     if n < RECOMMENDED_SAMPLES:
-        warnings.append(_warning("few_samples", [], (
-            f"{n} samples (< {RECOMMENDED_SAMPLES} recommended): errors and intervals are rough")))
+        warnings.append(
+            _warning(
+                "few_samples",
+                [],
+                (f"{n} samples (< {RECOMMENDED_SAMPLES} recommended): errors and intervals are rough"),
+            )
+        )
     corr = correlation(cov)
-    return {"uncertainty": uncertainty,
-            "correlation": [[float(c) if np.isfinite(c) else None for c in row] for row in corr],
-            "warnings": warnings, "hac_lags": int(lags)}
+    return {
+        "uncertainty": uncertainty,
+        "correlation": [[float(c) if np.isfinite(c) else None for c in row] for row in corr],
+        "warnings": warnings,
+        "hac_lags": int(lags),
+    }

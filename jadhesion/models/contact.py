@@ -62,8 +62,14 @@ def _curvature_ratio(m):
     return (e / (1.0 - m) - k) / (k - e)
 
 
-def hertz_semi_axes(wheel_radius, rail_head_radius, wheel_load, young_modulus=2.1e11,
-                    poisson_ratio=0.28, wheel_profile_radius=jnp.inf):
+def hertz_semi_axes(
+    wheel_radius,
+    rail_head_radius,
+    wheel_load,
+    young_modulus=2.1e11,
+    poisson_ratio=0.28,
+    wheel_profile_radius=jnp.inf,
+):
     """Hertz contact semi-axes (a along rolling, b lateral) [m].
 
     Args:
@@ -78,6 +84,7 @@ def hertz_semi_axes(wheel_radius, rail_head_radius, wheel_load, young_modulus=2.
     across = 0.5 * (1.0 / rail_head_radius + 1.0 / wheel_profile_radius)
     big, small = jnp.maximum(along, across), jnp.minimum(along, across)
     ratio = big / small
+
     # Bisection in k' = short/long on a log scale: ratio(k') decreases monotonically from ∞ to 1.
     def body(_, bracket):
         lo, hi = bracket
@@ -103,8 +110,9 @@ def _load_kalker_table():
     rows = {"a_le_b": [], "a_gt_b": []}
     with resources.files("jadhesion").joinpath("resources/kalker_c_table_e3.csv").open() as fh:
         for row in csv.DictReader(line for line in fh if not line.startswith("#")):
-            rows[row["case"]].append([float(row["g"]), float(row["c11_nu0"]),
-                                      float(row["c11_nu025"]), float(row["c11_nu05"])])
+            rows[row["case"]].append(
+                [float(row["g"]), float(row["c11_nu0"]), float(row["c11_nu025"]), float(row["c11_nu05"])]
+            )
     le, gt = np.array(rows["a_le_b"]), np.array(rows["a_gt_b"])
     # One abscissa x = ln(a/b): a<=b gives x = ln g <= 0; a>b gives x = -ln g > 0.
     x = np.concatenate([np.log(le[:, 0]), -np.log(gt[::-1, 0])[1:]])
@@ -141,8 +149,9 @@ def kalker_c11(a_over_b, poisson_ratio):
         above = _asymptote_long_rolling(g_hi, nu_j) * (1.0 + mismatch * g_hi / 0.1)
         per_nu.append(jnp.where(x < xt[0], below, jnp.where(x > xt[-1], above, inside)))
     w = jnp.clip(nu / 0.25, 0.0, 2.0)
-    return jnp.where(w <= 1.0, per_nu[0] + w * (per_nu[1] - per_nu[0]),
-                     per_nu[1] + (w - 1.0) * (per_nu[2] - per_nu[1]))
+    return jnp.where(
+        w <= 1.0, per_nu[0] + w * (per_nu[1] - per_nu[0]), per_nu[1] + (w - 1.0) * (per_nu[2] - per_nu[1])
+    )
 
 
 def contact_stiffness(contact: Contact, shear_modulus, poisson_ratio):

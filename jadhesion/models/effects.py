@@ -68,28 +68,96 @@ class EffectSpec(NamedTuple):
     exposing_run: str
 
 
-EFFECTS = {spec.name: spec for spec in (
-    EffectSpec("rail_change", 0.2, 0.0, 0.95, "-", "relative drop of mu0 at a step in time",
-               (0.02, 0.5), False, "time", "a run over each rail section separately"),
-    EffectSpec("wheel_radius_error", 0.01, -0.2, 0.2, "-", "true radius = nominal · (1 + m)",
-               (0.002, 0.05), True, "speed",
-               "a coasting run at two speeds, where creep grows with speed without torque"),
-    EffectSpec("signal_delay", 0.05, 0.0, 2.0, "s", "torque lags the speed signals by m seconds",
-               (0.01, 0.3), False, "torque_rate",
-               "a torque step, timed against the wheel acceleration"),
-    EffectSpec("speed_dependence", 0.3, -2.0, 2.0, "-", "mu0 falls by m per relative speed rise",
-               (0.05, 1.0), True, "speed", "a speed sweep at constant creep"),
-    EffectSpec("torque_offset", 0.02, -0.3, 0.3, "-", "torque bias as an adhesion offset",
-               (0.002, 0.05), True, "adhesion",
-               "a coasting run, where zero torque reads the bias"),
-    EffectSpec("thermal_softening", 0.5, 0.0, 10.0, "-", "mu0 / (1 + m · P_th / P_ref)",
-               (0.05, 3.0), False, "heat",
-               "a repeat run after a pause, when a thermal drop has recovered"),
-    EffectSpec("load_transfer", 0.5, -2.0, 2.0, "-", "N1 = N (1 − m · F_t / (M g))",
-               (0.1, 1.5), False, "traction_ratio",
-               "a run with the other axles' torque changed independently (one bogie coasting), "
-               "so that tractive effort no longer follows this axle's adhesion"),
-)}
+EFFECTS = {
+    spec.name: spec
+    for spec in (
+        EffectSpec(
+            "rail_change",
+            0.2,
+            0.0,
+            0.95,
+            "-",
+            "relative drop of mu0 at a step in time",
+            (0.02, 0.5),
+            False,
+            "time",
+            "a run over each rail section separately",
+        ),
+        EffectSpec(
+            "wheel_radius_error",
+            0.01,
+            -0.2,
+            0.2,
+            "-",
+            "true radius = nominal · (1 + m)",
+            (0.002, 0.05),
+            True,
+            "speed",
+            "a coasting run at two speeds, where creep grows with speed without torque",
+        ),
+        EffectSpec(
+            "signal_delay",
+            0.05,
+            0.0,
+            2.0,
+            "s",
+            "torque lags the speed signals by m seconds",
+            (0.01, 0.3),
+            False,
+            "torque_rate",
+            "a torque step, timed against the wheel acceleration",
+        ),
+        EffectSpec(
+            "speed_dependence",
+            0.3,
+            -2.0,
+            2.0,
+            "-",
+            "mu0 falls by m per relative speed rise",
+            (0.05, 1.0),
+            True,
+            "speed",
+            "a speed sweep at constant creep",
+        ),
+        EffectSpec(
+            "torque_offset",
+            0.02,
+            -0.3,
+            0.3,
+            "-",
+            "torque bias as an adhesion offset",
+            (0.002, 0.05),
+            True,
+            "adhesion",
+            "a coasting run, where zero torque reads the bias",
+        ),
+        EffectSpec(
+            "thermal_softening",
+            0.5,
+            0.0,
+            10.0,
+            "-",
+            "mu0 / (1 + m · P_th / P_ref)",
+            (0.05, 3.0),
+            False,
+            "heat",
+            "a repeat run after a pause, when a thermal drop has recovered",
+        ),
+        EffectSpec(
+            "load_transfer",
+            0.5,
+            -2.0,
+            2.0,
+            "-",
+            "N1 = N (1 − m · F_t / (M g))",
+            (0.1, 1.5),
+            False,
+            "traction_ratio",
+            "a run with the other axles' torque changed independently (one bogie coasting), "
+            "so that tractive effort no longer follows this axle's adhesion",
+        ),
+    )
+}
 EFFECT_NAMES = tuple(EFFECTS)
 INDEX = {name: i for i, name in enumerate(EFFECT_NAMES)}
 
@@ -129,8 +197,7 @@ def magnitudes(effects=()) -> np.ndarray:
             raise InputError(f"effect {name!r}: magnitude {mag!r} is not a number") from None
         if not (np.isfinite(value) and spec.low <= value <= spec.high):
             unit = "" if spec.unit == "-" else f" {spec.unit}"
-            raise InputError(f"effect {name!r}: magnitude {value} outside [{spec.low}, {spec.high}]"
-                             f"{unit}")
+            raise InputError(f"effect {name!r}: magnitude {value} outside [{spec.low}, {spec.high}]{unit}")
         out[INDEX[name]] = value
     return out
 

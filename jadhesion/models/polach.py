@@ -42,10 +42,20 @@ _EPS_CLIP = 1e8
 # [4/5] rational in t². Max error vs a correctly rounded arctan ≈ 1 ulp (2.2e-16 relative) on the
 # whole real line, ~3x faster than XLA:CPU's float64 ``atan`` (12 → 4 ns per element). Used
 # homogenised in (numerator, denominator) by :func:`atan_ratio`.
-_ATAN_P = (-8.750608600031904122785e-1, -1.615753718733365076637e1, -7.500855792314704667340e1,
-           -1.228866684490136173410e2, -6.485021904942025371773e1)
-_ATAN_Q = (2.485846490142306297962e1, 1.650270098316988542046e2, 4.328810604912902668951e2,
-           4.853903996359136964868e2, 1.945506571482613964425e2)
+_ATAN_P = (
+    -8.750608600031904122785e-1,
+    -1.615753718733365076637e1,
+    -7.500855792314704667340e1,
+    -1.228866684490136173410e2,
+    -6.485021904942025371773e1,
+)
+_ATAN_Q = (
+    2.485846490142306297962e1,
+    1.650270098316988542046e2,
+    4.328810604912902668951e2,
+    4.853903996359136964868e2,
+    1.945506571482613964425e2,
+)
 _TAN_3PI_8 = 2.41421356237309504880
 _PI_2_LO = 6.123233995736765886130e-17  # π/2 − fl(π/2)
 
@@ -137,4 +147,6 @@ def adhesion_peak(theta, k_eps, vehicle_speed, n_grid=400, s_min=1e-5, s_max=1.0
     mu_opt = curve(ls_opt)
     best_grid = jnp.max(values)
     use_grid = best_grid > mu_opt
-    return jnp.where(use_grid, best_grid, mu_opt), jnp.exp(jnp.where(use_grid, log_s[jnp.argmax(values)], ls_opt))
+    return jnp.where(use_grid, best_grid, mu_opt), jnp.exp(
+        jnp.where(use_grid, log_s[jnp.argmax(values)], ls_opt)
+    )

@@ -32,8 +32,9 @@ def convergence_figure(trace, scenario):
             ax.plot(it, q50, color=color, label=label, lw=1.6)
             ax.fill_between(it, q25, q75, color=color, alpha=0.2, lw=0)
         if idx is None:
-            ax.axhline(np.median(trace["floor"]), color="k", ls="--", lw=1,
-                       label="true parameters (noise floor)")
+            ax.axhline(
+                np.median(trace["floor"]), color="k", ls="--", lw=1, label="true parameters (noise floor)"
+            )
             ax.set_yscale("log")
             ax.set_ylabel("mean absolute error (eq 15)")
             ax.legend(fontsize=8)

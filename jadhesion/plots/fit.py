@@ -21,15 +21,20 @@ def fit_figure(data, theta, title=""):
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(8, 7), constrained_layout=True)
     top.plot(slip, mu, ".", ms=2, alpha=0.4, color="0.4", label=r"observed $\hat\mu$")
     # μ_adh depends on creep s = w/v as well as w: at varying speed the fit is a band, not a line
-    top.plot(slip[order], model[order], ".", ms=1.5, color="C3",
-             label=r"fitted $\mu_{adh}$ at each sample")
+    top.plot(slip[order], model[order], ".", ms=1.5, color="C3", label=r"fitted $\mu_{adh}$ at each sample")
     top.set_xscale("symlog", linthresh=1e-2)  # linear below 1 cm/s, where the curve rises
-    top.set(xlabel="slip velocity w [m/s] (linear below 0.01, log above)",
-            ylabel="adhesion coefficient", title=title)
+    top.set(
+        xlabel="slip velocity w [m/s] (linear below 0.01, log above)",
+        ylabel="adhesion coefficient",
+        title=title,
+    )
     top.legend(loc="lower right", markerscale=6)
     resid = mu - model
     bottom.plot(np.arange(resid.size), resid, "-", lw=0.6, color="C0")
     bottom.axhline(0.0, color="k", lw=0.8)
-    bottom.set(xlabel="sample (time order)", ylabel=r"residual $\hat\mu - \mu_{adh}$",
-               title=f"residuals: rms {np.sqrt(np.mean(resid ** 2)):.3g}")
+    bottom.set(
+        xlabel="sample (time order)",
+        ylabel=r"residual $\hat\mu - \mu_{adh}$",
+        title=f"residuals: rms {np.sqrt(np.mean(resid**2)):.3g}",
+    )
     return fig

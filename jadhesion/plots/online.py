@@ -20,8 +20,7 @@ def figure(bands: dict, truth, a_s=DEFAULT_SLOPE):
     The y-range is clipped to the truth's range ±60 % so a wild first step does not flatten the rest.
     """
     truth = np.asarray(truth)
-    true = {"p1": truth[:, 0], "p2": truth[:, 1],
-            "mu_max": a_s / (truth[:, 0] + 2.0 * np.sqrt(truth[:, 1]))}
+    true = {"p1": truth[:, 0], "p2": truth[:, 1], "mu_max": a_s / (truth[:, 0] + 2.0 * np.sqrt(truth[:, 1]))}
     labels = {"p1": "$p_1$ (Fig. 4)", "p2": "$p_2$ (Fig. 5)", "mu_max": r"$\mu_m$ (Fig. 6)"}
     k = np.arange(1, truth.shape[0] + 1)
     fig, axes = plt.subplots(3, 1, figsize=(8, 9), sharex=True, constrained_layout=True)
@@ -49,12 +48,19 @@ def recording_figure(time, mu_hat, creep, trace, used, title="", time_label="tim
     the forgetting factor η. ``trace`` is an :class:`~jadhesion.identify.online.OnlineInfo`."""
     time, mu_hat, creep, used = map(np.asarray, (time, mu_hat, creep, used))
     mu_hat, creep = np.abs(mu_hat), np.abs(creep)  # braking: magnitudes (both models are odd)
-    fig, axes = plt.subplots(3, 1, figsize=(9, 8), sharex=True, constrained_layout=True,
-                             height_ratios=(3, 2, 1))
-    for ax, obs, est, name, label in ((axes[0], mu_hat, trace.mu_max, "observed $\\hat\\mu$",
-                                       "tracked peak $\\mu_m$"),
-                                      (axes[1], creep, trace.creep_opt, "creep $\\lambda$",
-                                       "tracked optimum creep $\\lambda_m$ (gap: no optimum)")):
+    fig, axes = plt.subplots(
+        3, 1, figsize=(9, 8), sharex=True, constrained_layout=True, height_ratios=(3, 2, 1)
+    )
+    for ax, obs, est, name, label in (
+        (axes[0], mu_hat, trace.mu_max, "observed $\\hat\\mu$", "tracked peak $\\mu_m$"),
+        (
+            axes[1],
+            creep,
+            trace.creep_opt,
+            "creep $\\lambda$",
+            "tracked optimum creep $\\lambda_m$ (gap: no optimum)",
+        ),
+    ):
         ax.plot(time[used], obs[used], ".", ms=2, color="0.45", label=name)
         ax.plot(time[~used], obs[~used], ".", ms=2, color="0.85", label="skipped (standstill, coasting)")
         est = np.asarray(est, dtype=float)

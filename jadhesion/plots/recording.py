@@ -31,26 +31,46 @@ def _creep(cols):
 
 
 #: Shading of the excluded stretches (``selection``), by reason.
-REASON_COLORS = {"standstill": "0.55", "coasting": "C9", "direction change": "C6",
-                 "torque and creep disagree": "C8", "short stretch": "C7", "braking": "C1",
-                 "traction": "C2"}
+REASON_COLORS = {
+    "standstill": "0.55",
+    "coasting": "C9",
+    "direction change": "C6",
+    "torque and creep disagree": "C8",
+    "short stretch": "C7",
+    "braking": "C1",
+    "traction": "C2",
+}
 
 
 def _shade(ax, selection, labels: bool = True):
     seen = set()
     for run in selection.excluded():
         reason = run["reason"]
-        ax.axvspan(run["start"], run["end"], color=REASON_COLORS.get(reason, "0.8"), alpha=0.18,
-                   lw=0, label=None if reason in seen or not labels else f"excluded: {reason}")
+        ax.axvspan(
+            run["start"],
+            run["end"],
+            color=REASON_COLORS.get(reason, "0.8"),
+            alpha=0.18,
+            lw=0,
+            label=None if reason in seen or not labels else f"excluded: {reason}",
+        )
         seen.add(reason)
     for a, b in selection.gaps:
-        ax.axvspan(a, b, facecolor="none", edgecolor="k", hatch="//", lw=0,
-                   label=None if "gap" in seen or not labels else "gap (not bridged)")
+        ax.axvspan(
+            a,
+            b,
+            facecolor="none",
+            edgecolor="k",
+            hatch="//",
+            lw=0,
+            label=None if "gap" in seen or not labels else "gap (not bridged)",
+        )
         seen.add("gap")
 
 
-def recording_overview(recording_or_columns, mu_hat=None, truth_params=None,
-                       title: Optional[str] = None, selection=None) -> Figure:
+def recording_overview(
+    recording_or_columns, mu_hat=None, truth_params=None, title: Optional[str] = None, selection=None
+) -> Figure:
     """An overview of a recording.
 
     Left, against time (or sample index when there is no ``time`` column): vehicle and wheel speed
@@ -78,8 +98,7 @@ def recording_overview(recording_or_columns, mu_hat=None, truth_params=None,
     cols = {k: np.asarray(v, dtype=np.float64) for k, v in cols.items()}
     n = len(next(iter(cols.values())))
     raw = all(c in cols for c in ("time", "vehicle_speed", "wheel_speed", "traction_torque"))
-    if mu_hat is None and "adhesion" in cols and (not raw or isinstance(recording_or_columns,
-                                                                        Mapping)):
+    if mu_hat is None and "adhesion" in cols and (not raw or isinstance(recording_or_columns, Mapping)):
         mu_hat = cols["adhesion"]
     elif mu_hat is None and not isinstance(recording_or_columns, Mapping):
         try:
@@ -112,8 +131,7 @@ def recording_overview(recording_or_columns, mu_hat=None, truth_params=None,
     right = mu_hat is not None and creep is not None
 
     fig = Figure(figsize=(13.0, 2.0 + 1.9 * len(panels)), layout="constrained")
-    grid = GridSpec(len(panels), 2 if right else 1, figure=fig,
-                    width_ratios=[1.35, 1.0] if right else None)
+    grid = GridSpec(len(panels), 2 if right else 1, figure=fig, width_ratios=[1.35, 1.0] if right else None)
     style = dict(lw=0.9)
     share = None
     for row, panel in enumerate(panels):
@@ -123,8 +141,9 @@ def recording_overview(recording_or_columns, mu_hat=None, truth_params=None,
             if "vehicle_speed" in cols:
                 ax.plot(tb, brk(cols["vehicle_speed"] * _KMH), color="C0", label="vehicle", **style)
             if "wheel_speed" in cols:
-                ax.plot(tb, brk(cols["wheel_speed"] * _KMH), color="C1", label="wheel (circumferential)",
-                        **style)
+                ax.plot(
+                    tb, brk(cols["wheel_speed"] * _KMH), color="C1", label="wheel (circumferential)", **style
+                )
             ax.set_ylabel("speed [km/h]")
             if selection is not None and "time" in cols:
                 _shade(ax, selection)
@@ -152,12 +171,29 @@ def recording_overview(recording_or_columns, mu_hat=None, truth_params=None,
         ax = fig.add_subplot(grid[:, 1])
         positive = bool(np.all(creep > 0))
         used = np.ones(n, bool) if selection is None else selection.mask
-        ax.scatter(creep[used], mu_hat[used], s=4, alpha=0.35, color="C4", lw=0,
-                   rasterized=n > 5000, label=r"observed $\hat\mu$" + ("" if selection is None
-                                                                      else " (selected)"), zorder=3)
+        ax.scatter(
+            creep[used],
+            mu_hat[used],
+            s=4,
+            alpha=0.35,
+            color="C4",
+            lw=0,
+            rasterized=n > 5000,
+            label=r"observed $\hat\mu$" + ("" if selection is None else " (selected)"),
+            zorder=3,
+        )
         if not used.all():
-            ax.scatter(creep[~used], mu_hat[~used], s=3, alpha=0.2, color="0.6", lw=0,
-                       rasterized=n > 5000, label="excluded", zorder=2)
+            ax.scatter(
+                creep[~used],
+                mu_hat[~used],
+                s=3,
+                alpha=0.2,
+                color="0.6",
+                lw=0,
+                rasterized=n > 5000,
+                label="excluded",
+                zorder=2,
+            )
         if positive:
             ax.set_xscale("log")
         else:
@@ -187,5 +223,4 @@ def _overlay_truth(ax, truth_params, cols, creep, vehicle, positive):
     if not positive:
         s = np.concatenate([-s[::-1], [0.0], s])
     mu = np.asarray(polach_adhesion(theta, s, s * v_mean, vehicle.k_eps()))
-    ax.plot(s, mu, color="k", lw=1.3, zorder=2,
-            label=f"Polach truth (w = s·v̄, v̄ = {v_mean * _KMH:.2g} km/h)")
+    ax.plot(s, mu, color="k", lw=1.3, zorder=2, label=f"Polach truth (w = s·v̄, v̄ = {v_mean * _KMH:.2g} km/h)")

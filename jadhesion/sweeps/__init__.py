@@ -18,6 +18,21 @@ from .provenance import code_hash, source_digest
 from .runner import SweepSummary, merge, parts_dir, run_sweep
 from .table import COLUMNS, read_table, write_table
 
-__all__ = ["COLUMNS", "METHODS", "Chunk", "Grid", "SweepSummary", "code_hash", "fit_key", "grid_hash",
-           "merge", "observe", "parts_dir", "plan", "read_table", "run_sweep", "source_digest",
-           "write_table"]
+__all__ = [
+    "COLUMNS",
+    "METHODS",
+    "Chunk",
+    "Grid",
+    "SweepSummary",
+    "code_hash",
+    "fit_key",
+    "grid_hash",
+    "merge",
+    "observe",
+    "parts_dir",
+    "plan",
+    "read_table",
+    "run_sweep",
+    "source_digest",
+    "write_table",
+]

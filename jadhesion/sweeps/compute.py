@@ -72,9 +72,17 @@ def _local_chunk(method, options, data, theta_true, index, seed, noise_scale, cr
     peak = jax.vmap(adhesion_peak)
     true_mu_max, true_creep_opt = peak(jnp.broadcast_to(theta_true, fit.params.shape), k_eps, speed)
     mu_max, creep_opt = peak(fit.params, k_eps, speed)
-    out = dict(samples=covered, params=fit.params, mae=fit.mae, iterations=fit.iterations,
-               evaluations=fit.evaluations, true_mu_max=true_mu_max, true_creep_opt=true_creep_opt,
-               mu_max=mu_max, creep_opt=creep_opt)
+    out = dict(
+        samples=covered,
+        params=fit.params,
+        mae=fit.mae,
+        iterations=fit.iterations,
+        evaluations=fit.evaluations,
+        true_mu_max=true_mu_max,
+        true_creep_opt=true_creep_opt,
+        mu_max=mu_max,
+        creep_opt=creep_opt,
+    )
     out["status"] = fit.status  # jadhesion.status.Status codes
     return out
 
@@ -84,8 +92,9 @@ def _program(method: str, options: tuple):
     return jax.jit(functools.partial(_local_chunk, method, options))
 
 
-def start_chunk(method: str, data, theta_true, index, seed, noise_scale, creep_max, *, size=None,
-                options=(), device=None) -> dict:
+def start_chunk(
+    method: str, data, theta_true, index, seed, noise_scale, creep_max, *, size=None, options=(), device=None
+) -> dict:
     """Dispatch one chunk of grid points to ``device``; returns its (not yet computed) outputs.
 
     Args:
@@ -114,4 +123,3 @@ def start_chunk(method: str, data, theta_true, index, seed, noise_scale, creep_m
 def finish_chunk(outputs: dict, m: int) -> dict:
     """Wait for a chunk started by :func:`start_chunk`; host NumPy arrays of its ``m`` points."""
     return {k: np.asarray(v)[:m] for k, v in outputs.items()}
-

@@ -90,8 +90,13 @@ class Grid:
     @property
     def size(self) -> int:
         """Number of fits."""
-        return (len(self.scenarios) * len(self.methods) * len(self.seeds) * len(self.noise_scale)
-                * len(self.creep_max))
+        return (
+            len(self.scenarios)
+            * len(self.methods)
+            * len(self.seeds)
+            * len(self.noise_scale)
+            * len(self.creep_max)
+        )
 
     @property
     def per_seed(self) -> int:
@@ -122,7 +127,7 @@ def plan(grid: Grid, chunk_size: int) -> list:
     for scenario in grid.scenarios:
         for method in grid.methods:
             for start in range(0, len(cell), chunk_size):
-                chunks.append(Chunk(len(chunks), scenario, method, cell[start:start + chunk_size]))
+                chunks.append(Chunk(len(chunks), scenario, method, cell[start : start + chunk_size]))
     return chunks
 
 
@@ -130,6 +135,7 @@ def grid_hash(grid: Grid, chunk_size: int, source: str = "", code: str = "") -> 
     """A digest of everything that determines the chunks' contents (names part files): the grid,
     the chunk size, ``source`` (names a non-default dataset source) and ``code`` (the
     :func:`.provenance.code_hash` of the code and runtime computing them)."""
-    blob = json.dumps({"grid": grid.to_dict(), "chunk_size": chunk_size, "source": source,
-                       "code": code}, sort_keys=True)
+    blob = json.dumps(
+        {"grid": grid.to_dict(), "chunk_size": chunk_size, "source": source, "code": code}, sort_keys=True
+    )
     return hashlib.sha256(blob.encode()).hexdigest()[:16]

@@ -58,9 +58,14 @@ def code_hash(simulate=None, devices=None) -> str:
     devices the sweep runs on (default ``jax.local_devices()``).
     """
     devices = jax.local_devices() if devices is None else devices
-    runtime = {"jax": jax.__version__, "jaxlib": jaxlib.__version__,
-               "x64": bool(jax.config.jax_enable_x64),
-               "devices": sorted({(d.platform, d.device_kind) for d in devices})}
-    blob = json.dumps({"package": _package_digest(), "simulate": _simulate_source(simulate),
-                       "runtime": runtime}, sort_keys=True)
+    runtime = {
+        "jax": jax.__version__,
+        "jaxlib": jaxlib.__version__,
+        "x64": bool(jax.config.jax_enable_x64),
+        "devices": sorted({(d.platform, d.device_kind) for d in devices}),
+    }
+    blob = json.dumps(
+        {"package": _package_digest(), "simulate": _simulate_source(simulate), "runtime": runtime},
+        sort_keys=True,
+    )
     return hashlib.sha256(blob.encode()).hexdigest()[:16]

@@ -95,12 +95,26 @@ def _start(grid: Grid, chunk, chunk_size: int, simulate, device) -> _Started:
     theta = np.asarray(SCENARIOS[chunk.scenario].params, dtype=float)
     noise = np.asarray(grid.noise_scale)[noise_ix]
     creep = np.asarray(grid.creep_max)[creep_ix]
-    outputs = start_chunk(chunk.method, data, jnp.asarray(theta), np.searchsorted(distinct, seed_ix),
-                          seeds[seed_ix], noise, creep, size=chunk_size, options=grid.fit_options,
-                          device=device)
+    outputs = start_chunk(
+        chunk.method,
+        data,
+        jnp.asarray(theta),
+        np.searchsorted(distinct, seed_ix),
+        seeds[seed_ix],
+        noise,
+        creep,
+        size=chunk_size,
+        options=grid.fit_options,
+        device=device,
+    )
     m = len(seed_ix)
-    coordinates = dict(scenario=np.full(m, chunk.scenario), method=np.full(m, chunk.method),
-                       seed=seeds[seed_ix], noise_scale=noise, creep_max=creep)
+    coordinates = dict(
+        scenario=np.full(m, chunk.scenario),
+        method=np.full(m, chunk.method),
+        seed=seeds[seed_ix],
+        noise_scale=noise,
+        creep_max=creep,
+    )
     coordinates.update({f"true_{p}": np.full(m, t) for p, t in zip(PARAM_NAMES, theta, strict=True)})
     return _Started(chunk, coordinates, outputs)
 
@@ -116,8 +130,16 @@ def _finish(started: _Started) -> dict:
     return table
 
 
-def run_sweep(grid: Grid, out, *, chunk_size: int = 64, resume: bool = True,
-              progress: Optional[Callable[[int, int], None]] = None, simulate=None, devices=None) -> tuple:
+def run_sweep(
+    grid: Grid,
+    out,
+    *,
+    chunk_size: int = 64,
+    resume: bool = True,
+    progress: Optional[Callable[[int, int], None]] = None,
+    simulate=None,
+    devices=None,
+) -> tuple:
     """Run every fit of ``grid``; write the merged table to ``out`` (``.csv`` or ``.parquet``).
 
     Each chunk is one jitted, vmapped program of ``chunk_size`` points on one device; this
@@ -147,8 +169,13 @@ def run_sweep(grid: Grid, out, *, chunk_size: int = 64, resume: bool = True,
     mine = chunks[rank::size]
     todo = [c for c in mine if not (resume and _part(parts, c.index).exists())]
     if rank == 0:
-        manifest = dict(grid=grid.to_dict(), chunk_size=chunk_size, chunks=len(chunks), columns=COLUMNS,
-                        code=code_hash(simulate, devices))
+        manifest = dict(
+            grid=grid.to_dict(),
+            chunk_size=chunk_size,
+            chunks=len(chunks),
+            columns=COLUMNS,
+            code=code_hash(simulate, devices),
+        )
         (parts / "grid.json").write_text(json.dumps(manifest, indent=1))
     computed, total = 0, sum(len(c.points) for c in todo)
     for first in range(0, len(todo), len(devices)):
@@ -167,9 +194,18 @@ def run_sweep(grid: Grid, out, *, chunk_size: int = 64, resume: bool = True,
         sync_global_devices(f"jadhesion.sweep.{parts.name}")
     table = merge(grid, out, chunk_size, simulate, devices) if rank == 0 else None
     seconds = time.perf_counter() - start
-    summary = SweepSummary(grid.size, computed, len(chunks), len(todo), seconds,
-                           computed / seconds if seconds > 0 else math.nan, jax.device_count(), size,
-                           str(out) if rank == 0 else None, str(parts))
+    summary = SweepSummary(
+        grid.size,
+        computed,
+        len(chunks),
+        len(todo),
+        seconds,
+        computed / seconds if seconds > 0 else math.nan,
+        jax.device_count(),
+        size,
+        str(out) if rank == 0 else None,
+        str(parts),
+    )
     return table, summary
 
 

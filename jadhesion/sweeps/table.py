@@ -19,9 +19,23 @@ from ..models.polach import PARAM_NAMES
 COORDINATES = ("scenario", "method", "seed", "noise_scale", "creep_max")
 #: Column order of the table; ``status`` is the fit's :class:`jadhesion.status.Status` label
 #: (``converged``, ``max_steps``, …).
-COLUMNS = (COORDINATES + ("samples",) + tuple(f"true_{p}" for p in PARAM_NAMES) + PARAM_NAMES
-           + ("mae", "status", "iterations", "evaluations", "seconds",
-              "true_mu_max", "mu_max", "true_creep_opt", "creep_opt"))
+COLUMNS = (
+    COORDINATES
+    + ("samples",)
+    + tuple(f"true_{p}" for p in PARAM_NAMES)
+    + PARAM_NAMES
+    + (
+        "mae",
+        "status",
+        "iterations",
+        "evaluations",
+        "seconds",
+        "true_mu_max",
+        "mu_max",
+        "true_creep_opt",
+        "creep_opt",
+    )
+)
 _STR = {"scenario", "method", "status"}
 _INT = {"seed", "samples", "iterations", "evaluations"}
 
@@ -53,8 +67,9 @@ def _pyarrow():
         import pyarrow
         import pyarrow.parquet
     except ImportError:
-        raise InputError("sweep: writing .parquet needs pyarrow (pip install pyarrow); "
-                         "use a .csv output instead") from None
+        raise InputError(
+            "sweep: writing .parquet needs pyarrow (pip install pyarrow); use a .csv output instead"
+        ) from None
     return pyarrow
 
 

@@ -48,22 +48,35 @@ class Effect:
 
 EFFECTS = {
     "none": Effect("-", 0.0, 0.0, False, "nothing concealed"),
-    "rail_change": Effect("relative", 0.15, 0.40, True,
-                          "mu0 → mu0(1+m) at a time in 35–65 % of the run; kA → kA(1+m/2) on half "
-                          "the runs"),
-    "wheel_radius_error": Effect("relative", 0.005, 0.02, True,
-                                 "true rolling radius r_nom(1+m); wheel speed logged at r_nom"),
+    "rail_change": Effect(
+        "relative",
+        0.15,
+        0.40,
+        True,
+        "mu0 → mu0(1+m) at a time in 35–65 % of the run; kA → kA(1+m/2) on half the runs",
+    ),
+    "wheel_radius_error": Effect(
+        "relative", 0.005, 0.02, True, "true rolling radius r_nom(1+m); wheel speed logged at r_nom"
+    ),
     "signal_delay": Effect("s", 0.05, 0.30, False, "logged torque is the torque m seconds earlier"),
-    "speed_dependence": Effect("-", 0.4, 1.0, False,
-                               "mu0(v) = mu0((1−m) + m·CK(v)/CK(0)), Curtius–Kniffler "
-                               "CK = 7.5/(3.6v + 44) + 0.161"),
-    "torque_offset": Effect("adhesion units", 0.01, 0.04, True,
-                            "logged torque + m·Q_axle·r_nom [N·m]"),
-    "thermal_softening": Effect("-", 0.1, 0.4, False,
-                                "mu0·exp(−m·P̄/50 kW), P̄ = frictional power F|w| lagged 4 s"),
-    "load_transfer": Effect("-", 0.1, 0.4, True,
-                            "Q_axle(1+q), q → m(h_c F_coupler + h_g M_loco v̇)/(h_g M_loco g), "
-                            "lag 0.2 s; k_eps ∝ (1+q)^(−1/3)"),
+    "speed_dependence": Effect(
+        "-",
+        0.4,
+        1.0,
+        False,
+        "mu0(v) = mu0((1−m) + m·CK(v)/CK(0)), Curtius–Kniffler CK = 7.5/(3.6v + 44) + 0.161",
+    ),
+    "torque_offset": Effect("adhesion units", 0.01, 0.04, True, "logged torque + m·Q_axle·r_nom [N·m]"),
+    "thermal_softening": Effect(
+        "-", 0.1, 0.4, False, "mu0·exp(−m·P̄/50 kW), P̄ = frictional power F|w| lagged 4 s"
+    ),
+    "load_transfer": Effect(
+        "-",
+        0.1,
+        0.4,
+        True,
+        "Q_axle(1+q), q → m(h_c F_coupler + h_g M_loco v̇)/(h_g M_loco g), lag 0.2 s; k_eps ∝ (1+q)^(−1/3)",
+    ),
 }
 
 
@@ -78,8 +91,10 @@ def effect_detail(name: str, magnitude: float, rng: np.random.Generator, duratio
     """Random details of an effect beyond its magnitude (only rail_change has any)."""
     if name != "rail_change":
         return {}
-    return {"time_s": float(rng.uniform(0.35, 0.65) * duration),
-            "ka_factor": float(1.0 + magnitude / 2.0) if rng.random() < 0.5 else 1.0}
+    return {
+        "time_s": float(rng.uniform(0.35, 0.65) * duration),
+        "ka_factor": float(1.0 + magnitude / 2.0) if rng.random() < 0.5 else 1.0,
+    }
 
 
 @dataclasses.dataclass(frozen=True)
@@ -96,9 +111,11 @@ class Plan:
 
 
 PROFILES = ("start", "sweep", "steady")
-_WEIGHTS = {"start": {"sweep": 2, "ramp": 2, "hold": 1, "excursion": 1, "coast": 1.5},
-            "sweep": {"sweep": 3, "ramp": 2, "hold": 0.5, "coast": 1.5},
-            "steady": {"hold": 2, "excursion": 2, "coast": 1.5, "brake": 1, "ramp": 1}}
+_WEIGHTS = {
+    "start": {"sweep": 2, "ramp": 2, "hold": 1, "excursion": 1, "coast": 1.5},
+    "sweep": {"sweep": 3, "ramp": 2, "hold": 0.5, "coast": 1.5},
+    "steady": {"hold": 2, "excursion": 2, "coast": 1.5, "brake": 1, "ramp": 1},
+}
 
 
 def make_plan(kind: str, rng: np.random.Generator, duration: float) -> Plan:
@@ -228,9 +245,24 @@ def simulate(world: World, duration: float, step: float = 2e-3) -> dict:
     """
     n = int(math.ceil(duration / step)) + 1
     h = duration / (n - 1)
-    out = {k: np.empty(n) for k in ("time", "omega", "vehicle_speed", "torque", "force", "load",
-                                    "mu0_eff", "creep", "slip", "heat", "load_frac", "omega_dot",
-                                    "v_dot")}
+    out = {
+        k: np.empty(n)
+        for k in (
+            "time",
+            "omega",
+            "vehicle_speed",
+            "torque",
+            "force",
+            "load",
+            "mu0_eff",
+            "creep",
+            "slip",
+            "heat",
+            "load_frac",
+            "omega_dot",
+            "v_dot",
+        )
+    }
     veh = world.vehicle
     omega, v, heat, q = world.plan.v0 / world.r_true, world.plan.v0, 0.0, 0.0
     decay_heat, decay_q = math.exp(-h / THERMAL_TAU_S), math.exp(-h / PITCH_TAU_S)
@@ -254,17 +286,30 @@ def simulate(world: World, duration: float, step: float = 2e-3) -> dict:
                     break
             omega, v = y
         od, vd, (tq, force, load, mu0, s, w) = forces(world, t, command(world, t), omega, v, heat, q)
-        for key, val in (("time", t), ("omega", omega), ("vehicle_speed", v), ("torque", tq),
-                         ("force", force), ("load", load), ("mu0_eff", mu0), ("creep", s),
-                         ("slip", w), ("heat", heat), ("load_frac", q), ("omega_dot", od),
-                         ("v_dot", vd)):
+        for key, val in (
+            ("time", t),
+            ("omega", omega),
+            ("vehicle_speed", v),
+            ("torque", tq),
+            ("force", force),
+            ("load", load),
+            ("mu0_eff", mu0),
+            ("creep", s),
+            ("slip", w),
+            ("heat", heat),
+            ("load_frac", q),
+            ("omega_dot", od),
+            ("v_dot", vd),
+        ):
             out[key][i] = val
         heat = decay_heat * heat + (1.0 - decay_heat) * abs(force * w)
         if world.effect == "load_transfer":
             trail = world.plan.trailing_mass_kg
             coupler = trail * vd + _resistance(trail, v) + trail * GRAVITY * world.plan.grade
-            target = world.magnitude * (veh.coupler_height_m * coupler + veh.cog_height_m
-                                        * veh.locomotive_mass_kg * vd) / (
-                veh.cog_height_m * veh.locomotive_mass_kg * GRAVITY)
+            target = (
+                world.magnitude
+                * (veh.coupler_height_m * coupler + veh.cog_height_m * veh.locomotive_mass_kg * vd)
+                / (veh.cog_height_m * veh.locomotive_mass_kg * GRAVITY)
+            )
             q = decay_q * q + (1.0 - decay_q) * target
     return out

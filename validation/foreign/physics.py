@@ -24,12 +24,19 @@ from scipy.special import ellipe, ellipk
 GRAVITY = 9.81  # m/s²
 
 #: Kalker's c11 (Table E.3), coarse excerpt: rows (ln(a/b), c11 at ν = 0, 0.25, 0.5).
-C11_TABLE = np.array([
-    [math.log(0.2), 2.59, 3.37, 4.81], [math.log(0.4), 2.78, 3.53, 4.82],
-    [math.log(0.6), 2.98, 3.72, 4.91], [math.log(0.8), 3.19, 3.91, 5.05],
-    [0.0, 3.40, 4.12, 5.20], [-math.log(0.8), 3.65, 4.36, 5.42],
-    [-math.log(0.6), 4.06, 4.78, 5.80], [-math.log(0.4), 4.84, 5.57, 6.57],
-    [-math.log(0.2), 6.96, 7.78, 8.82]])
+C11_TABLE = np.array(
+    [
+        [math.log(0.2), 2.59, 3.37, 4.81],
+        [math.log(0.4), 2.78, 3.53, 4.82],
+        [math.log(0.6), 2.98, 3.72, 4.91],
+        [math.log(0.8), 3.19, 3.91, 5.05],
+        [0.0, 3.40, 4.12, 5.20],
+        [-math.log(0.8), 3.65, 4.36, 5.42],
+        [-math.log(0.6), 4.06, 4.78, 5.80],
+        [-math.log(0.4), 4.84, 5.57, 6.57],
+        [-math.log(0.2), 6.96, 7.78, 8.82],
+    ]
+)
 _C11_NU = np.array([0.0, 0.25, 0.5])
 
 
@@ -72,8 +79,14 @@ class ForeignVehicle:
 
     def semi_axes(self) -> tuple:
         """Hertz semi-axes (a rolling, b lateral) [m] at the static wheel load."""
-        return hertz(self.wheel_radius_m, self.rail_head_radius_m, self.wheel_profile_radius_m,
-                     self.wheel_load_n, self.shear_modulus_pa, self.poisson_ratio)
+        return hertz(
+            self.wheel_radius_m,
+            self.rail_head_radius_m,
+            self.wheel_profile_radius_m,
+            self.wheel_load_n,
+            self.shear_modulus_pa,
+            self.poisson_ratio,
+        )
 
     def c11(self) -> float:
         """Kalker's c11 [-] of the static contact."""
@@ -89,27 +102,57 @@ class ForeignVehicle:
     def sidecar(self) -> dict:
         """The recording sidecar (DESIGN §3 keys) that lets a reader rebuild this contact."""
         a, b = self.semi_axes()
-        return {"name": self.name, "axle_load_kg": self.axle_load_kg,
-                "wheel_radius_m": self.wheel_radius_m,
-                "wheelset_inertia_kgm2": self.wheelset_inertia_kgm2,
-                "locomotive_mass_kg": self.locomotive_mass_kg,
-                "observer_time_constant_s": self.observer_time_constant_s,
-                "rail_head_radius_m": self.rail_head_radius_m, "wheel_load_n": self.wheel_load_n,
-                "contact_semi_axes_m": [a, b], "shear_modulus_pa": self.shear_modulus_pa,
-                "poisson_ratio": self.poisson_ratio}
+        return {
+            "name": self.name,
+            "axle_load_kg": self.axle_load_kg,
+            "wheel_radius_m": self.wheel_radius_m,
+            "wheelset_inertia_kgm2": self.wheelset_inertia_kgm2,
+            "locomotive_mass_kg": self.locomotive_mass_kg,
+            "observer_time_constant_s": self.observer_time_constant_s,
+            "rail_head_radius_m": self.rail_head_radius_m,
+            "wheel_load_n": self.wheel_load_n,
+            "contact_semi_axes_m": [a, b],
+            "shear_modulus_pa": self.shear_modulus_pa,
+            "poisson_ratio": self.poisson_ratio,
+        }
 
 
 #: The vehicles (J, T0, heights and radii are typical values chosen here, not published data).
 VEHICLES = {
-    "coco_22e": ForeignVehicle("coco_22e", 21500.0, 0.61, 3000.0, 129000.0, 6, 0.05, 0.30,
-                               max_torque_nm=6.5e4),
-    "bobo_20t": ForeignVehicle("bobo_20t", 20000.0, 0.625, 2300.0, 80000.0, 4, 0.04, 0.30,
-                               shear_modulus_pa=8.1e10, poisson_ratio=0.28, max_torque_nm=6.0e4,
-                               cog_height_m=1.6, coupler_height_m=1.06),
-    "coco_25t": ForeignVehicle("coco_25t", 25000.0, 0.50, 1900.0, 150000.0, 6, 0.08, 0.254,
-                               wheel_profile_radius_m=1.0, shear_modulus_pa=7.9e10,
-                               poisson_ratio=0.29, max_torque_nm=6.0e4, cog_height_m=1.9,
-                               coupler_height_m=0.87),
+    "coco_22e": ForeignVehicle(
+        "coco_22e", 21500.0, 0.61, 3000.0, 129000.0, 6, 0.05, 0.30, max_torque_nm=6.5e4
+    ),
+    "bobo_20t": ForeignVehicle(
+        "bobo_20t",
+        20000.0,
+        0.625,
+        2300.0,
+        80000.0,
+        4,
+        0.04,
+        0.30,
+        shear_modulus_pa=8.1e10,
+        poisson_ratio=0.28,
+        max_torque_nm=6.0e4,
+        cog_height_m=1.6,
+        coupler_height_m=1.06,
+    ),
+    "coco_25t": ForeignVehicle(
+        "coco_25t",
+        25000.0,
+        0.50,
+        1900.0,
+        150000.0,
+        6,
+        0.08,
+        0.254,
+        wheel_profile_radius_m=1.0,
+        shear_modulus_pa=7.9e10,
+        poisson_ratio=0.29,
+        max_torque_nm=6.0e4,
+        cog_height_m=1.9,
+        coupler_height_m=0.87,
+    ),
 }
 
 

@@ -20,19 +20,36 @@ from scipy.signal import lfilter
 
 CHANNELS = ("vehicle_speed", "wheel_speed", "traction_torque")
 
-MILD = {"vehicle_speed": {"white": 1e-3, "ar": 1e-3, "ar_tau_s": 0.5, "quantum": 1e-3},
-        "wheel_speed": {"white": 1e-3, "ar": 5e-4, "ar_tau_s": 0.2, "quantum": 1e-3},
-        "traction_torque": {"white": 40.0, "ar": 20.0, "ar_tau_s": 0.3, "quantum": 10.0},
-        "jitter_s": 0.0, "time_quantum_s": 1e-4}
+MILD = {
+    "vehicle_speed": {"white": 1e-3, "ar": 1e-3, "ar_tau_s": 0.5, "quantum": 1e-3},
+    "wheel_speed": {"white": 1e-3, "ar": 5e-4, "ar_tau_s": 0.2, "quantum": 1e-3},
+    "traction_torque": {"white": 40.0, "ar": 20.0, "ar_tau_s": 0.3, "quantum": 10.0},
+    "jitter_s": 0.0,
+    "time_quantum_s": 1e-4,
+}
 
 #: Ranges (low, high) of the realistic preset, drawn log-uniformly (jitter: fraction of Δt).
-REALISTIC = {"vehicle_speed": {"white": (1e-3, 6e-3), "ar": (5e-4, 5e-3), "ar_tau_s": (0.2, 2.0),
-                               "quantum": (1e-3, 5e-3)},
-             "wheel_speed": {"white": (1e-3, 6e-3), "ar": (3e-4, 3e-3), "ar_tau_s": (0.1, 1.0),
-                             "quantum": (1e-3, 5e-3)},
-             "traction_torque": {"white": (20.0, 150.0), "ar": (10.0, 100.0),
-                                 "ar_tau_s": (0.1, 1.0), "quantum": (10.0, 100.0)},
-             "jitter_fraction": (1e-3, 0.05)}
+REALISTIC = {
+    "vehicle_speed": {
+        "white": (1e-3, 6e-3),
+        "ar": (5e-4, 5e-3),
+        "ar_tau_s": (0.2, 2.0),
+        "quantum": (1e-3, 5e-3),
+    },
+    "wheel_speed": {
+        "white": (1e-3, 6e-3),
+        "ar": (3e-4, 3e-3),
+        "ar_tau_s": (0.1, 1.0),
+        "quantum": (1e-3, 5e-3),
+    },
+    "traction_torque": {
+        "white": (20.0, 150.0),
+        "ar": (10.0, 100.0),
+        "ar_tau_s": (0.1, 1.0),
+        "quantum": (10.0, 100.0),
+    },
+    "jitter_fraction": (1e-3, 0.05),
+}
 
 
 def settings(spec, rng: np.random.Generator, rate_hz: float) -> dict:
@@ -40,8 +57,13 @@ def settings(spec, rng: np.random.Generator, rate_hz: float) -> dict:
     if isinstance(spec, dict):
         return {**MILD, **spec}
     if spec in (None, "realistic"):
-        out = {ch: {k: float(math.exp(rng.uniform(math.log(lo), math.log(hi))))
-                    for k, (lo, hi) in REALISTIC[ch].items()} for ch in CHANNELS}
+        out = {
+            ch: {
+                k: float(math.exp(rng.uniform(math.log(lo), math.log(hi))))
+                for k, (lo, hi) in REALISTIC[ch].items()
+            }
+            for ch in CHANNELS
+        }
         frac = REALISTIC["jitter_fraction"]
         out["jitter_s"] = float(math.exp(rng.uniform(*np.log(frac)))) / rate_hz
         out["time_quantum_s"] = 1e-4
