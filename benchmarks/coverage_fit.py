@@ -98,7 +98,7 @@ def score(recordings, truths):
         datasets = [to_dataset(r, creep=creep) for r in recordings]
         fits = _fits(datasets)
         rows = []
-        for d, f, t in zip(datasets, fits, truths):
+        for d, f, t in zip(datasets, fits, truths, strict=True):
             rep = fit_report(d, f)
             rows.append(
                 {
@@ -137,9 +137,11 @@ def summarise(rows):
         se = [r["stderr"][j] for r in rows]
         for lv, z in Z.items():
             out[f"{p}_coverage{lv}"] = float(
-                np.mean([_covered(e, s, t, z) for e, s, t in zip(est[:, j], se, truth[:, j])])
+                np.mean([_covered(e, s, t, z) for e, s, t in zip(est[:, j], se, truth[:, j], strict=True)])
             )
-        zs = np.array([(e - t) / s for e, s, t in zip(est[:, j], se, truth[:, j]) if s and np.isfinite(s)])
+        zs = np.array(
+            [(e - t) / s for e, s, t in zip(est[:, j], se, truth[:, j], strict=True) if s and np.isfinite(s)]
+        )
         out[f"{p}_z_mean"] = float(zs.mean()) if zs.size else None
         out[f"{p}_z_sd"] = float(zs.std()) if zs.size else None
         out[f"{p}_on_bound"] = int(sum(s is None for s in se))
@@ -150,16 +152,19 @@ def figure(summary, path):
     """Error and 90 % coverage against the speed-sensor noise sd, per generator and creep option."""
     fig, axes = plt.subplots(1, 3, figsize=(14, 4))
     for gen, marker in (("ours", "o"), ("foreign", "s")):
-        for creep, ls in zip(CREEPS, ("-", "--")):
+        for creep, ls in zip(CREEPS, ("-", "--"), strict=True):
             keys = [k for k in summary if k.startswith(gen + "/") and k.endswith("/" + creep)]
-            pts = sorted((summary[k]["noise_sd"], summary[k]) for k in keys)
+            pts = sorted(((summary[k]["noise_sd"], summary[k]) for k in keys), key=lambda p: p[0])
             if not pts:
                 continue
             groups = {}
             for sd, s in pts:
                 groups.setdefault(sd, []).append(s)
             xs = sorted(groups)
-            mean = lambda key: [np.mean([s[key] for s in groups[v]]) for v in xs]  # noqa: E731
+
+            def mean(key, groups=groups, xs=xs):
+                return [np.mean([s[key] for s in groups[v]]) for v in xs]
+
             label = f"{gen}, LM {creep}"
             axes[0].plot(xs, mean("slope_rel_error_median"), marker + ls, label=label)
             axes[1].plot(xs, mean("mu0_abs_error_median"), marker + ls, label=label)
@@ -174,7 +179,7 @@ def figure(summary, path):
     axes[0].axhline(0.25, color="k", lw=0.6)
     axes[2].axhspan(0.85, 0.95, color="0.85")
     titles = ("|slope error| / slope (median)", "|μ0 error| (median)", "HAC 90 % interval coverage")
-    for ax, title in zip(axes, titles):
+    for ax, title in zip(axes, titles, strict=True):
         ax.set_xscale("log")
         ax.set_xlabel("speed-sensor noise sd [m/s]")
         ax.set_title(title + " — mean over scenarios", fontsize=9)

@@ -5,10 +5,12 @@ recordings."""
 import jax
 import jax.numpy as jnp
 import numpy as np
+import pytest
 from scipy import stats
 
+from jadhesion.data.dataset import to_dataset
 from jadhesion.data.scenarios import get_scenario
-from jadhesion.data.simulator import simulate_batch
+from jadhesion.data.simulator import simulate_many
 from jadhesion.identify.polach_fit import fit_polach_batch
 from jadhesion.identify.trust import fit_report
 from jadhesion.identify.uncertainty import Z95, bandwidth, covariance
@@ -65,16 +67,25 @@ def test_singular_direction_is_infinite_and_fixed_parameters_are_nan():
     assert np.all(np.isnan(np.asarray(cov[1]))) and np.all(np.isfinite(np.asarray(cov[::2, ::2])))
 
 
-def test_fit_intervals_cover_the_truth_on_simulated_recordings():
-    """25 simulated sand recordings (the observer colours the noise): the 95 % intervals of μ0 and
-    kS must hold the truth in a binomial band around 95 % (P(X ≤ 20 | n = 25, p = 0.95) ≈ 0.7 %)."""
+@pytest.mark.parametrize("sensors", ["realistic", "clean"])
+def test_fit_intervals_cover_the_truth_on_simulated_recordings(sensors):
+    """25 simulated sand recordings through the fit's own path (smoothed creep, the
+    errors-in-variables LM residual, HAC sandwich of that residual): the 95 % intervals of μ0 and
+    kS must hold the truth in a binomial band around 95 % (P(X ≤ 20 | n = 25, p = 0.95) ≈ 0.7 %),
+    on realistic sensors (the default) and on the historical clean ones. (On realistic sensors
+    the raw speed difference with the plain residual covers only ≈ 70 %: its errors are wider than
+    its intervals, ``benchmarks/results/coverage_fit.json``.)"""
     n = 25
     truth = np.asarray(get_scenario("sand").params)
-    data = simulate_batch("sand", list(range(100, 100 + n)), n_samples=1000)
+    datasets = [
+        to_dataset(r)
+        for r in simulate_many("sand", list(range(100, 100 + n)), n_samples=1000, sensors=sensors)
+    ]
+    data = jax.tree.map(lambda *a: jnp.stack(a), *datasets)
     fits = fit_polach_batch(data, "lm", jax.random.split(jax.random.key(0), n))
     hits = {"mu0": 0, "kS": 0}
     for i in range(n):
-        report = fit_report(jax.tree.map(lambda a: a[i], data), jax.tree.map(lambda a: a[i], fits))
+        report = fit_report(datasets[i], jax.tree.map(lambda a, i=i: a[i], fits))
         for p in hits:
             ci = report["uncertainty"][p]["ci95"]
             hits[p] += ci is not None and ci[0] <= truth[PARAM_NAMES.index(p)] <= ci[1]
