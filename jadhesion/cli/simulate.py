@@ -37,7 +37,7 @@ DEFAULT_DURATION_S = 39.98
 
 def register(sub) -> None:
     """Add the ``simulate`` subcommand to ``sub`` (argparse subparsers)."""
-    p = sub.add_parser("simulate", help=COMMANDS["simulate"], description=__doc__.splitlines()[0])
+    p = sub.add_parser("simulate", help=COMMANDS["simulate"])
     p.add_argument("--scenario", default="dry", help=f"one of {', '.join(SCENARIO_NAMES)} (default dry)")
     p.add_argument(
         "--params",
