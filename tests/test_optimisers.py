@@ -84,7 +84,10 @@ def test_while_loop_matches_scan_history(algorithm):
 def test_vmap_over_problems_equals_separate_runs_without_retrace(algorithm):
     centres = jnp.array([[0.0, 0.0, 0.0, 0.0], [1.0, -1.0, 2.0, 0.5], [-1.5, 2.5, 0.1, 1.0]])
     keys = jax.random.split(jax.random.key(5), 3)
-    singles = [run(algorithm, sphere, BOUNDS, k, POP, ITERS, TARGET, args=c) for k, c in zip(keys, centres)]
+    singles = [
+        run(algorithm, sphere, BOUNDS, k, POP, ITERS, TARGET, args=c)
+        for k, c in zip(keys, centres, strict=True)
+    ]
     traced = TRACES["n"]
     batched = jax.vmap(lambda k, c: run(algorithm, sphere, BOUNDS, k, POP, ITERS, TARGET, args=c))(
         keys, centres
