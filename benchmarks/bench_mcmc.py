@@ -39,24 +39,24 @@ jax.config.update("jax_enable_x64", True)
 
 from jadhesion.cli.common import emit_json, table  # noqa: E402
 from jadhesion.data.scenarios import SCENARIOS  # noqa: E402
-from jadhesion.data.simulator import (
+from jadhesion.data.simulator import (  # noqa: E402
     result_dataset,
     simulate_batch,
-    simulate_dataset,  # noqa: E402
+    simulate_dataset,
     simulate_many,
 )
 from jadhesion.identify.ensemble import ChainTooShortWarning, run_ensemble  # noqa: E402
 from jadhesion.identify.laplace import initial_spread, lm_optimum  # noqa: E402
-from jadhesion.identify.likelihood import (
+from jadhesion.identify.likelihood import (  # noqa: E402
     LOG_SCALE_BOUNDS,
-    ensemble_log_prob,  # noqa: E402
+    ensemble_log_prob,
     recording_observer_terms,
 )
 from jadhesion.identify.mcmc import initial_ball  # noqa: E402
-from validation.calibration import (
+from validation.calibration import (  # noqa: E402
     QUANTITIES,
     binomial_band,
-    coverage_study,  # noqa: E402
+    coverage_study,
     synthetic_dataset,
 )
 
@@ -226,7 +226,7 @@ def bench_recordings(m, likelihoods, steps, walkers, n_points, seed=0, save=None
         for name, sc in SCENARIOS.items():
             taus, accs = [], []
 
-            def note(i, result, name=name, lik=lik):
+            def note(i, result, name=name, lik=lik, taus=taus, accs=accs):
                 taus.append(float(np.max(result.diagnostics.tau)))
                 accs.append(result.diagnostics.acceptance)
                 done[0] += 1
@@ -238,7 +238,7 @@ def bench_recordings(m, likelihoods, steps, walkers, n_points, seed=0, save=None
                     )
                     sys.stderr.flush()
 
-            datasets, observers = zip(*sets[name])
+            datasets, observers = zip(*sets[name], strict=True)
             report = coverage_study(
                 list(datasets),
                 [np.asarray(sc.params)] * per,
@@ -263,7 +263,7 @@ def bench_recordings(m, likelihoods, steps, walkers, n_points, seed=0, save=None
         hits = np.concatenate([np.array(doc["results"][lik][n]["hits90"]) for n in SCENARIOS])
         doc["results"][lik]["all"] = {
             "n": int(hits.shape[0]),
-            "coverage90": dict(zip(QUANTITIES, hits.mean(axis=0).tolist())),
+            "coverage90": dict(zip(QUANTITIES, hits.mean(axis=0).tolist(), strict=True)),
         }
         if save:
             doc["wall_seconds"] = time.perf_counter() - t_start

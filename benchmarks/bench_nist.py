@@ -21,7 +21,7 @@ jax.config.update("jax_enable_x64", True)
 
 from jadhesion.identify.lm import lm_solve  # noqa: E402
 from validation.nist import DATA_DIR as DATA  # noqa: E402
-from validation.nist import MODELS, load_problem, log_relative_error
+from validation.nist import MODELS, load_problem, log_relative_error  # noqa: E402
 
 
 def bench(problem):

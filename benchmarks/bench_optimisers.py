@@ -4,7 +4,8 @@ Times are taken after a warm-up call; the first call's extra time is reported as
 Rows: improved-TLBO ms/iteration (pop 50, 1000 points) beside mealpy's TLBO and pyswarms' PSO when
 installed; improved-TLBO identification to a target MAE; warm LM (global and single start) beside
 scipy's ``least_squares`` on the same residuals; global-LM vs scipy random-start success rate;
-batched fits per second (64 datasets x 1000 points). Usage: ``python -m benchmarks.bench_optimisers [--json]``.
+batched fits per second (64 datasets x 1000 points).
+Usage: ``python -m benchmarks.bench_optimisers [--json]``.
 """
 
 from __future__ import annotations
@@ -239,7 +240,7 @@ def success_rate(trials, points=1000):
     rng = np.random.default_rng(1)
     theirs = []
     for i in range(trials):
-        f = numpy_residual(jax.tree.map(lambda a: a[i], stack))
+        f = numpy_residual(jax.tree.map(lambda a, i=i: a[i], stack))
         theirs.append(float(np.mean(np.abs(f(least_squares(f, rng.uniform(0, 1, 5), bounds=(0, 1)).x)))))
     best = np.minimum(np.minimum(ours, np.asarray(theirs)), truth_basin)
     ok = lambda m: np.mean(np.asarray(m) <= 1.001 * best)  # noqa: E731
@@ -272,7 +273,7 @@ def batched(n, points=1000):
     rows = []
     steps = _plain_lm_batch(stack).steps
     for name, fn in (("vmap", _plain_lm_batch), ("work queue", _plain_lm_queue)):
-        warm, comp = timed(lambda: fn(stack).params, repeat=3)
+        warm, comp = timed(lambda fn=fn: fn(stack).params, repeat=3)
         rows.append(
             dict(
                 name=f"batched plain LM, {name}, fits/s {label})",
@@ -290,7 +291,9 @@ def batched(n, points=1000):
         ("itlbo", "itlbo, stall test (cap 300)", {}),
         ("itlbo", "itlbo to 1.02 x truth MAE", dict(target=1.02 * truth)),
     ):
-        warm, comp = timed(lambda: fit_polach_batch(stack, method, keys, **kw).params, repeat=3)
+        warm, comp = timed(
+            lambda method=method, kw=kw: fit_polach_batch(stack, method, keys, **kw).params, repeat=3
+        )
         fit = fit_polach_batch(stack, method, keys, **kw)
         rows.append(
             dict(

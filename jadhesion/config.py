@@ -11,7 +11,7 @@ from pathlib import Path
 
 def enable_x64() -> None:
     """Compute in float64 (results of this project are reported in double precision)."""
-    import jax
+    import jax  # here, not at the top: the JAX-free CLI imports this module (``--help``: no JAX)
 
     jax.config.update("jax_enable_x64", True)
 
@@ -32,7 +32,7 @@ def enable_compilation_cache(path: str | os.PathLike | None = None) -> Path:
 
     The cache lives in ``$JADHESION_CACHE`` or ``~/.cache/jadhesion/xla`` unless ``path`` is given.
     """
-    import jax
+    import jax  # here, not at the top: see enable_x64
 
     cache = Path(path) if path else compilation_cache_dir()
     cache.mkdir(parents=True, exist_ok=True)

@@ -17,7 +17,7 @@ HEADER = "time,vehicle_speed,wheel_speed,traction_torque"
 def good_rows(n=40):
     t = np.arange(n) * 0.02
     v = 0.6 + 0.01 * t
-    return [f"{a:.4f},{b:.5f},{b * 1.05:.5f},{30000 + 100 * a:.1f}" for a, b in zip(t, v)]
+    return [f"{a:.4f},{b:.5f},{b * 1.05:.5f},{30000 + 100 * a:.1f}" for a, b in zip(t, v, strict=True)]
 
 
 def csv(*rows, header=HEADER):

@@ -10,6 +10,9 @@ import pytest
 
 from jadhesion import LOCO_22E, polach_adhesion
 from jadhesion.cli import main
+from jadhesion.status import Status
+
+STATUS_LABELS = {s.label for s in Status}
 
 
 @pytest.fixture(scope="module")
@@ -127,14 +130,31 @@ def test_reproduce_online_json_keys(env):
 
 
 def test_reproduce_table2_json_rows_include_mcmc(env):
-    proc = jadhesion(env, "reproduce", "table2", "--seeds", "2", "--mcmc-steps", "300", "--json")
+    proc = jadhesion(
+        env, "reproduce", "table2", "--seeds", "2", "--mcmc-steps", "300", "--sensors", "realistic", "--json"
+    )
     doc = json.loads(proc.stdout)
-    keys = {"scenario", "method", "error", "iterations", "evaluations", "seconds", "params", "paper"}
-    methods = {(r["scenario"], r["method"]) for r in doc["rows"]}
-    assert methods == {(s, m) for s in ("dry", "wet", "sand") for m in ("itlbo", "tlbo", "pso", "lm", "mcmc")}
+    assert doc["sensors"] == ["clean", "realistic"]
+    keys = {
+        "scenario",
+        "method",
+        "error",
+        "iterations",
+        "evaluations",
+        "seconds",
+        "params",
+        "paper",
+        "status",
+    }
+    cells = {(s, m) for s in ("dry", "wet", "sand") for m in ("itlbo", "tlbo", "pso", "lm", "mcmc")}
+    rows = {sensors: [r for r in doc["rows"] if r["sensors"] == sensors] for sensors in doc["sensors"]}
+    assert len(doc["rows"]) == 2 * len(cells)
     truth = {"dry": 0.3555, "wet": 0.2610}
-    for row in doc["rows"]:
+    # The paper's conditions (clean sensors, creep from the speed difference): its numbers reproduced.
+    assert {(r["scenario"], r["method"]) for r in rows["clean"]} == cells
+    for row in rows["clean"]:
         assert set(row) >= keys, row["method"]
+        assert row["creep"] == "raw" and row["status"] in STATUS_LABELS, row
         if row["method"] == "lm":  # least squares sits at the noise floor (MAE of the truth)
             assert 0.95 * row["floor"] < row["error"] < 1.02 * row["floor"], row
         elif row["method"] == "itlbo":  # the paper's method reaches the floor in its budget
@@ -146,7 +166,7 @@ def test_reproduce_table2_json_rows_include_mcmc(env):
             assert row["params"]["mu0"] == pytest.approx(truth[row["scenario"]], abs=0.02), row
         if row["method"] in ("itlbo", "tlbo"):  # the paper reports both on every rail
             assert row["paper"] is not None and row["paper"]["iterations"] > 0
-    for row in (r for r in doc["rows"] if r["method"] == "mcmc"):
+    for row in (r for r in rows["clean"] if r["method"] == "mcmc"):
         assert row["likelihood"] == doc["mcmc"]["likelihood"] and row["paper"] is None
         assert set(row["width90"]) >= {"kA", "kS", "mu0", "A", "B", "mu_max", "creep_opt"}
         assert (
@@ -154,6 +174,17 @@ def test_reproduce_table2_json_rows_include_mcmc(env):
             and row["evaluations"] == row["iterations"] * row["walkers"]
         )
         assert 0.005 < row["error"] < 0.05 and row["seconds"] > 0
+        assert row["status"] == ("converged" if row["converged"] else "max_steps")
+    # Realistic sensors beside them (smoothed creep, as `fit` does): every cell, with its status; the
+    # paper has no such numbers, and the sensors' noise adds to the floor of every scenario.
+    assert {(r["scenario"], r["method"]) for r in rows["realistic"]} == cells
+    clean_floor = {r["scenario"]: r["floor"] for r in rows["clean"] if r["method"] == "lm"}
+    for row in rows["realistic"]:
+        assert set(row) >= keys, row["method"]
+        assert row["creep"] == "smoothed" and row["sensor_noise"] == 1.0 and row["paper"] is None
+        assert row["status"] in STATUS_LABELS and np.isfinite(row["error"]), row
+        if row["method"] == "lm":
+            assert row["floor"] > clean_floor[row["scenario"]], row
 
 
 def test_posterior_auto_likelihood_uses_the_observer_on_a_raw_recording(env, recording):
@@ -175,7 +206,8 @@ def test_fit_warns_few_samples_in_process(tmp_path, capsys):
     mu = mu + 0.005 * rng.standard_normal(50)
     path = tmp_path / "few.csv"
     path.write_text(
-        "creepage,vehicle_speed,adhesion\n" + "".join(f"{c},{v},{m}\n" for c, v, m in zip(creep, speed, mu))
+        "creepage,vehicle_speed,adhesion\n"
+        + "".join(f"{c},{v},{m}\n" for c, v, m in zip(creep, speed, mu, strict=True))
     )
     assert main(["fit", str(path), "--method", "lm", "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)

@@ -5,9 +5,12 @@ import json
 import numpy as np
 import pytest
 
-from jadhesion.cli import main
+from jadhesion.cli import main, simulate
 from jadhesion.data.dataset import to_dataset
 from jadhesion.data.recording import load_recording
+from jadhesion.data.scenarios import SCENARIOS
+from jadhesion.data.simulator import DEFAULT_SAMPLES, SAMPLE_PERIOD
+from jadhesion.models.effects import EFFECT_NAMES
 from jadhesion.models.polach import PARAM_NAMES, polach_adhesion
 
 
@@ -110,3 +113,11 @@ def test_bad_values_exit_2_naming_the_flag(capsys, tmp_path, argv, flag):
     code, _, err = _simulate(capsys, tmp_path / "x.csv", *argv)
     assert code == 2 and err.count("\n") == 1 and flag in err
     assert list(tmp_path.iterdir()) == [tmp_path / "BAD.json"]  # nothing written
+
+
+def test_help_names_and_defaults_are_the_catalogues_and_the_simulators():
+    """The JAX-free argument module's copies (help text only) equal what they copy."""
+    assert simulate.SCENARIO_NAMES == tuple(SCENARIOS)
+    assert simulate.EFFECT_NAMES == EFFECT_NAMES
+    assert simulate.DEFAULT_RATE_HZ == 1.0 / SAMPLE_PERIOD
+    assert simulate.DEFAULT_DURATION_S == pytest.approx((DEFAULT_SAMPLES - 1) * SAMPLE_PERIOD, rel=1e-12)

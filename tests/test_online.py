@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from jadhesion.experiments import online as ex
+from jadhesion.experiments import online_text
 from jadhesion.identify import online as ol
 
 SHORT = 60  # steps of the short records (one compiled shape shared by several tests)
@@ -59,7 +60,7 @@ def test_jitted_scan_matches_python_loop_of_steps():
     params = ol.algorithm1_params()
     fast = ol.identify(params, sc.lam, sc.mu)
     state, infos, step = ol.init(params), [], jax.jit(ol.step)
-    for obs in zip(sc.lam, sc.mu):
+    for obs in zip(sc.lam, sc.mu, strict=True):
         state, info = step(params, state, obs)
         infos.append(info)
     slow = jax.tree.map(lambda *xs: jnp.stack(xs), *infos)
@@ -72,7 +73,7 @@ def test_vmap_over_seeds_matches_loop():
     batched = ex.run_batch(params, sc)
     for r in range(3):
         one = ol.identify(params, sc.lam, sc.mu[r])
-        jax.tree.map(lambda a, b: np.testing.assert_allclose(a[r], b, rtol=1e-7), batched, one)
+        jax.tree.map(lambda a, b, r=r: np.testing.assert_allclose(a[r], b, rtol=1e-7), batched, one)
 
 
 def test_vmap_over_params():
@@ -159,7 +160,7 @@ def test_run_contract_plot_and_verdicts(claims):
     assert max(result["baselines"]["batch_ls"]["p1_relerr"]) < 0.01  # the information floor
     assert result["paper"]["k_p2_1pct"] == 250
     assert (plots / "online_kiencke.png").stat().st_size > 10_000
-    lines = ex.format_text(result).splitlines()
+    lines = online_text.format_text(result).splitlines()
     verdict = {
         line.split(": ", 1)[1].split(" (")[0].split(" paper")[0]: line.split(":")[0].strip()
         for line in lines

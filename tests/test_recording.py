@@ -111,7 +111,9 @@ def test_slip_velocity_dataset(tmp_path):
     v = np.array([0.5, 1.0, 0.0])
     (tmp_path / "d.csv").write_text(
         "slip_velocity,vehicle_speed,adhesion,comment\n"
-        + "".join(f"{float(a)!r},{float(b)!r},0.2,run {i}\n" for i, (a, b) in enumerate(zip(w, v)))
+        + "".join(
+            f"{float(a)!r},{float(b)!r},0.2,run {i}\n" for i, (a, b) in enumerate(zip(w, v, strict=True))
+        )
     )
     rec = load_recording(tmp_path / "d.csv")
     assert "comment" not in rec.columns and "'comment'" in rec.notes[0]  # text column ignored

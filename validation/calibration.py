@@ -131,7 +131,7 @@ def coverage_study(
     sampler = sample_posterior if sampler is None else sampler
     hits = {level: [] for level in LEVELS}
     widths, seconds = [], []
-    for i, (data, theta) in enumerate(zip(datasets, thetas)):
+    for i, (data, theta) in enumerate(zip(datasets, thetas, strict=True)):
         obs = None if observers is None else observers[i]
         extra = {} if obs is None else {"obs": obs}
         with warnings.catch_warnings():
@@ -155,6 +155,8 @@ def coverage_study(
         if progress is not None:
             progress(i + 1)
     hits = {level: np.array(h) for level, h in hits.items()}
-    coverage = {level: dict(zip(QUANTITIES, h.mean(axis=0).tolist())) for level, h in hits.items()}
-    width90 = dict(zip(QUANTITIES, np.median(widths, axis=0).tolist()))
+    coverage = {
+        level: dict(zip(QUANTITIES, h.mean(axis=0).tolist(), strict=True)) for level, h in hits.items()
+    }
+    width90 = dict(zip(QUANTITIES, np.median(widths, axis=0).tolist(), strict=True))
     return CoverageReport(hits, coverage, len(thetas), width90, float(np.mean(seconds)))

@@ -50,7 +50,7 @@ def _params(params, rng) -> dict:
     if params is None:
         return physics.random_params(rng)
     if not isinstance(params, dict):
-        params = dict(zip(physics.PARAM_NAMES, params))
+        params = dict(zip(physics.PARAM_NAMES, params, strict=True))
     return {k: float(params[k]) for k in physics.PARAM_NAMES}
 
 

@@ -24,7 +24,7 @@ def register(sub) -> None:
     p.add_argument(
         "file",
         nargs="+",
-        help="recording or creepage CSV(s), or directories of them (every *.csv): "
+        help="recordings or creepage files (CSV, Parquet, MATLAB .mat), or directories of them: "
         "several are fitted in one process, one compiled program per length "
         "bucket, each exactly as when fitted alone",
     )

@@ -2,7 +2,9 @@
 
 With no target it runs both: paper 001's Table 2 (Polach, offline) and paper 000's online
 identification (Kiencke). Table 2 gains one ``mcmc`` row per scenario (the emcee posterior,
-:func:`jadhesion.experiments.table2.mcmc_row`) unless ``--no-mcmc``.
+:func:`jadhesion.experiments.mcmc_row.mcmc_row`) unless ``--no-mcmc``. Table 2 runs on clean
+sensors, the paper's conditions; ``--sensors realistic`` adds the same rows on realistic sensors
+(scaled by ``--sensor-noise``) beside them.
 
 This module defines the arguments only; :mod:`.reproduce_run` does the work.
 """
@@ -27,6 +29,20 @@ def register(sub) -> None:
         default=None,
         metavar="S",
         help="table2: steps of each posterior chain (default 1500; burn-in a third)",
+    )
+    p.add_argument(
+        "--sensors",
+        choices=("clean", "realistic"),
+        default="clean",
+        help="table2: clean (the paper's conditions, default) or realistic: rows on realistic "
+        "sensors beside the clean ones",
+    )
+    p.add_argument(
+        "--sensor-noise",
+        type=float,
+        default=1.0,
+        metavar="SCALE",
+        help="table2: scale of the realistic sensor noise (jadhesion.data.sensors; default 1)",
     )
     p.add_argument("--plot", metavar="DIR", default=None, help="write figures into DIR")
     p.add_argument("--json", action="store_true", help="one JSON document on stdout")

@@ -3,14 +3,17 @@
 
 from __future__ import annotations
 
-from ..experiments import online, table2
-from .common import Progress, emit_json, require_at_least
+from ..experiments import online, online_text, table2, table2_text
+from ..experiments.mcmc_row import MCMC_MIN_STEPS
+from .common import Progress, UserError, emit_json, require_at_least
 
 
 def run(args) -> int:
     """Reproduce the requested target(s) on the built-in defaults."""
     require_at_least("reproduce", 1, seeds=args.seeds, runs=args.runs)
-    require_at_least("reproduce", table2.MCMC_MIN_STEPS, mcmc_steps=args.mcmc_steps)
+    require_at_least("reproduce", MCMC_MIN_STEPS, mcmc_steps=args.mcmc_steps)
+    if not args.sensor_noise >= 0.0:
+        raise UserError(f"reproduce: --sensor-noise must be >= 0, got {args.sensor_noise}")
     out = {}
     if args.target in (None, "table2"):
         with Progress(label="table2", unit="cells") as progress:
@@ -20,6 +23,8 @@ def run(args) -> int:
                 progress=progress,
                 mcmc=not args.no_mcmc,
                 mcmc_steps=args.mcmc_steps,
+                sensors=args.sensors,
+                sensor_noise=args.sensor_noise,
             )
     if args.target in (None, "online"):
         with Progress(label="online Monte Carlo", unit="configs") as progress:
@@ -28,6 +33,5 @@ def run(args) -> int:
         emit_json(out[args.target] if args.target else out)
     else:
         for name, result in out.items():
-            module = table2 if name == "table2" else online
-            print(module.format_text(result))
+            print((table2_text if name == "table2" else online_text).format_text(result))
     return 0

@@ -9,49 +9,36 @@ Researchers' options: ``--params kA=…,mu0=…`` replaces any subset of the sce
 parameters (the rest, the creep profile and the noise stay the scenario's); ``--duration`` [s] and
 ``--rate`` [Hz] set the recording's length and sampling; ``--vehicle SIDECAR.json`` a locomotive
 (sidecar keys, missing ones 22E); ``--test braking`` negates the creep reference (negative torque).
+
+This module defines the arguments only; :mod:`.simulate_run` does the work.
 """
 
 from __future__ import annotations
 
-import json
-import math
-from pathlib import Path
+from . import COMMANDS
 
-from ..data.recording import _load_sidecar, save_recording
-from ..data.scenarios import SCENARIOS, get_scenario
-from ..data.simulator import DEFAULT_SAMPLES, SAMPLE_PERIOD, simulate
-from ..data.vehicle import LOCO_22E
-from ..errors import RecordingError
-from ..models.effects import EFFECT_NAMES, magnitudes
-from ..models.polach import PARAM_NAMES
-from .common import UserError, emit_json
-
-RECORDING_COLUMNS = (
-    "time",
-    "vehicle_speed",
-    "wheel_speed",
-    "traction_torque",
-    "creepage",
-    "slip_velocity",
-    "adhesion",
+#: The names of :data:`jadhesion.data.scenarios.SCENARIOS` and
+#: :data:`jadhesion.models.effects.EFFECT_NAMES`, and the simulator's default rate [Hz] and length
+#: [s] (:data:`~jadhesion.data.simulator.SAMPLE_PERIOD`, ``DEFAULT_SAMPLES``), for the help text
+#: only: those modules import JAX; a test keeps these equal to them.
+SCENARIO_NAMES = ("dry", "wet", "sand")
+EFFECT_NAMES = (
+    "rail_change",
+    "wheel_radius_error",
+    "signal_delay",
+    "speed_dependence",
+    "torque_offset",
+    "thermal_softening",
+    "load_transfer",
 )
-#: Accepted ranges of ``--params`` values (physical validity, not the fit's box): name → (lo, hi,
-#: whether lo itself is allowed).
-PARAM_RANGES = {
-    "kA": (0.0, 1.0, False),
-    "kS": (0.0, 1.0, False),
-    "mu0": (0.0, 1.5, False),
-    "A": (0.0, 1.0, True),
-    "B": (0.0, 10.0, True),
-}
-#: ``--rate`` range [Hz] and the largest recording [samples].
-RATE_RANGE = (10.0, 1000.0)
-MIN_SAMPLES, MAX_SAMPLES = 100, 200_000
+DEFAULT_RATE_HZ = 50.0
+DEFAULT_DURATION_S = 39.98
 
 
 def register(sub) -> None:
-    p = sub.add_parser("simulate", help="simulate a 22E traction- or braking-test recording")
-    p.add_argument("--scenario", default="dry", help=f"one of {', '.join(SCENARIOS)} (default dry)")
+    """Add the ``simulate`` subcommand to ``sub`` (argparse subparsers)."""
+    p = sub.add_parser("simulate", help=COMMANDS["simulate"])
+    p.add_argument("--scenario", default="dry", help=f"one of {', '.join(SCENARIO_NAMES)} (default dry)")
     p.add_argument(
         "--params",
         default=None,
@@ -63,14 +50,14 @@ def register(sub) -> None:
         type=float,
         default=None,
         metavar="S",
-        help=f"recording length [s] (default {(DEFAULT_SAMPLES - 1) * SAMPLE_PERIOD:g})",
+        help=f"recording length [s] (default {DEFAULT_DURATION_S:g})",
     )
     p.add_argument(
         "--rate",
         type=float,
-        default=1.0 / SAMPLE_PERIOD,
+        default=DEFAULT_RATE_HZ,
         metavar="HZ",
-        help=f"sample rate [Hz] (default {1.0 / SAMPLE_PERIOD:g})",
+        help=f"sample rate [Hz] (default {DEFAULT_RATE_HZ:g})",
     )
     p.add_argument(
         "--vehicle",
@@ -101,121 +88,4 @@ def register(sub) -> None:
     )
     p.add_argument("--out", required=True, metavar="FILE.csv", help="recording to write")
     p.add_argument("--json", action="store_true", help="one JSON document on stdout")
-    p.set_defaults(func=run)
-
-
-def parse_params(text: str) -> dict:
-    """``"kA=0.3,mu0=0.4"`` → ``{"kA": 0.3, "mu0": 0.4}``; :class:`UserError` naming ``--params``."""
-    out = {}
-    for item in text.split(","):
-        name, sep, value = item.partition("=")
-        name = name.strip()
-        if not sep or name not in PARAM_RANGES:
-            raise UserError(
-                f"--params {text}: expected NAME=VALUE items with NAME one of "
-                f"{', '.join(PARAM_NAMES)}, got {item.strip()!r}"
-            )
-        if name in out:
-            raise UserError(f"--params {text}: {name} given twice")
-        try:
-            v = float(value)
-        except ValueError:
-            raise UserError(f"--params {text}: {name}={value.strip()!r} is not a number") from None
-        lo, hi, closed = PARAM_RANGES[name]
-        if not (math.isfinite(v) and (v >= lo if closed else v > lo) and v <= hi):
-            raise UserError(
-                f"--params {text}: {name}={v:g} is outside {'[' if closed else '('}{lo:g}, {hi:g}]"
-            )
-        out[name] = v
-    return out
-
-
-def _samples(duration, rate) -> int:
-    if not (math.isfinite(rate) and RATE_RANGE[0] <= rate <= RATE_RANGE[1]):
-        raise UserError(
-            f"--rate {rate:g}: expected a sample rate in [{RATE_RANGE[0]:g}, {RATE_RANGE[1]:g}] Hz"
-        )
-    if duration is None:
-        duration = (DEFAULT_SAMPLES - 1) * SAMPLE_PERIOD
-    if not (math.isfinite(duration) and duration > 0):
-        raise UserError(f"--duration {duration:g}: expected a positive number of seconds")
-    n = round(duration * rate) + 1
-    if not MIN_SAMPLES <= n <= MAX_SAMPLES:
-        raise UserError(
-            f"--duration {duration:g}: gives {n} samples at {rate:g} Hz; expected "
-            f"{MIN_SAMPLES} to {MAX_SAMPLES}"
-        )
-    return n
-
-
-def _vehicle(path):
-    if path is None:
-        return LOCO_22E
-    p = Path(path)
-    if p.suffix.lower() != ".json" or not p.is_file():
-        raise UserError(f"--vehicle {path}: expected an existing sidecar .json file")
-    try:
-        return _load_sidecar(p.with_suffix(".csv"))[2]
-    except RecordingError as exc:
-        raise UserError(f"--vehicle {exc}") from None
-
-
-def run(args) -> int:
-    scenario = get_scenario(args.scenario)
-    if args.params is not None:
-        given = parse_params(args.params)
-        scenario = scenario.replace(
-            params=tuple(given.get(k, v) for k, v in zip(PARAM_NAMES, scenario.params))
-        )
-    n_samples = _samples(args.duration, args.rate)
-    vehicle = _vehicle(args.vehicle)
-    magnitudes(args.effect)  # validate before any work
-    out = Path(args.out)
-    if out.suffix.lower() != ".csv":
-        raise UserError(f"--out {args.out}: expected a .csv file name")
-    if not out.parent.is_dir():
-        raise UserError(f"--out {args.out}: directory {str(out.parent)!r} does not exist")
-    if not args.sensor_noise >= 0.0:
-        raise UserError(f"--sensor-noise {args.sensor_noise}: expected a scale >= 0")
-    result = simulate(
-        scenario,
-        seed=args.seed,
-        effects=args.effect,
-        n_samples=n_samples,
-        vehicle=vehicle,
-        sample_period=1.0 / args.rate,
-        braking=args.test == "braking",
-        sensor_noise=args.sensor_noise,
-    )
-    save_recording({k: result.columns[k] for k in RECORDING_COLUMNS}, result.vehicle, out)
-    truth_path = out.with_suffix(".truth.json")
-    truth_path.write_text(json.dumps(result.truth, indent=2, allow_nan=False) + "\n", encoding="utf-8")
-    summary = {
-        "recording": str(out),
-        "sidecar": str(out.with_suffix(".json")),
-        "truth": str(truth_path),
-        "scenario": scenario.name,
-        "seed": args.seed,
-        "params": result.truth["params"],
-        "test": args.test,
-        "duration_s": result.truth["duration_s"],
-        "rate_hz": args.rate,
-        "effects": result.truth["effects"],
-        "n_samples": len(result.columns["time"]),
-        "envelope": result.truth["envelope"],
-    }
-    if args.json:
-        emit_json(summary)
-    else:
-        env = summary["envelope"]
-        print(
-            f"wrote {out} ({summary['n_samples']} samples, {summary['duration_s']:g} s at "
-            f"{args.rate:g} Hz, {args.test}), {out.with_suffix('.json')}, {truth_path}"
-        )
-        print(
-            f"mean speed {env['mean_speed_kmh']:.2f} km/h, "
-            f"max slip {env['max_slip_kmh']:.2f} km/h, max creep {env['max_creep']:.3f}, "
-            f"mu_hat [{env['mu_low']:.3f}, {env['mu_high']:.3f}] mean {env['mu_mean']:.3f}, "
-            f"true-parameter MAE {env['true_param_mae']:.4f}"
-        )
-    return 0
+    p.set_defaults(handler="jadhesion.cli.simulate_run:run")

@@ -269,7 +269,7 @@ def save_recording(
         raise ValueError("save_recording: no columns")
     names = list(columns)
     arrays = [np.asarray(columns[c], dtype=np.float64) for c in names]
-    for c, a in zip(names, arrays):
+    for c, a in zip(names, arrays, strict=True):
         if not isinstance(c, str) or not c.strip() or c != c.strip() or any(ch in c for ch in ',"\r\n#'):
             raise ValueError(f"save_recording: column name {c!r} cannot be a CSV header")
         if a.ndim != 1:
@@ -285,7 +285,7 @@ def save_recording(
     lists = [a.tolist() for a in arrays]
     buf = io.StringIO()
     buf.write(",".join(names) + "\n")
-    buf.writelines(",".join(map(repr, row)) + "\n" for row in zip(*lists))
+    buf.writelines(",".join(map(repr, row)) + "\n" for row in zip(*lists, strict=True))
     atomic_write(path, lambda tmp: tmp.write_text(buf.getvalue(), encoding="utf-8", newline=""))
     atomic_write(
         path.with_suffix(".json"), lambda tmp: tmp.write_text(sidecar_text, encoding="utf-8", newline="")

@@ -36,7 +36,6 @@ import numpy as np
 from ..identify import online as ol
 from ..models.kiencke import DEFAULT_SLOPE, RAIL_SETS, kiencke_adhesion, kiencke_regressors
 from ..plots.online import figure
-from ..report.text import table
 
 N_STEPS = 1200
 CHANGES = (400, 800)
@@ -127,7 +126,7 @@ def run_metrics(trace: ol.OnlineInfo, truth, a_s=DEFAULT_SLOPE) -> dict:
         out[label + "_first"] = _first_index(ok) + 1.0
     bounds = list(CHANGES) + [truth.shape[0]]
     both = (err["p1"] <= TRACK_TOL) & (err["p2"] <= TRACK_TOL)
-    track = [_stay_index(both[:, a:b]) + 1.0 for a, b in zip(bounds[:-1], bounds[1:])]
+    track = [_stay_index(both[:, a:b]) + 1.0 for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
     out["k_track_after_change"] = np.concatenate(track)
     out.update({f"k_track_change{i + 1}": t for i, t in enumerate(track)})
     windows = np.concatenate([np.arange(b - WINDOW, b) for b in bounds])
@@ -159,7 +158,7 @@ def batch_ls(sc: Scenario, a_s=DEFAULT_SLOPE) -> dict:
     z, u = kiencke_regressors(jnp.broadcast_to(sc.lam, sc.mu.shape), sc.mu, a_s)
     bounds = [0, *CHANGES, sc.lam.shape[0]]
     rel = []
-    for a, b in zip(bounds[:-1], bounds[1:]):
+    for a, b in zip(bounds[:-1], bounds[1:], strict=True):
         uu, zz = u[:, a:b], z[:, a:b]
         x = jnp.linalg.solve(jnp.einsum("rki,rkj->rij", uu, uu), jnp.einsum("rki,rk->ri", uu, zz)[..., None])[
             ..., 0
@@ -248,81 +247,3 @@ def run(runs=1000, plot_dir=None, progress: Optional[Callable[[int, int], None]]
         figure(bands, np.asarray(sc.truth)).savefig(path, dpi=120)
         result["plots"] = [path]
     return result
-
-
-def _fmt(v):
-    return "never" if v is None else f"{v:.4g}"
-
-
-def _verdict(claim, key, a1, a2):
-    """A1 beats A2 on the median of ``key`` and fails (never converges) no more often."""
-    never = "never_" + key[2:]
-    ok = a1[key] is not None and (a2[key] is None or a1[key] < a2[key])
-    ok = ok and a1.get(never, 0.0) <= a2.get(never, 0.0)
-    tail = f" (never: A1 {100 * a1[never]:.0f} %, A2 {100 * a2[never]:.0f} %)" if never in a1 else ""
-    return (
-        f"  {'holds' if ok else 'DOES NOT HOLD'}: {claim} ({key}) A1 {_fmt(a1[key])} vs A2 "
-        f"{_fmt(a2[key])}{tail}"
-    )
-
-
-def format_text(result: dict) -> str:
-    """Human-readable report: ours vs the paper, verdicts on its claims, ablation and baselines."""
-    keys = (
-        "k_p1_1pct",
-        "k_p2_1pct",
-        "k_mumax_01pct",
-        "k_track_change1",
-        "k_track_change2",
-        "fluctuation",
-        "fluctuation_dry",
-    )
-    rows = []
-    for name, m in [
-        *(("alg " + k, v) for k, v in result["algorithms"].items()),
-        *result["ablation"].items(),
-        ("rls_0.98", result["baselines"]["rls_0.98"]),
-    ]:
-        row = {"config": name}
-        for k in keys:
-            iqr = m[k + "_iqr"]
-            row[k] = f"{_fmt(m[k])} [{_fmt(iqr[0])}, {_fmt(iqr[1])}]"
-        rows.append(row)
-    rows.append({"config": "paper (A1)", **{k: str(result["paper"].get(k, "")) for k in keys}})
-    a1, a2 = result["algorithms"]["1"], result["algorithms"]["2"]
-    s = result["setup"]
-    lines = [
-        f"Paper 000 online identification: {s['runs']} runs x {s['steps']} steps, "
-        f"rails {'->'.join(s['rails'])}, noise sigma {s['noise_sigma']}; median [IQR], "
-        "'never' = more runs failed than the quantile allows",
-        table(rows, ["config", *keys]),
-        "Paper's claims (A1 alone, then A1 vs A2):",
-    ]
-    for k in ("k_p1_1pct", "k_p2_1pct", "k_mumax_01pct"):
-        ours = a1[k]
-        ok = ours is not None and ours <= 1.2 * result["paper"][k]
-        lines.append(
-            f"  {'holds' if ok else 'DOES NOT HOLD'}: {k} paper {result['paper'][k]}, "
-            f"ours {_fmt(ours)} (never in {100 * a1['never_' + k[2:]]:.0f} % of runs; "
-            f"first reached {_fmt(a1[k + '_first'])})"
-        )
-    lines += [
-        _verdict(claim, key, a1, a2)
-        for claim, key in (
-            ("faster convergence of p2", "k_p2_1pct"),
-            ("faster tracking, dry->normal", "k_track_change1"),
-            ("faster tracking, normal->wet", "k_track_change2"),
-            ("smaller fluctuation, RMS rel. mu_m error, all segments", "fluctuation"),
-            ("smaller fluctuation, dry segment only", "fluctuation_dry"),
-        )
-    ]
-    b = result["baselines"]["batch_ls"]
-    lines.append(
-        "Batch LS per segment ("
-        + ", ".join(b["segments"])
-        + "): median rel. error p1 "
-        + ", ".join(f"{v:.2g}" for v in b["p1_relerr"])
-        + "; p2 "
-        + ", ".join(f"{v:.2g}" for v in b["p2_relerr"])
-    )
-    return "\n".join(lines)

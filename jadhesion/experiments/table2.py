@@ -20,25 +20,40 @@ at that seed's LM fit. ``error`` is the MAE of the posterior medians; ``iteratio
 /``seconds`` are the steps, log-density evaluations and warm seconds of a *converged* chain (burn-in
 plus 50 τ_max, scaled from a :data:`MCMC_STEPS`-step run; ``converged`` says whether the run itself
 was that long); ``width90`` are the 90 % interval widths. The paper has no such row.
+
+**Sensors.** The paper's Table 2 comes from a simulation with clean sensors, so the reproduction
+runs on :data:`jadhesion.data.sensors.CLEAN` (its creep the plain difference of the recorded
+speeds). ``sensors="realistic"`` adds, beside those rows, the same table on
+:data:`~jadhesion.data.sensors.REALISTIC` sensors (scaled by ``sensor_noise``) through the
+library's default dataset (:func:`jadhesion.data.dataset.to_dataset`: smoothed creep and its
+uncertainty, which LM uses); those rows carry ``paper: None``. Every row says its ``sensors``,
+``sensor_noise`` and ``creep``, and has a ``status`` (:mod:`jadhesion.status`): ``"converged"``
+when every seed's fit passed its convergence test, else the commonest other status
+(``status_counts``: seeds per status).
 """
 
 from __future__ import annotations
 
+import collections
 import functools
 import time
+from pathlib import Path
 from typing import Callable, Optional
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..data.dataset import to_dataset
 from ..data.scenarios import get_scenario
 from ..data.simulator import simulate_many, stack_datasets
 from ..identify.driver import run as run_population
 from ..identify.methods import NAMES
 from ..identify.polach_fit import ALGORITHMS, fit_polach, polach_mae
-from ..models.polach import BOUNDS, PARAM_NAMES
-from ..report.text import table
+from ..models.polach import PARAM_NAMES
+from ..plots.convergence import convergence_figure
+from ..status import Status, status_labels
+from .mcmc_row import MCMC_LIKELIHOOD, MCMC_MIN_STEPS, MCMC_STEPS, MCMC_WALKERS, mcmc_row
 
 SCENARIOS = ("dry", "wet", "sand")
 METHODS = NAMES
@@ -59,11 +74,8 @@ PAPER = {
     ("sand", "itlbo"): {"error": 0.0167, "iterations": 44, "seconds": 70},
 }
 POP_SIZE = 50
-#: The mcmc rows: likelihood, ensemble size, steps run (burn-in: a third).
-MCMC_LIKELIHOOD = "observer"
-MCMC_WALKERS = 32
-MCMC_STEPS = 1500
-MCMC_MIN_STEPS = 30
+#: ``sensors`` choices: the paper's conditions alone, or realistic rows beside them.
+SENSOR_CHOICES = ("clean", "realistic")
 
 
 def _median_iqr(values):
@@ -90,7 +102,7 @@ def _timed_fits(datasets, method, keys, targets, max_iter):
         return fit, time.perf_counter() - t0
 
     _, compile_seconds = one(0)  # first call compiles; timed separately, not reported as a fit
-    fits, seconds = zip(*(one(i) for i in range(len(targets))))
+    fits, seconds = zip(*(one(i) for i in range(len(targets))), strict=True)
     return fits, np.array(seconds), compile_seconds
 
 
@@ -113,41 +125,19 @@ def _histories(datasets, method, keys, history_iter):
     return np.asarray(out.history.best_f), np.asarray(out.history.best_x), np.asarray(out.best_x)
 
 
-def mcmc_row(
-    sim, data, theta_lm, *, likelihood=MCMC_LIKELIHOOD, walkers=MCMC_WALKERS, steps=MCMC_STEPS, seed=0
-) -> dict:
-    """The ``mcmc`` row of one simulated recording ``sim`` (its dataset ``data``), walkers started
-    at the LM fit ``theta_lm`` — for the observer likelihood polished by a projected LM on the
-    observer's view of the curve (:func:`jadhesion.identify.lm.box_lm`)."""
-    from ..identify.laplace import initial_spread, observer_residual
-    from ..identify.likelihood import recording_observer_terms
-    from ..identify.lm import box_lm
-    from .mcmc_row import table2_row
+def _status(codes) -> tuple:
+    """A row's status and its ``status_counts`` from the seeds' status codes."""
+    counts = collections.Counter(status_labels(codes))
+    others = [label for label, _ in counts.most_common() if label != Status.CONVERGED.label]
+    return (others[0] if others else Status.CONVERGED.label), dict(counts)
 
-    t0 = time.perf_counter()
-    obs = None
-    theta0 = jnp.asarray(theta_lm)
-    if likelihood == "observer":
-        obs = recording_observer_terms(sim)
-        theta0 = box_lm(observer_residual, theta0, (data, obs), BOUNDS).params
-    spread = np.asarray(initial_spread(theta0, data, obs=obs))
-    start_seconds = time.perf_counter() - t0
-    row = table2_row(
-        data,
-        np.asarray(theta0),
-        walkers=walkers,
-        steps=steps,
-        seed=seed,
-        likelihood=likelihood,
-        obs=obs,
-        spread=spread,
-        burn=steps // 3,
-        truth=np.asarray(get_scenario(sim.truth["scenario"]).params),
-    )
-    row["start_seconds"] = start_seconds
-    row["compile_seconds"] = row.pop("log_prob_compile_seconds")
-    row["iterations"] = row["steps"]
-    return row
+
+def _datasets(sims, sensors):
+    """The stacked fitting datasets: the speed difference's creep on clean sensors (the paper's
+    conditions), the library's default (smoothed creep, :func:`to_dataset`) on realistic ones."""
+    if sensors == "clean":
+        return stack_datasets(sims), "raw"
+    return jax.tree_util.tree_map(lambda *a: jnp.stack(a), *map(to_dataset, sims)), "smoothed"
 
 
 def run_scenario(
@@ -158,13 +148,17 @@ def run_scenario(
     progress: Optional[Callable[[], None]] = None,
     mcmc=True,
     mcmc_steps=MCMC_STEPS,
+    sensors="clean",
+    sensor_noise=1.0,
 ):
-    """Table 2 rows and convergence histories for one scenario; ``progress()`` after each cell."""
+    """Table 2 rows and convergence histories for one scenario on ``sensors`` (``"clean"`` or
+    ``"realistic"``, scaled by ``sensor_noise``); ``progress()`` after each cell."""
     truth = np.asarray(get_scenario(scenario).params)
-    sims = simulate_many(scenario, list(range(seeds)))
-    datasets = stack_datasets(sims)
+    sims = simulate_many(scenario, list(range(seeds)), sensors=sensors, sensor_noise=sensor_noise)
+    datasets, creep = _datasets(sims, sensors)
     floors = np.asarray(jax.vmap(polach_mae, in_axes=(None, 0))(jnp.asarray(truth), datasets))
     targets = 1.01 * floors
+    conditions = {"sensors": sensors, "sensor_noise": float(sensor_noise), "creep": creep}
     rows, histories = [], {}
     for m, method in enumerate(METHODS):
         keys = jax.random.split(jax.random.fold_in(jax.random.key(2024), m), seeds)
@@ -181,18 +175,19 @@ def run_scenario(
         iters = np.array([float(f.iterations) for f in fits])
         evals = np.array([float(f.evaluations) for f in fits])
         hit = reached if method != "lm" else np.ones_like(reached)
-        row = {"scenario": scenario, "method": method}
+        row = {"scenario": scenario, "method": method, **conditions}
         row["error"], row["error_iqr"] = _median_iqr(final_err)
         for key, values in (("iterations", iters), ("evaluations", evals), ("seconds", seconds)):
             row[key], row[key + "_iqr"] = _median_iqr(np.where(hit, values, np.nan))
         row["reached"] = float(np.mean(reached))
+        row["status"], row["status_counts"] = _status([f.status for f in fits])
         row["floor"] = float(np.median(floors))
         row["compile_seconds"] = float(compile_s)
-        row["params"] = dict(zip(PARAM_NAMES, np.median(final_params, axis=0).tolist()))
+        row["params"] = dict(zip(PARAM_NAMES, np.median(final_params, axis=0).tolist(), strict=True))
         row["param_abs_error"] = dict(
-            zip(PARAM_NAMES, np.median(np.abs(final_params - truth), axis=0).tolist())
+            zip(PARAM_NAMES, np.median(np.abs(final_params - truth), axis=0).tolist(), strict=True)
         )
-        row["paper"] = PAPER.get((scenario, method))
+        row["paper"] = PAPER.get((scenario, method)) if sensors == "clean" else None
         rows.append(row)
         if method == "lm":
             theta_lm = np.asarray(fits[0].params)
@@ -201,7 +196,7 @@ def run_scenario(
     if mcmc:
         data0 = jax.tree_util.tree_map(lambda a: a[0], datasets)
         t0 = time.perf_counter()
-        row = {"scenario": scenario, **mcmc_row(sims[0], data0, theta_lm, steps=mcmc_steps)}
+        row = {"scenario": scenario, **conditions, **mcmc_row(sims[0], data0, theta_lm, steps=mcmc_steps)}
         row["row_wall_seconds"] = time.perf_counter() - t0  # start, compiles and the run itself
         row["floor"] = float(floors[0])
         row["reached"] = float(row["error"] <= targets[0])
@@ -220,15 +215,23 @@ def run(
     history_iter=300,
     mcmc=True,
     mcmc_steps=None,
+    sensors="clean",
+    sensor_noise=1.0,
 ) -> dict:
     """The whole Table 2: ``{"rows": [...], "seeds": N, ...}``; figures into ``plot_dir``.
     ``mcmc``: add the :func:`mcmc_row` of each scenario, chains of ``mcmc_steps`` (default
-    :data:`MCMC_STEPS`) steps. ``progress(done, total)``: called with the cells finished so far
-    and the cells in all."""
+    :data:`MCMC_STEPS`) steps. ``sensors``: ``"clean"`` (the paper's conditions) or
+    ``"realistic"`` (the clean rows, then rows on realistic sensors scaled by ``sensor_noise``).
+    ``progress(done, total)``: called with the cells finished so far and the cells in all."""
     mcmc_steps = MCMC_STEPS if mcmc_steps is None else int(mcmc_steps)
     if mcmc and mcmc_steps < MCMC_MIN_STEPS:
         raise ValueError(f"mcmc_steps must be at least {MCMC_MIN_STEPS}, got {mcmc_steps}")
-    total, done = len(SCENARIOS) * (len(METHODS) + bool(mcmc)), []
+    if sensors not in SENSOR_CHOICES:
+        raise ValueError(f"sensors must be one of {SENSOR_CHOICES}, got {sensors!r}")
+    if not sensor_noise >= 0.0:
+        raise ValueError(f"sensor_noise must be >= 0, got {sensor_noise}")
+    sensor_sets = SENSOR_CHOICES[: SENSOR_CHOICES.index(sensors) + 1]
+    total, done = len(sensor_sets) * len(SCENARIOS) * (len(METHODS) + bool(mcmc)), []
 
     def cell_done():
         done.append(1)
@@ -237,11 +240,20 @@ def run(
 
     rows, traces = [], {}
     t0 = time.perf_counter()
-    for scenario in SCENARIOS:
-        r, traces[scenario] = run_scenario(
-            scenario, seeds, max_iter, history_iter, cell_done, mcmc, mcmc_steps
-        )
-        rows += r
+    for sensor_set in sensor_sets:
+        for scenario in SCENARIOS:
+            r, traces[sensor_set, scenario] = run_scenario(
+                scenario,
+                seeds,
+                max_iter,
+                history_iter,
+                cell_done,
+                mcmc,
+                mcmc_steps,
+                sensors=sensor_set,
+                sensor_noise=1.0 if sensor_set == "clean" else sensor_noise,
+            )
+            rows += r
     result = {
         "rows": rows,
         "seeds": seeds,
@@ -249,6 +261,8 @@ def run(
         "max_iter": max_iter,
         "history_iter": history_iter,
         "target": "1.01 x error of the true parameters",
+        "sensors": list(sensor_sets),
+        "sensor_noise": float(sensor_noise),
         "wall_seconds": time.perf_counter() - t0,
     }
     if mcmc:
@@ -261,81 +275,11 @@ def run(
             "converged chain (burn-in + 50 tau_max), seconds scaled to it",
         }
     if plot_dir is not None:
-        from pathlib import Path
-
-        from ..plots.convergence import convergence_figure
-
         out = Path(plot_dir)
         out.mkdir(parents=True, exist_ok=True)
-        for scenario, trace in traces.items():
+        for (sensor_set, scenario), trace in traces.items():
+            suffix = "" if sensor_set == "clean" else f"_{sensor_set}"
             fig = convergence_figure(trace, scenario)
-            fig.savefig(out / f"table2_convergence_{scenario}.png", dpi=120)
+            fig.savefig(out / f"table2_convergence_{scenario}{suffix}.png", dpi=120)
         result["figures"] = sorted(str(p) for p in out.glob("table2_convergence_*.png"))
     return result
-
-
-def format_text(result) -> str:
-    """Table 2 as text, our medians beside the paper's numbers."""
-    lines = [
-        f"Paper 001, Table 2 — medians over {result['seeds']} seeds; target = "
-        f"{result['target']}; population size {result['pop_size']}.",
-        "",
-    ]
-    rows = []
-    for r in result["rows"]:
-        paper = r["paper"] or {}
-        rows.append(
-            {
-                "scenario": r["scenario"],
-                "method": r["method"],
-                "floor": r["floor"],
-                "error": r["error"],
-                "reached": f"{100 * r['reached']:.0f}%",
-                "iter": "-" if r["iterations"] is None else f"{r['iterations']:.0f}",
-                "evals": "-" if r["evaluations"] is None else f"{r['evaluations']:.0f}",
-                "ms": "-" if r["seconds"] is None else f"{1e3 * r['seconds']:.1f}",
-                "paper err": paper.get("error", "-"),
-                "paper iter": paper.get("iterations", "-"),
-                "paper s": paper.get("seconds", "-"),
-            }
-        )
-    cols = [
-        "scenario",
-        "method",
-        "floor",
-        "error",
-        "reached",
-        "iter",
-        "evals",
-        "ms",
-        "paper err",
-        "paper iter",
-        "paper s",
-    ]
-    lines.append(table(rows, cols))
-    mc = [r for r in result["rows"] if r["method"] == "mcmc"]
-    if mc:
-        info = result.get("mcmc", {})
-        lines += [
-            "",
-            f"mcmc: emcee posterior of seed 0 ({info.get('likelihood', mc[0].get('likelihood'))} "
-            f"likelihood, {mc[0]['walkers']} walkers); error = MAE of the posterior "
-            f"medians; iter/evals/ms = steps/log-density evaluations/time of a converged "
-            f"chain (burn-in + 50 tau); 90 % interval widths:",
-        ]
-        names = ["kA", "kS", "mu0", "A", "B", "mu_max", "creep_opt"]
-        lines.append(
-            table(
-                [
-                    {
-                        "scenario": r["scenario"],
-                        **{n: r["width90"][n] for n in names},
-                        "tau": f"{r['tau_max']:.0f}",
-                        "converged": "yes" if r["converged"] else "estimate",
-                    }
-                    for r in mc
-                ],
-                ["scenario", *names, "tau", "converged"],
-            )
-        )
-    return "\n".join(lines)

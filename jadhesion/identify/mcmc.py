@@ -23,13 +23,20 @@ import numpy as np
 
 from ..data.dataset import PolachDataset
 from ..models.polach import PARAM_NAMES, adhesion_peak, polach_adhesion
-from .ensemble import MIN_TAU_MULTIPLE, ChainTooShortWarning, Diagnostics, run_ensemble  # noqa: F401
+from .ensemble import (  # noqa: F401
+    MIN_TAU_MULTIPLE,
+    ChainTooShortWarning,
+    Diagnostics,
+    integrated_time,
+    run_ensemble,
+)
 from .likelihood import (
     AUTOREGRESSIVE,
     LOG_SCALE_BOUNDS,
     RHO_MAX,
     ObserverTerms,
     ensemble_log_prob,
+    log_posterior,
     noise_names,
     prediction,
 )
@@ -64,7 +71,7 @@ class PosteriorResult(NamedTuple):
         """An ``arviz.InferenceData`` (one arviz chain per walker); needs ``arviz`` installed."""
         with warnings.catch_warnings():  # arviz 0.23 announces its 1.0 refactor on import
             warnings.simplefilter("ignore", FutureWarning)
-            import arviz
+            import arviz  # optional (the bench extra): imported only when asked for
 
         posterior = {name: np.swapaxes(self.chain[..., i], 0, 1) for i, name in enumerate(self.names)}
         return arviz.from_dict(posterior=posterior)
@@ -242,8 +249,6 @@ def sample_nuts(
             "sample_nuts needs the optional dependency blackjax "
             "(pip install 'jadhesion[nuts]' or pip install blackjax)"
         ) from None
-    from .ensemble import integrated_time
-    from .likelihood import log_posterior
 
     names = PARAM_NAMES + noise_names(likelihood)
     lower, upper = (

@@ -116,22 +116,10 @@ def subsample(data: PolachDataset, n_max: int = SEED_SAMPLES) -> PolachDataset:
     if data.weight is not None:
         valid = jnp.sum(data.weight).astype(jnp.int32)
         idx = jnp.round(jnp.arange(n_max) * ((valid - 1) / (n_max - 1))).astype(jnp.int32)
-        return data._replace(
-            creep=data.creep[idx],
-            slip=data.slip[idx],
-            adhesion=data.adhesion[idx],
-            vehicle_speed=data.vehicle_speed[idx],
-            weight=data.weight[idx],
-        )
-    idx = np.linspace(0, n - 1, n_max).round().astype(np.int32)
-    sd = {k: getattr(data, k)[idx] for k in ("slip_sd", "creep_sd") if getattr(data, k) is not None}
-    return data._replace(
-        creep=data.creep[idx],
-        slip=data.slip[idx],
-        adhesion=data.adhesion[idx],
-        vehicle_speed=data.vehicle_speed[idx],
-        **sd,
-    )
+    else:
+        idx = np.linspace(0, n - 1, n_max).round().astype(np.int32)
+    fields = ("creep", "slip", "adhesion", "vehicle_speed", "slip_sd", "creep_sd", "weight")
+    return data._replace(**{k: getattr(data, k)[idx] for k in fields if getattr(data, k) is not None})
 
 
 def _fit(method, pop_size, max_iter, use_target, data, key, target):

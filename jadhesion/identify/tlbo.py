@@ -18,8 +18,8 @@ One iteration on a class ``X`` (n, d) with teacher ``T`` (best student) and mean
 
 After every phase the candidates are clipped to the box and selection is greedy, keeping the
 *better* of old and new (the paper's sentence reads reversed). Evaluations per iteration: ``2n``
-(classic), ``2n + 2m`` (improved, ``m = max(1, round(0.2 n))``); ``n`` at init. TLBO has no tunable coefficients,
-so its params pytree is empty.
+(classic), ``2n + 2m`` (improved, ``m = max(1, round(0.2 n))``); ``n`` at init. TLBO has no tunable
+coefficients, so its params pytree is empty.
 """
 
 from __future__ import annotations

@@ -1,2 +1,2 @@
-"""Figures. Each module draws one kind of figure with matplotlib's Agg backend and returns the
-:class:`matplotlib.figure.Figure`; callers save it."""
+"""Figures. Each module draws one kind of figure on a bare :class:`matplotlib.figure.Figure` (no
+pyplot, no global backend) and returns it; callers save it."""

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+from matplotlib.figure import Figure
 
 from ..models.polach import PARAM_NAMES
 
@@ -16,14 +17,10 @@ def convergence_figure(trace, scenario):
     ``trace``: ``{"histories": {method: {"error": (seeds, iters), "params": (seeds, iters, 5)}},
     "truth": (5,), "floor": (seeds,)}`` as produced by :func:`jadhesion.experiments.table2.run_scenario`.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(2, 3, figsize=(13, 7), constrained_layout=True)
+    fig = Figure(figsize=(13, 7), layout="constrained")
+    axes = fig.subplots(2, 3)
     panels = [("error", None)] + [(name, i) for i, name in enumerate(PARAM_NAMES)]
-    for ax, (name, idx) in zip(axes.flat, panels):
+    for ax, (name, idx) in zip(axes.flat, panels, strict=True):
         for method, hist in trace["histories"].items():
             series = hist["error"] if idx is None else hist["params"][..., idx]
             it = np.arange(1, series.shape[1] + 1)

@@ -3,13 +3,10 @@ residuals in time order (their runs show the observer's colouring of the noise).
 
 from __future__ import annotations
 
-import matplotlib
+import numpy as np
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from ..models.polach import polach_adhesion  # noqa: E402
+from ..models.polach import polach_adhesion
 
 
 def fit_figure(data, theta, title=""):
@@ -18,7 +15,8 @@ def fit_figure(data, theta, title=""):
     slip, mu = np.asarray(data.slip), np.asarray(data.adhesion)
     model = np.asarray(polach_adhesion(theta, data.creep, data.slip, data.k_eps))
     order = np.argsort(slip)
-    fig, (top, bottom) = plt.subplots(2, 1, figsize=(8, 7), constrained_layout=True)
+    fig = Figure(figsize=(8, 7), layout="constrained")
+    top, bottom = fig.subplots(2, 1)
     top.plot(slip, mu, ".", ms=2, alpha=0.4, color="0.4", label=r"observed $\hat\mu$")
     # μ_adh depends on creep s = w/v as well as w: at varying speed the fit is a band, not a line
     top.plot(slip[order], model[order], ".", ms=1.5, color="C3", label=r"fitted $\mu_{adh}$ at each sample")

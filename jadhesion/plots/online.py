@@ -2,13 +2,10 @@
 
 from __future__ import annotations
 
-import matplotlib
+import numpy as np
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from ..models.kiencke import DEFAULT_SLOPE  # noqa: E402
+from ..models.kiencke import DEFAULT_SLOPE
 
 _STYLE = {"1": ("tab:blue", "Algorithm 1"), "2": ("tab:orange", "Algorithm 2")}
 
@@ -23,8 +20,9 @@ def figure(bands: dict, truth, a_s=DEFAULT_SLOPE):
     true = {"p1": truth[:, 0], "p2": truth[:, 1], "mu_max": a_s / (truth[:, 0] + 2.0 * np.sqrt(truth[:, 1]))}
     labels = {"p1": "$p_1$ (Fig. 4)", "p2": "$p_2$ (Fig. 5)", "mu_max": r"$\mu_m$ (Fig. 6)"}
     k = np.arange(1, truth.shape[0] + 1)
-    fig, axes = plt.subplots(3, 1, figsize=(8, 9), sharex=True, constrained_layout=True)
-    for ax, field in zip(axes, ("p1", "p2", "mu_max")):
+    fig = Figure(figsize=(8, 9), layout="constrained")
+    axes = fig.subplots(3, 1, sharex=True)
+    for ax, field in zip(axes, ("p1", "p2", "mu_max"), strict=True):
         for alg, band in bands.items():
             color, name = _STYLE.get(alg, ("tab:gray", alg))
             lo, med, hi = np.asarray(band[field])
@@ -48,9 +46,8 @@ def recording_figure(time, mu_hat, creep, trace, used, title="", time_label="tim
     the forgetting factor η. ``trace`` is an :class:`~jadhesion.identify.online.OnlineInfo`."""
     time, mu_hat, creep, used = map(np.asarray, (time, mu_hat, creep, used))
     mu_hat, creep = np.abs(mu_hat), np.abs(creep)  # braking: magnitudes (both models are odd)
-    fig, axes = plt.subplots(
-        3, 1, figsize=(9, 8), sharex=True, constrained_layout=True, height_ratios=(3, 2, 1)
-    )
+    fig = Figure(figsize=(9, 8), layout="constrained")
+    axes = fig.subplots(3, 1, sharex=True, height_ratios=(3, 2, 1))
     for ax, obs, est, name, label in (
         (axes[0], mu_hat, trace.mu_max, "observed $\\hat\\mu$", "tracked peak $\\mu_m$"),
         (

@@ -11,13 +11,13 @@ from matplotlib.gridspec import GridSpec
 
 from ..data.dataset import to_dataset
 from ..data.vehicle import LOCO_22E
+from ..models import kinematics
+from ..models.polach import polach_adhesion
 
 _KMH = 3.6
 
 
 def _creep(cols):
-    from ..models import kinematics
-
     if "creepage" in cols:
         return np.asarray(cols["creepage"])
     v = np.asarray(cols["vehicle_speed"])
@@ -211,8 +211,6 @@ def recording_overview(
 
 
 def _overlay_truth(ax, truth_params, cols, creep, vehicle, positive):
-    from ..models.polach import polach_adhesion
-
     theta = np.asarray(truth_params, dtype=np.float64)
     v_mean = float(np.mean(np.abs(cols["vehicle_speed"]))) if "vehicle_speed" in cols else 1.0
     hi = float(np.max(np.abs(creep)))

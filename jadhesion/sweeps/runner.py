@@ -125,7 +125,6 @@ def _finish(started: _Started) -> dict:
     table = dict(started.coordinates)
     table.update({p: res["params"][:, j] for j, p in enumerate(PARAM_NAMES)})
     table.update({k: v for k, v in res.items() if k not in ("params", "status")})
-    m = len(started.chunk.points)
     table["status"] = np.asarray(status_labels(res["status"]))
     return table
 

@@ -157,7 +157,7 @@ def make_plan(kind: str, rng: np.random.Generator, duration: float) -> Plan:
             go(1.0, -rng.uniform(0.4, 1.2), rng.uniform(0.1, 0.4))
             go(rng.uniform(1, 3), knots[-1][1], knots[-1][2])
             go(1.0, 0.0, 0.3)
-    t, frac, wlim = zip(*knots)
+    t, frac, wlim = zip(*knots, strict=True)
     v0 = {"start": 0.0, "sweep": rng.uniform(1.0, 8.0), "steady": rng.uniform(2.0, 10.0)}[kind]
     trailing = rng.uniform(500e3, 2500e3) if kind == "start" else rng.uniform(300e3, 2000e3)
     return Plan(kind, t, frac, wlim, float(v0), float(trailing), float(rng.uniform(-0.002, 0.004)))

@@ -214,4 +214,4 @@ def random_params(rng: np.random.Generator) -> dict:
     values = [float(np.clip(c * rng.normal(1.0, 0.15), 0.02, 1.0)) for c in centre]
     values[3] = float(np.clip(centre[3] + rng.normal(0.0, 0.05), 0.0, 0.9))  # A may be 0
     values[2] = float(np.clip(values[2], 0.2, 0.55))
-    return dict(zip(PARAM_NAMES, values))
+    return dict(zip(PARAM_NAMES, values, strict=True))

@@ -1,0 +1,156 @@
+"""``jadhesion simulate``'s work: check the options, simulate, write the recording, its sidecar and
+its truth, print or ``--json`` a summary (arguments: :mod:`.simulate`)."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+from ..data.recording import _load_sidecar, save_recording
+from ..data.scenarios import get_scenario
+from ..data.simulator import DEFAULT_SAMPLES, SAMPLE_PERIOD, simulate
+from ..data.vehicle import LOCO_22E
+from ..errors import RecordingError
+from ..models.effects import magnitudes
+from ..models.polach import PARAM_NAMES
+from .common import UserError, emit_json
+
+RECORDING_COLUMNS = (
+    "time",
+    "vehicle_speed",
+    "wheel_speed",
+    "traction_torque",
+    "creepage",
+    "slip_velocity",
+    "adhesion",
+)
+#: Accepted ranges of ``--params`` values (physical validity, not the fit's box): name → (lo, hi,
+#: whether lo itself is allowed).
+PARAM_RANGES = {
+    "kA": (0.0, 1.0, False),
+    "kS": (0.0, 1.0, False),
+    "mu0": (0.0, 1.5, False),
+    "A": (0.0, 1.0, True),
+    "B": (0.0, 10.0, True),
+}
+#: ``--rate`` range [Hz] and the largest recording [samples].
+RATE_RANGE = (10.0, 1000.0)
+MIN_SAMPLES, MAX_SAMPLES = 100, 200_000
+
+
+def parse_params(text: str) -> dict:
+    """``"kA=0.3,mu0=0.4"`` → ``{"kA": 0.3, "mu0": 0.4}``; :class:`UserError` naming ``--params``."""
+    out = {}
+    for item in text.split(","):
+        name, sep, value = item.partition("=")
+        name = name.strip()
+        if not sep or name not in PARAM_RANGES:
+            raise UserError(
+                f"--params {text}: expected NAME=VALUE items with NAME one of "
+                f"{', '.join(PARAM_NAMES)}, got {item.strip()!r}"
+            )
+        if name in out:
+            raise UserError(f"--params {text}: {name} given twice")
+        try:
+            v = float(value)
+        except ValueError:
+            raise UserError(f"--params {text}: {name}={value.strip()!r} is not a number") from None
+        lo, hi, closed = PARAM_RANGES[name]
+        if not (math.isfinite(v) and (v >= lo if closed else v > lo) and v <= hi):
+            raise UserError(
+                f"--params {text}: {name}={v:g} is outside {'[' if closed else '('}{lo:g}, {hi:g}]"
+            )
+        out[name] = v
+    return out
+
+
+def _samples(duration, rate) -> int:
+    if not (math.isfinite(rate) and RATE_RANGE[0] <= rate <= RATE_RANGE[1]):
+        raise UserError(
+            f"--rate {rate:g}: expected a sample rate in [{RATE_RANGE[0]:g}, {RATE_RANGE[1]:g}] Hz"
+        )
+    if duration is None:
+        duration = (DEFAULT_SAMPLES - 1) * SAMPLE_PERIOD
+    if not (math.isfinite(duration) and duration > 0):
+        raise UserError(f"--duration {duration:g}: expected a positive number of seconds")
+    n = round(duration * rate) + 1
+    if not MIN_SAMPLES <= n <= MAX_SAMPLES:
+        raise UserError(
+            f"--duration {duration:g}: gives {n} samples at {rate:g} Hz; expected "
+            f"{MIN_SAMPLES} to {MAX_SAMPLES}"
+        )
+    return n
+
+
+def _vehicle(path):
+    if path is None:
+        return LOCO_22E
+    p = Path(path)
+    if p.suffix.lower() != ".json" or not p.is_file():
+        raise UserError(f"--vehicle {path}: expected an existing sidecar .json file")
+    try:
+        return _load_sidecar(p.with_suffix(".csv"))[2]
+    except RecordingError as exc:
+        raise UserError(f"--vehicle {exc}") from None
+
+
+def run(args) -> int:
+    scenario = get_scenario(args.scenario)
+    if args.params is not None:
+        given = parse_params(args.params)
+        scenario = scenario.replace(
+            params=tuple(given.get(k, v) for k, v in zip(PARAM_NAMES, scenario.params, strict=True))
+        )
+    n_samples = _samples(args.duration, args.rate)
+    vehicle = _vehicle(args.vehicle)
+    magnitudes(args.effect)  # validate before any work
+    out = Path(args.out)
+    if out.suffix.lower() != ".csv":
+        raise UserError(f"--out {args.out}: expected a .csv file name")
+    if not out.parent.is_dir():
+        raise UserError(f"--out {args.out}: directory {str(out.parent)!r} does not exist")
+    if not args.sensor_noise >= 0.0:
+        raise UserError(f"--sensor-noise {args.sensor_noise}: expected a scale >= 0")
+    result = simulate(
+        scenario,
+        seed=args.seed,
+        effects=args.effect,
+        n_samples=n_samples,
+        vehicle=vehicle,
+        sample_period=1.0 / args.rate,
+        braking=args.test == "braking",
+        sensor_noise=args.sensor_noise,
+    )
+    save_recording({k: result.columns[k] for k in RECORDING_COLUMNS}, result.vehicle, out)
+    truth_path = out.with_suffix(".truth.json")
+    truth_path.write_text(json.dumps(result.truth, indent=2, allow_nan=False) + "\n", encoding="utf-8")
+    summary = {
+        "recording": str(out),
+        "sidecar": str(out.with_suffix(".json")),
+        "truth": str(truth_path),
+        "scenario": scenario.name,
+        "seed": args.seed,
+        "params": result.truth["params"],
+        "test": args.test,
+        "duration_s": result.truth["duration_s"],
+        "rate_hz": args.rate,
+        "effects": result.truth["effects"],
+        "n_samples": len(result.columns["time"]),
+        "envelope": result.truth["envelope"],
+    }
+    if args.json:
+        emit_json(summary)
+    else:
+        env = summary["envelope"]
+        print(
+            f"wrote {out} ({summary['n_samples']} samples, {summary['duration_s']:g} s at "
+            f"{args.rate:g} Hz, {args.test}), {out.with_suffix('.json')}, {truth_path}"
+        )
+        print(
+            f"mean speed {env['mean_speed_kmh']:.2f} km/h, "
+            f"max slip {env['max_slip_kmh']:.2f} km/h, max creep {env['max_creep']:.3f}, "
+            f"mu_hat [{env['mu_low']:.3f}, {env['mu_high']:.3f}] mean {env['mu_mean']:.3f}, "
+            f"true-parameter MAE {env['true_param_mae']:.4f}"
+        )
+    return 0
