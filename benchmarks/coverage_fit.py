@@ -150,7 +150,7 @@ def summarise(rows):
 
 def figure(summary, path):
     """Error and 90 % coverage against the speed-sensor noise sd, per generator and creep option."""
-    fig, axes = plt.subplots(1, 3, figsize=(14, 4))
+    fig, axes = plt.subplots(1, 4, figsize=(18, 4.2))
     for gen, marker in (("ours", "o"), ("foreign", "s")):
         for creep, ls in zip(CREEPS, ("-", "--"), strict=True):
             keys = [k for k in summary if k.startswith(gen + "/") and k.endswith("/" + creep)]
@@ -168,6 +168,7 @@ def figure(summary, path):
             label = f"{gen}, LM {creep}"
             axes[0].plot(xs, mean("slope_rel_error_median"), marker + ls, label=label)
             axes[1].plot(xs, mean("mu0_abs_error_median"), marker + ls, label=label)
+            axes[3].plot(xs, mean("slope_within25"), marker + ls, label=label)
             for i, p in enumerate(CHECKED):
                 axes[2].plot(
                     xs,
@@ -178,11 +179,17 @@ def figure(summary, path):
                 )
     axes[0].axhline(0.25, color="k", lw=0.6)
     axes[2].axhspan(0.85, 0.95, color="0.85")
-    titles = ("|slope error| / slope (median)", "|μ0 error| (median)", "HAC 90 % interval coverage")
+    axes[3].axhline(0.9, color="k", lw=0.6)
+    titles = (
+        "LM |slope error| / slope (median)",
+        "LM |μ0 error| (median)",
+        "HAC 90 % interval coverage",
+        "share of LM slopes within 25 %",
+    )
     for ax, title in zip(axes, titles, strict=True):
         ax.set_xscale("log")
         ax.set_xlabel("speed-sensor noise sd [m/s]")
-        ax.set_title(title + " — mean over scenarios", fontsize=9)
+        ax.set_title(title + " (ours: mean of 3 scenarios)", fontsize=9)
         ax.legend(fontsize=6)
     fig.tight_layout()
     fig.savefig(path, dpi=100)
