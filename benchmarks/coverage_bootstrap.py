@@ -243,7 +243,7 @@ def main(argv=None):
         boot["truth"] = dict(zip(QUANTITIES, truth.tolist(), strict=True))
         boot["seconds"] = time.perf_counter() - t0
         boot["hit90"] = {
-            q: boot["interval"][q][0] <= t <= boot["interval"][q][1]
+            q: bool(boot["interval"][q][0] <= t <= boot["interval"][q][1])
             for q, t in zip(QUANTITIES, truth, strict=True)
         }
         boot["hac_stderr"] = {q: hac[q]["stderr"] for q in PARAM_NAMES}
