@@ -17,7 +17,9 @@ truth is that bound), ``z = (estimate − truth)/stderr`` mean and sd (calibrate
 from 0 is bias, an sd above 1 intervals too narrow), the initial slope ``(kA + kS)/2`` within 25 %
 of the truth, median |μ0 error|.
 
-The JSON records the git commit, every setting and ``os.getloadavg()``; the figure plots, per
+``results/coverage_fit_conditional.json`` is the same run before the trust block stopped
+conditioning on parameters at a bound (commit 26731cc). The JSON records the git commit, every
+setting and ``os.getloadavg()``; the figure plots, per
 creep option, the median relative error of the slope and of μ0 and the 90 % coverage of kS and μ0
 against the speed-sensor noise sd.
 """

@@ -13,10 +13,10 @@ Warning codes:
 * ``at_bound`` — a parameter within :data:`BOUND_TOL` of 0 or 1: its ``stderr``/``ci95`` are
   ``null`` (a local interval means nothing on a face of the box). It stays *free* in the
   covariance, so the others' errors include the trade-off with it: conditioning on it (the former
-  rule) made them far too narrow whenever A or B sat on a bound — measured with the HAC sandwich on
-  8 simulated recordings per set, 90 % coverage of kS/μ0 rose from 0.38/0.25 to 0.88/0.88 (wet,
-  clean sensors), from 0.88/0.62 to 1.0/1.0 (dry, clean) and from 0.38/0.62 to 0.62/0.75 (foreign
-  generator, realistic sensors) (``benchmarks/results/coverage_fit.json`` has the full table).
+  rule) made them far too narrow whenever A or B sat on a bound. HAC 90 % coverage of kS/μ0,
+  12 recordings per set, conditional → free (``benchmarks/results/coverage_fit_conditional.json``
+  → ``coverage_fit.json``): dry clean 0.75/0.50 → 0.83/0.92, wet clean 0.33/0.25 → 0.83/0.83,
+  foreign generator realistic 0.50/0.50 → 0.67/0.67, dry realistic μ0 0.00 → 0.50.
 * ``weakly_identified`` — a parameter whose 95 % interval is wider than :data:`WEAK_WIDTH` of its
   box, or whose variance is infinite (a singular direction), named with the combination the data
   do determine where one is known: with A and B both weak, at small slip ``w``
