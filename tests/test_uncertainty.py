@@ -11,7 +11,7 @@ from scipy import stats
 from jadhesion.data.dataset import to_dataset
 from jadhesion.data.scenarios import get_scenario
 from jadhesion.data.simulator import simulate_many
-from jadhesion.identify.polach_fit import fit_polach_batch
+from jadhesion.identify.polach_fit import LM_RESIDUAL, fit_polach_batch
 from jadhesion.identify.trust import fit_report
 from jadhesion.identify.uncertainty import Z95, bandwidth, covariance
 from jadhesion.models.polach import PARAM_NAMES
@@ -95,3 +95,26 @@ def test_fit_intervals_cover_the_truth_on_simulated_recordings(sensors):
     low = stats.binom.ppf(0.005, n, 0.95)
     for p, h in hits.items():
         assert low <= h, (p, h, n)
+
+
+def test_a_parameter_on_a_bound_stays_free_for_the_others():
+    """The trust block reports no interval for a parameter on a bound but keeps it free in the
+    covariance: the others' stderrs are the unconditional ones, not those conditional on it."""
+    data = to_dataset(simulate_many("sand", [7], n_samples=400)[0])  # sand: true kA = 1, A = 0
+    fit = fit_polach_batch(
+        jax.tree.map(lambda a: a[None], data), "lm", jax.random.split(jax.random.key(0), 1)
+    )
+    fit = jax.tree.map(lambda a: a[0], fit)
+    theta = np.asarray(fit.params)
+    on_bound = (theta <= 1e-6) | (theta >= 1 - 1e-6)
+    assert on_bound.any(), theta
+    report = fit_report(data, fit)
+    jac = jax.jacfwd(LM_RESIDUAL)(fit.params, data)
+    r = LM_RESIDUAL(fit.params, data)
+    free = np.sqrt(np.diag(np.asarray(covariance(jac, r)[0])))
+    for i, name in enumerate(PARAM_NAMES):
+        u = report["uncertainty"][name]
+        if on_bound[i]:
+            assert u["stderr"] is None and u["ci95"] is None
+        elif np.isfinite(free[i]):
+            assert u["stderr"] == pytest.approx(free[i], rel=1e-9)
