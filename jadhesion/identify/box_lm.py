@@ -69,9 +69,47 @@ class _BoxState(NamedTuple):
     fresh: jax.Array
 
 
-def _box_lm_stepper(residual, bounds, options):
+def _reductions(res, lo, width, u, args):
+    """``½‖r‖²``, ``Jᵀr``, ``JᵀJ`` and ``max |r|`` at ``u`` (one residual and forward Jacobian)."""
+
+    def f(v):
+        r = res(lo + width * v, args)
+        return r, r
+
+    jac, r = jax.jacfwd(f, has_aux=True)(u)
+    return 0.5 * jnp.sum(r * r), jac.T @ r, jac.T @ jac, jnp.max(jnp.abs(r))
+
+
+def _blocked_reductions(res, lo, width, u, args, n, block):
+    """:func:`_reductions` of a row-wise residual of ``n`` rows, summed over blocks of ``block``
+    rows (``lax.scan``, then the remainder): memory ``O(block)`` instead of ``O(n)`` for the
+    Jacobian and its intermediates. ``args`` leaves of shape ``(n,)`` are split by rows, the others
+    passed whole to every block."""
+    leaves, tree = jax.tree.flatten(args)
+    is_row = [jnp.shape(x) == (n,) for x in leaves]
+    full = (n // block) * block
+
+    def add(acc, rows):
+        it = iter(rows)
+        part = jax.tree.unflatten(
+            tree, [next(it) if row else x for x, row in zip(leaves, is_row, strict=True)]
+        )
+        c, g, h, m = _reductions(res, lo, width, u, part)
+        return (acc[0] + c, acc[1] + g, acc[2] + h, jnp.maximum(acc[3], m)), None
+
+    row_leaves = [x for x, row in zip(leaves, is_row, strict=True) if row]
+    d, dtype = u.shape[0], u.dtype
+    zero = (jnp.zeros((), dtype), jnp.zeros(d, dtype), jnp.zeros((d, d), dtype), jnp.zeros((), dtype))
+    acc, _ = jax.lax.scan(add, zero, [x[:full].reshape(n // block, block) for x in row_leaves])
+    if full < n:
+        acc, _ = add(acc, [x[full:] for x in row_leaves])
+    return acc
+
+
+def _box_lm_stepper(residual, bounds, options, block_rows=None):
     """``(init, step)`` of the projected LM: ``init(p0)`` is a fresh state (no evaluation, so
-    restarting a lane is free), ``step(state, args)`` one iteration (one residual and Jacobian)."""
+    restarting a lane is free), ``step(state, args)`` one iteration (one residual and Jacobian;
+    with ``block_rows``, see :func:`box_lm`, reduced block by block)."""
     res = safe_residual(residual)
     lo, hi = bounds
     width = hi - lo
@@ -79,13 +117,10 @@ def _box_lm_stepper(residual, bounds, options):
 
     def linearise(u, args):
         """``½‖r‖²``, ``Jᵀr``, ``JᵀJ`` and ``max |r|`` at ``u``."""
-
-        def f(v):
-            r = res(lo + width * v, args)
-            return r, r
-
-        jac, r = jax.jacfwd(f, has_aux=True)(u)
-        return 0.5 * jnp.sum(r * r), jac.T @ r, jac.T @ jac, jnp.max(jnp.abs(r))
+        n = jax.eval_shape(res, lo, args).shape[0]
+        if block_rows is None or n <= block_rows:
+            return _reductions(res, lo, width, u, args)
+        return _blocked_reductions(res, lo, width, u, args, n, block_rows)
 
     def init(p0):
         dtype = p0.dtype
@@ -184,12 +219,18 @@ def _prepare(p0, bounds, options):
     return p0, bounds, BoxLMOptions(*(jnp.asarray(o, p0.dtype) for o in options))
 
 
-@functools.partial(jax.jit, static_argnames=("residual", "max_steps"))
-def box_lm(residual, p0, args, bounds, options=BoxLMOptions(), *, max_steps=100):
+@functools.partial(jax.jit, static_argnames=("residual", "max_steps", "block_rows"))
+def box_lm(residual, p0, args, bounds, options=BoxLMOptions(), *, max_steps=100, block_rows=None):
     """Projected LM on the box ``bounds = (lo, hi)`` from ``p0`` (see the module docstring).
-    ``steps`` counts iterations; each costs one residual and one forward Jacobian."""
+    ``steps`` counts iterations; each costs one residual and one forward Jacobian.
+
+    ``block_rows``: for a *row-wise* residual (row ``i`` depends only on the ``i``-th entry of
+    every ``args`` leaf of shape ``(n,)``), a residual longer than ``block_rows`` is linearised in
+    blocks of that many rows (:func:`_blocked_reductions`): the same sums to rounding, with
+    memory for one block's Jacobian instead of all ``n`` rows'. ``None`` (default): in one piece.
+    """
     p0, bounds, options = _prepare(p0, bounds, options)
-    init, step, result = _box_lm_stepper(residual, bounds, options)
+    init, step, result = _box_lm_stepper(residual, bounds, options, block_rows)
     final = jax.lax.while_loop(
         lambda st: ~st.done & (st.steps < max_steps), lambda st: step(st, args), init(p0)
     )

@@ -34,6 +34,9 @@ from .methods import POPULATION as ALGORITHMS
 #: Each LM run is capped at ``LM_MAX_STEPS``. (A random search compiles in a fraction of the time
 #: of an improved-TLBO search and found the global minimum as often on noisy 1000-point data.)
 LM_POP, LM_SEARCH_ITER, LM_STARTS, LM_MAX_STEPS = 64, 0, 4, 100
+#: Rows per block of a full-data LM linearisation (:func:`.box_lm.box_lm`'s ``block_rows``: the
+#: residuals are row-wise): an hour of data needs one block's Jacobian in memory, not all rows'.
+LM_BLOCK_ROWS = 8192
 
 
 class PolachFit(NamedTuple):
@@ -116,21 +119,17 @@ def subsample(data: PolachDataset, n_max: int = SEED_SAMPLES) -> PolachDataset:
     if data.weight is not None:
         valid = jnp.sum(data.weight).astype(jnp.int32)
         idx = jnp.round(jnp.arange(n_max) * ((valid - 1) / (n_max - 1))).astype(jnp.int32)
-        return data._replace(
-            creep=data.creep[idx],
-            slip=data.slip[idx],
-            adhesion=data.adhesion[idx],
-            vehicle_speed=data.vehicle_speed[idx],
-            weight=data.weight[idx],
-        )
-    idx = np.linspace(0, n - 1, n_max).round().astype(np.int32)
-    sd = {k: getattr(data, k)[idx] for k in ("slip_sd", "creep_sd") if getattr(data, k) is not None}
+    else:
+        idx = np.linspace(0, n - 1, n_max).round().astype(np.int32)
+    optional = {
+        k: getattr(data, k)[idx] for k in ("slip_sd", "creep_sd", "weight") if getattr(data, k) is not None
+    }
     return data._replace(
         creep=data.creep[idx],
         slip=data.slip[idx],
         adhesion=data.adhesion[idx],
         vehicle_speed=data.vehicle_speed[idx],
-        **sd,
+        **optional,
     )
 
 
@@ -148,6 +147,7 @@ def _fit(method, pop_size, max_iter, use_target, data, key, target):
             search_iter=LM_SEARCH_ITER,
             search_args=None if seed_data is data else seed_data,
             max_steps=LM_MAX_STEPS,
+            block_rows=LM_BLOCK_ROWS,
         )
         theta, iterations, evaluations = out.params, out.steps, n_pop + out.steps
     else:
@@ -204,7 +204,9 @@ def _global_lm_many(data, keys, target, use_target):
         lanes=SEED_LANES,
     )
     seeded = jax.vmap(best_of)(jax.tree.map(lambda a: a.reshape((n, LM_STARTS) + a.shape[1:]), seeded))
-    polish = box_lm_queue(LM_RESIDUAL, seeded.params, data, bounds, max_steps=LM_MAX_STEPS)
+    polish = box_lm_queue(
+        LM_RESIDUAL, seeded.params, data, bounds, max_steps=LM_MAX_STEPS, block_rows=LM_BLOCK_ROWS
+    )
     r = jax.vmap(polach_residual)(polish.params, data)
     mae = mean_abs(r) if data.weight is None else jax.vmap(dataset_mae)(r, data)
     steps = seeded.steps + polish.steps
