@@ -112,8 +112,9 @@ def fit_datasets(
     fit: Callable | None = None,
 ) -> list[Fitted]:
     """Fit every dataset, padded to its bucket, with the same ``key`` (as one file at a time);
-    ``fit`` is :func:`.polach_fit.fit_polach` or a drop-in (the command line's kept program,
-    :func:`jadhesion.cli.fit_program.fit_polach`). One compiled program per method and bucket."""
+    ``fit`` is :func:`.polach_fit.fit_polach` (default), a drop-in (the command line's kept
+    program, :func:`jadhesion.cli.fit_program.fit_polach`) or :func:`.kiencke_fit.fit_kiencke`
+    (its informative samples exclude the padding). One compiled program per method and bucket."""
     if fit is None:
         from .polach_fit import fit_polach as fit
     out = []
