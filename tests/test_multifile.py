@@ -234,6 +234,22 @@ def test_many_files_equal_one_at_a_time(files, capsys, tmp_path, method):
         assert row["stderr_mu0"] == ("" if s is None else repr(s))
 
 
+def test_many_kiencke_fits_equal_one_at_a_time(files, capsys):
+    """``fit --model kiencke`` on several files: padded to length buckets, each file's document
+    equals its single-file one."""
+    flags = ["--model", "kiencke", "--method", "lm", "--json"]
+    code, out, _ = _fit(capsys, *files, *flags)
+    assert code == 0
+    fits = json.loads(out)["fits"]
+    for path, doc in zip(files, fits, strict=True):
+        code, out, _ = _fit(capsys, path, *flags)
+        single = json.loads(out)
+        assert doc["model"] == single["model"] == "kiencke"
+        assert {k: v for k, v in doc.items() if k not in ("file", "seconds")} == {
+            k: v for k, v in single.items() if k != "seconds"
+        }
+
+
 def test_many_files_human_table_and_plots(files, capsys, tmp_path):
     code, out, _ = _fit(capsys, *files, "--method", "lm", "--plot", tmp_path / "plots")
     assert code == 0 and "3 files" in out and all(p.name in out for p in files)
