@@ -88,9 +88,10 @@ def _initial(y, r):
     return x0, p0
 
 
-def _filter(y, dts, r, q):
+def _filter(y, dts, r, q, keep=True):
     """Kalman filter: filtered means/covariances (n, 4)/(n, 4, 4), predicted ones for steps 1..n−1,
-    and the log-likelihood of ``y`` (n, 2) = (wheel speed, vehicle speed)."""
+    and the log-likelihood of ``y`` (n, 2) = (wheel speed, vehicle speed); with ``keep=False`` the
+    log-likelihood only (nothing stored per step: the noise grid's passes)."""
     H = jnp.asarray(_H, y.dtype)
     R = jnp.diag(r)
 
@@ -115,9 +116,12 @@ def _filter(y, dts, r, q):
         F, Q = _transition(dt, q[0], q[1])
         xp, pp = F @ x, F @ p @ F.T + Q
         x, p, l1 = update(xp, pp, obs)
-        return (x, p, ll + l1), (x, p, xp, pp)
+        return (x, p, ll + l1), ((x, p, xp, pp) if keep else None)
 
-    (_, _, ll), (xs, ps, xps, pps) = jax.lax.scan(step, (x0, p0, ll0), (y[1:], dts))
+    (_, _, ll), stored = jax.lax.scan(step, (x0, p0, ll0), (y[1:], dts))
+    if not keep:
+        return ll
+    xs, ps, xps, pps = stored
     return (jnp.concatenate([x0[None], xs]), jnp.concatenate([p0[None], ps]), xps, pps, ll)
 
 
@@ -139,7 +143,7 @@ def _smooth(xs, ps, xps, pps, dts, q):
 
 
 def _log_likelihood(y, dts, r, q):
-    return _filter(y, dts, r, q)[-1]
+    return _filter(y, dts, r, q, keep=False)
 
 
 def estimate_noise(time, wheel_speed, vehicle_speed):
