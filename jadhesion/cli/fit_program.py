@@ -42,6 +42,7 @@ DATASET_SOURCES = (
     "data/dataset.py",
     "data/observer.py",
     "data/creep_state.py",
+    "data/vehicle.py",
     "models",
     "cli/fit_program.py",
 )
