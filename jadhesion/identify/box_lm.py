@@ -12,10 +12,10 @@ Marquardt/MINPACK scaling) and projects, ``u' = clip(u + δ, 0, 1)``. The step i
 gain ratio ``ρ = (C − C')/(−gᵀs − ½ sᵀHs) > 10⁻⁴`` (``s = u' − u``, ``C = ½‖r‖²``); ``λ`` follows
 Nielsen's rule. It stops after an accepted step with ``C − C' ≤ ftol·C`` and
 ``‖s‖∞ ≤ xtol (xtol + ‖u‖∞)``; after any step whose predicted and actual decreases are both at most
-``ftol·C`` (MINPACK's test); when the projected gradient ``‖clip(u − g) − u‖∞ ≤ gtol`` (any of these three at a
-point where variables sit on a face with vanishing Jacobian columns — a plateau, e.g. ``μ0 = 0`` —
-is not a minimum when moving them :data:`PROBE` inwards lowers the cost: the run continues from
-there); and a stop whose undamped Gauss–Newton step still promises more than :data:`GN_GAIN`·C
+``ftol·C`` (MINPACK's test); when the projected gradient ``‖clip(u − g) − u‖∞ ≤ gtol`` (any of
+these three at a point where variables sit on a face with vanishing Jacobian columns — a plateau,
+e.g. ``μ0 = 0`` — is not a minimum when moving them :data:`PROBE` inwards lowers the cost: the run
+continues from there); and a stop whose undamped Gauss–Newton step still promises more than :data:`GN_GAIN`·C
 is ``STALLED`` (the damping, not the problem, made the model flat); when
 ``λ > 10¹⁶`` (no decrease is representable: status ``STALLED``); or at ``max_steps`` (status
 ``MAX_STEPS``). Only the three tests give ``CONVERGED`` (``success`` true).
@@ -46,6 +46,10 @@ class BoxLMOptions(NamedTuple):
     ftol: float = 1e-10
     xtol: float = 1e-8
     gtol: float = 1e-12
+
+
+#: The default coefficients (one shared value, so a default argument builds nothing).
+DEFAULT_OPTIONS = BoxLMOptions()
 
 
 class _BoxState(NamedTuple):
@@ -220,7 +224,7 @@ def _prepare(p0, bounds, options):
 
 
 @functools.partial(jax.jit, static_argnames=("residual", "max_steps", "block_rows"))
-def box_lm(residual, p0, args, bounds, options=BoxLMOptions(), *, max_steps=100, block_rows=None):
+def box_lm(residual, p0, args, bounds, options=DEFAULT_OPTIONS, *, max_steps=100, block_rows=None):
     """Projected LM on the box ``bounds = (lo, hi)`` from ``p0`` (see the module docstring).
     ``steps`` counts iterations; each costs one residual and one forward Jacobian.
 

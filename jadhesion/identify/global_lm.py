@@ -6,7 +6,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from .box_lm import BoxLMOptions, box_lm
+from .box_lm import DEFAULT_OPTIONS, box_lm
 from .driver import run
 from .lm_result import best_of, sse_objective
 from .population import evaluate, uniform_population
@@ -40,7 +40,7 @@ def global_lm(
     search_iter=5,
     search_args=None,
     max_steps=100,
-    options=BoxLMOptions(),
+    options=DEFAULT_OPTIONS,
     block_rows=None,
 ):
     """ "Global LM": :func:`seed_starts` (a search on ``‖r‖²``) seeds ``n_starts`` :func:`box_lm`

@@ -11,12 +11,12 @@ import functools
 import jax
 import jax.numpy as jnp
 
-from .box_lm import BoxLMOptions, _box_lm_stepper, _prepare
+from .box_lm import DEFAULT_OPTIONS, _box_lm_stepper, _prepare
 
 
 @functools.partial(jax.jit, static_argnames=("residual", "max_steps", "lanes", "block_rows"))
 def box_lm_queue(
-    residual, starts, args, bounds, options=BoxLMOptions(), *, max_steps=100, lanes=8, block_rows=None
+    residual, starts, args, bounds, options=DEFAULT_OPTIONS, *, max_steps=100, lanes=8, block_rows=None
 ):
     """:func:`box_lm` on many problems — row ``i`` of ``starts`` (N, d) with the ``i``-th slice of
     the stacked pytree ``args`` — as a work queue: ``lanes`` problems iterate side by side (one
