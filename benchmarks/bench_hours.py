@@ -173,6 +173,7 @@ def main(argv=None) -> int:
         return 0
 
     args.work.mkdir(parents=True, exist_ok=True)
+    args.commit = _commit()  # before this run writes its result file (a tracked file)
     env = {
         **os.environ,
         "PYTHONPATH": os.pathsep.join(p for p in (str(ROOT), os.environ.get("PYTHONPATH")) if p),
@@ -224,7 +225,7 @@ def _summary(results) -> dict:
 def _write(args, results, env, readers) -> None:
     largest = args.work / f"hour{max(args.rows)}.csv"
     doc = {
-        "commit": _commit(),
+        "commit": args.commit,
         "settings": {
             "rows": args.rows,
             "rate_hz": RATE_HZ,
