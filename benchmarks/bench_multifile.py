@@ -16,7 +16,8 @@ Medians are reported. Also, in this process (library, warm): the 100 datasets fi
 time (:func:`jadhesion.identify.batch_fit.fit_datasets`) and vmapped per bucket
 (:func:`~jadhesion.identify.batch_fit.fit_datasets_vmapped`). Results go to
 ``benchmarks/results/bench_multifile.json`` with the git commit and the settings. Run as
-``python -m benchmarks.bench_multifile [--repeats 3] [--method lm] [--count 100]``.
+``python -m benchmarks.bench_multifile [--repeats 3] [--method lm] [--model polach] [--count 100]``
+(``--out`` another file for another model).
 """
 
 from __future__ import annotations
@@ -72,29 +73,33 @@ def _simulate(folder: Path, count: int, noise: float) -> list[Path]:
     return paths
 
 
-def _fit(paths, method, env) -> tuple[float, dict]:
-    argv = [sys.executable, "-m", "jadhesion", "fit", *map(str, paths), "--method", method, "--json"]
+def _fit(paths, method, model, env) -> tuple[float, dict]:
+    argv = [sys.executable, "-m", "jadhesion", "fit", *map(str, paths), "--method", method, "--model", model]
+    argv.append("--json")
     start = time.perf_counter()
     proc = subprocess.run(argv, env=env, check=True, capture_output=True, text=True, timeout=900)
     return time.perf_counter() - start, json.loads(proc.stdout)
 
 
-def _library(paths, method) -> dict:
+def _library(paths, method, model) -> dict:
     import jax
 
     from jadhesion.cli.fit_program import to_dataset
     from jadhesion.config import enable_x64
     from jadhesion.data.recording import load_recording
     from jadhesion.identify.batch_fit import fit_datasets, fit_datasets_vmapped
+    from jadhesion.identify.kiencke_fit import fit_kiencke
 
     enable_x64()
     datasets = [to_dataset(load_recording(p)) for p in paths]
     key = jax.random.key(0)
     out = {}
-    for name, call in (
-        ("one_at_a_time", lambda: fit_datasets(datasets, method, key)),
-        ("vmapped", lambda: fit_datasets_vmapped(datasets, method, key)),
-    ):
+    calls = {"one_at_a_time": lambda: fit_datasets(datasets, method, key)}
+    if model == "kiencke":
+        calls = {"one_at_a_time": lambda: fit_datasets(datasets, method, key, fit=fit_kiencke)}
+    else:
+        calls["vmapped"] = lambda: fit_datasets_vmapped(datasets, method, key)
+    for name, call in calls.items():
         call()  # compile
         start = time.perf_counter()
         call()
@@ -107,6 +112,7 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3, help="interleaved rounds (default 3)")
     parser.add_argument("--method", default="lm", help="fit method (default lm)")
+    parser.add_argument("--model", default="polach", help="polach (default) or kiencke")
     parser.add_argument("--count", type=int, default=100, help="recordings of the large call")
     parser.add_argument("--noise", type=float, default=1.0, help="sensor-noise scale (default 1)")
     parser.add_argument("--no-library", action="store_true", help="skip the in-process timings")
@@ -118,15 +124,15 @@ def main(argv=None) -> int:
     os.environ["JADHESION_CACHE"] = env["JADHESION_CACHE"]
     many = _simulate(work / "hundred", args.count, args.noise)
     six = many[:6]
-    _fit(many, args.method, env)  # warm-up: every bucket's program compiled and kept
+    _fit(many, args.method, args.model, env)  # warm-up: every bucket's program compiled and kept
     for p in six:
-        _fit([p], args.method, env)
+        _fit([p], args.method, args.model, env)
 
     times: dict = {"six_calls": [], "one_call": [], "hundred": [], "hundred_fit_seconds": []}
     for _ in range(args.repeats):
-        times["six_calls"].append(sum(_fit([p], args.method, env)[0] for p in six))
-        times["one_call"].append(_fit(six, args.method, env)[0])
-        wall, doc = _fit(many, args.method, env)
+        times["six_calls"].append(sum(_fit([p], args.method, args.model, env)[0] for p in six))
+        times["one_call"].append(_fit(six, args.method, args.model, env)[0])
+        wall, doc = _fit(many, args.method, args.model, env)
         times["hundred"].append(wall)
         times["hundred_fit_seconds"].append(sum(f["seconds"] for f in doc["fits"]))
 
@@ -135,6 +141,7 @@ def main(argv=None) -> int:
         "commit": _commit(),
         "settings": {
             "method": args.method,
+            "model": args.model,
             "repeats": args.repeats,
             "interleaved": True,
             "count": args.count,
@@ -152,7 +159,7 @@ def main(argv=None) -> int:
         "fits_per_second_hundred_fits_only": args.count / med["hundred_fit_seconds"],
     }
     if not args.no_library:
-        result["library_warm"] = _library(many, args.method)
+        result["library_warm"] = _library(many, args.method, args.model)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(result, indent=2) + "\n")
     print(json.dumps({k: v for k, v in result.items() if k != "seconds"}, indent=2))

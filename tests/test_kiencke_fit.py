@@ -7,6 +7,7 @@ import pytest
 
 from jadhesion.data.dataset import PolachDataset
 from jadhesion.identify import kiencke_fit as kf
+from jadhesion.identify.batch_fit import pad_dataset
 from jadhesion.models.kiencke import kiencke_adhesion
 
 TRUE = np.array([80.0, 100.0, 35.0])  # the paper's "normal" rail, a_s = 35
@@ -88,6 +89,22 @@ def test_vmap_over_datasets_matches_single_fits():
     batch = jax.vmap(lambda d, k: kf.fit_kiencke(d, "lm", k))(stacked, keys)
     for i, d in enumerate(data):
         np.testing.assert_allclose(batch.params[i], kf.fit_kiencke(d, "lm", keys[i]).params, rtol=1e-9)
+
+
+@pytest.mark.parametrize("method", ["lm", "itlbo"])
+def test_padded_fit_equals_unpadded(method):
+    """``fit --model kiencke`` pads to length buckets: the padding carries no weight, so the
+    population method gives the same parameters bit for bit and LM to round-off."""
+    data = _dataset(n=250, seed=4)
+    options = {"pop_size": 10, "max_iter": 40}
+    a = kf.fit_kiencke(data, method, jax.random.key(2), **options)
+    b = kf.fit_kiencke(pad_dataset(data), method, jax.random.key(2), **options)
+    assert int(b.n_used) == int(a.n_used) == 250
+    if method == "lm":
+        np.testing.assert_allclose(b.params, a.params, rtol=1e-9)
+    else:
+        np.testing.assert_array_equal(b.params, a.params)
+    assert float(b.mae) == pytest.approx(float(a.mae), rel=1e-12)
 
 
 def test_unknown_method():

@@ -15,8 +15,11 @@ import numpy as np
 import pytest
 
 from jadhesion.cli import fit_program
-from jadhesion.data.dataset import PolachDataset
+from jadhesion.data.dataset import PolachDataset, to_dataset
+from jadhesion.data.recording import load_recording, save_recording
+from jadhesion.data.vehicle import LOCO_22E
 from jadhesion.identify.polach_fit import fit_polach
+from jadhesion.identify.trust import trust_numbers
 from jadhesion.programs import ProgramCache, code_key
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -152,43 +155,80 @@ def test_remembered_value_is_the_computed_one(tmp_path):
     assert cache.remember("k", {"v": 1}, lambda: 2.5) == 2.5
 
 
-def test_warm_fit_process_imports_no_identification_library(tmp_path):
-    """A second ``jadhesion fit`` process runs the kept program: same JSON, and neither
-    jadhesion.identify nor optimistix/equinox is imported."""
-    from jadhesion.data.recording import save_recording
-
-    data = _dataset(300)
-    rec = save_recording(
-        {
-            "vehicle_speed": np.asarray(data.vehicle_speed),
-            "creepage": np.asarray(data.creep),
-            "slip_velocity": np.asarray(data.slip),
-            "adhesion": np.asarray(data.adhesion),
-        },
-        path=tmp_path / "rec.csv",
+def _raw_recording(tmp_path, n=400, seed=0):
+    """A recording of the four raw signals (numbers only, no simulator)."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) * 0.02
+    v = 5.0 + 0.1 * t + 1e-3 * rng.standard_normal(n)
+    slip = 0.05 + 0.04 * np.sin(t) ** 2
+    torque = 0.2 * LOCO_22E.axle_weight_n * LOCO_22E.wheel_radius_m * (1 + 0.05 * np.sin(3 * t))
+    return load_recording(
+        save_recording(
+            {"time": t, "vehicle_speed": v, "wheel_speed": v + slip, "traction_torque": torque},
+            LOCO_22E,
+            tmp_path / "raw.csv",
+        )
     )
+
+
+def test_dataset_and_trust_programs_equal_library_bit_for_bit(programs, tmp_path):
+    """Observer + creep smoother and the trust block's covariance as kept programs: miss, hit and
+    the library give the same numbers bit for bit."""
+    recording = _raw_recording(tmp_path)
+    ref = to_dataset(recording)
+    for _ in range(2):  # miss (exported), then hit (deserialised)
+        got = fit_program.to_dataset(recording)
+        _assert_same(got, ref)
+    assert len(list(programs.directory.glob("polach_dataset-*.jaxexport"))) == 1
+    params = jnp.asarray([0.4, 1.0, 0.35, 0.3, 0.2])  # kS on its bound: held fixed
+    ref_cov, ref_lags = trust_numbers(params, ref)
+    for _ in range(2):
+        cov, lags = fit_program.trust_numbers(params, ref)
+        np.testing.assert_array_equal(np.asarray(cov), np.asarray(ref_cov))
+        assert float(lags) == float(ref_lags)
+
+
+def test_warm_fit_process_loads_kept_programs_only(tmp_path):
+    """A second ``jadhesion fit`` process on a recording (observer, smoother, LM fit, trust block)
+    gives the same JSON, keeps nothing new (every program was kept by the first) and imports
+    neither optimistix/equinox (LM of the Polach fit is the projected LM of identify/box_lm) nor
+    matplotlib (no --plot). The start-up time itself is a benchmark: benchmarks/bench_startup.py."""
+    recording = _raw_recording(tmp_path, n=300)
+    cache = tmp_path / "xla"
     env = {
         **os.environ,
-        "JADHESION_CACHE": str(tmp_path / "xla"),
+        "JADHESION_CACHE": str(cache),
         "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
     }
     probe = (
         "import sys, json; from jadhesion.cli import main;"
         "code = main(['fit', sys.argv[1], '--method', 'lm', '--json']);"
-        "heavy = [m for m in ('jadhesion.identify', 'optimistix', 'equinox') if m in sys.modules];"
+        "heavy = [m for m in ('optimistix', 'equinox', 'matplotlib') if m in sys.modules];"
         "sys.stderr.write('HEAVY=' + json.dumps(heavy) + '\\n'); sys.exit(code)"
     )
-    runs = [
-        subprocess.run(
-            [sys.executable, "-c", probe, str(rec)], env=env, capture_output=True, text=True, timeout=600
+
+    def run():
+        return subprocess.run(
+            [sys.executable, "-c", probe, str(recording.path)],
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=600,
         )
-        for _ in range(2)
-    ]
-    for r in runs:
+
+    first = run()
+    kept = sorted(p.name for p in cache.rglob("*"))
+    second = run()
+    for r in (first, second):
         assert r.returncode == 0, r.stderr
-    docs = [json.loads(r.stdout) for r in runs]
+    docs = [json.loads(r.stdout) for r in (first, second)]
     for d in docs:
         d.pop("seconds")
     assert docs[0] == docs[1]
-    assert 'HEAVY=["jadhesion.identify", "optimistix", "equinox"]' in runs[0].stderr
-    assert "HEAVY=[]" in runs[1].stderr
+    assert {p.split("-")[0] for p in kept if p.endswith(".jaxexport")} == {
+        "polach_dataset",
+        "polach_fit",
+        "polach_trust",
+    }
+    assert sorted(p.name for p in cache.rglob("*")) == kept
+    assert "HEAVY=[]" in second.stderr

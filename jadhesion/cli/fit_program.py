@@ -1,17 +1,20 @@
-"""``jadhesion fit``'s fast start: the Polach fit as a kept exported program.
+"""``jadhesion fit``'s fast start: the command's JAX work as kept exported programs.
 
-:func:`fit_polach` and :func:`to_dataset` are drop-ins for
-:func:`jadhesion.identify.polach_fit.fit_polach` and :func:`jadhesion.data.dataset.to_dataset` with
-the same results, bit for bit. A process whose program cache (:func:`jadhesion.config.program_cache_dir`)
-holds the fit for these shapes, options and code deserialises and calls it, with the compiled
-executable from the persistent compilation cache: it imports neither the identification library
-nor optimistix/equinox, and traces nothing. On a miss the library is imported, the fit exported,
-kept and called (so its compilation lands in the compilation cache under the key a later process
-looks up). The vehicle's gradient constant ``k_eps`` — about a second of eager JAX operations in a
-new process — is remembered as the value it computed.
+Three programs, each exported once (``jax.export``) and kept in the program cache
+(:func:`jadhesion.config.program_cache_dir`, :mod:`jadhesion.programs`) under its shapes, options
+and code: ``polach_dataset`` (observer, kinematics and Kalman/RTS creep smoother of a recording's
+raw signals: :func:`to_dataset`), ``polach_fit`` (the fit of a padded dataset: :func:`fit_polach`)
+and ``polach_trust`` (the Jacobian of LM's residual over every row and the HAC covariance:
+:func:`trust_numbers`). Each is a drop-in for its library function with the same results, bit for
+bit. A process that finds them deserialises and calls them, with the compiled executables from
+the persistent compilation cache: it traces and lowers nothing, and imports no optimistix or
+equinox (the fit's LM is the projected LM of :mod:`jadhesion.identify.box_lm`). On a miss the
+library function is exported, kept and called (so its compilation lands in the compilation cache
+under the key a later process looks up). The vehicle's gradient constant ``k_eps`` — about a
+second of eager JAX operations in a new process — is remembered as the value it computed.
 
-``JADHESION_PROGRAMS=0`` in the environment turns both off: the library is imported and traced as
-before (for comparison and as a way out).
+``JADHESION_PROGRAMS=0`` in the environment turns all of this off: the library is called and
+traced as before (for comparison and as a way out).
 """
 
 from __future__ import annotations
@@ -20,8 +23,11 @@ import collections
 import dataclasses
 import functools
 import os
+import types
+from typing import NamedTuple
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 
 from ..config import program_cache_dir
@@ -31,6 +37,15 @@ from ..programs import ProgramCache, code_key
 #: jadhesion sources that define the exported fit, and the libraries it is built from.
 FIT_SOURCES = ("identify", "models", "data/dataset.py", "cli/fit_program.py")
 FIT_DISTRIBUTIONS = ("optimistix", "equinox", "lineax")
+#: Sources of the dataset program (observer, kinematics, creep smoother).
+DATASET_SOURCES = (
+    "data/dataset.py",
+    "data/observer.py",
+    "data/creep_state.py",
+    "data/vehicle.py",
+    "models",
+    "cli/fit_program.py",
+)
 #: Sources of ``Vehicle.k_eps`` (Hertz, Kalker's table, Polach's gradient constant).
 K_EPS_SOURCES = (
     "models/contact.py",
@@ -53,15 +68,52 @@ def _cache() -> ProgramCache:
     return ProgramCache(program_cache_dir())
 
 
+#: The vehicle's numbers the observer and the smoother read (arguments of the dataset program).
+VEHICLE_FIELDS = ("wheelset_inertia_kgm2", "wheel_radius_m", "axle_load_kg", "observer_time_constant_s")
+
+
+class _Signals(NamedTuple):
+    """What :func:`jadhesion.data.dataset.to_dataset` reads of a recording with the raw signals:
+    their columns and the vehicle's numbers (a namespace of :data:`VEHICLE_FIELDS`)."""
+
+    columns: dict
+    vehicle: object
+
+
+def _dataset_program(observer_variant, creep):
+    """The function kept as program ``polach_dataset``: ``(raw signals, vehicle numbers, k_eps)
+    -> dataset dict`` (observer, kinematics and creep smoother). The vehicle's numbers are
+    arguments, as in the library's calls, so that the compiled arithmetic is the same."""
+
+    def program(columns, vehicle, k_eps):
+        signals = _Signals(columns, types.SimpleNamespace(**vehicle))
+        return _dataset.to_dataset(signals, observer_variant, creep, k_eps=k_eps)._asdict()
+
+    return program
+
+
 def to_dataset(recording, observer_variant: str = "paper", creep: str = "smoothed"):
     """:func:`jadhesion.data.dataset.to_dataset` with ``k_eps`` remembered across processes
-    (keyed on every vehicle field and the sources of ``k_eps``)."""
+    (keyed on every vehicle field and the sources of ``k_eps``) and, for a recording with the raw
+    signals, the observer and the creep smoother run as a kept program (keyed on the length and
+    the options); the same dataset bit for bit."""
     vehicle = recording.vehicle
     if not _enabled():
         return _dataset.to_dataset(recording, observer_variant, creep)
     key = {"vehicle": dataclasses.asdict(vehicle), "code": _code(K_EPS_SOURCES)}
     k_eps = _cache().remember("k_eps", key, vehicle.k_eps)
-    return _dataset.to_dataset(recording, observer_variant, creep, k_eps=k_eps)
+    if _dataset.adhesion_source(recording) == "column":  # a fitting dataset: a few array operations
+        return _dataset.to_dataset(recording, observer_variant, creep, k_eps=k_eps)
+    args = (
+        {c: np.asarray(recording.columns[c]) for c in _dataset.RAW_SIGNALS},
+        {f: np.asarray(getattr(vehicle, f)) for f in VEHICLE_FIELDS},
+        np.asarray(k_eps),
+    )
+    static = {"observer_variant": observer_variant, "creep": creep}
+    make = functools.partial(_dataset_program, observer_variant, creep)
+    out = _kept("polach_dataset", make, args, static, DATASET_SOURCES)
+    # NumPy arrays: the selection's masking and the padding then run no eager JAX operation
+    return _dataset.PolachDataset(**jax.tree.map(np.asarray, out))
 
 
 @functools.cache
@@ -69,63 +121,69 @@ def _result_type(fields: tuple):
     return collections.namedtuple("PolachFit", fields)
 
 
-def _polach_program(method, pop_size, max_iter, use_target):
-    """The function kept as program ``polach_fit``: ``(dataset, key data, target) -> dict``."""
-    # The fit command's one function-level import, on purpose: the identification library
-    # (optimistix, equinox, every optimiser) is imported only on a cache miss, never on a warm start.
+def _polach_program(method, pop_size, max_iter, target):
+    """The function kept as program ``polach_fit``: ``(dataset, key data) -> dict``; ``target``
+    (a float or ``None``) is one of its static options, checked by the library here, before
+    tracing."""
+    # The fit command's one function-level import, on purpose: the fitting library is imported
+    # only on a cache miss, never on a warm start.
     from ..identify.polach_fit import fit_polach as library_fit
 
-    def program(data, key_data, target):
-        fit = library_fit(
-            data,
-            method,
-            jax.random.wrap_key_data(key_data),
-            pop_size=pop_size,
-            max_iter=max_iter,
-            target=target if use_target else None,
-        )
+    def program(data, key_data):
+        key = jax.random.wrap_key_data(key_data)
+        fit = library_fit(data, method, key, pop_size=pop_size, max_iter=max_iter, target=target)
         return fit._asdict()
 
     return program
+
+
+def _trust_program():
+    """The function kept as program ``polach_trust``: ``(params, dataset) -> (cov, lags)``."""
+    from ..identify.trust import trust_numbers  # on a miss only, as above
+
+    return trust_numbers
+
+
+def _kept(name, make_fn, args, static, sources=None):
+    """``make_fn()``'s function called on ``args`` through the kept program ``name`` (exported
+    and kept now on a miss; a kept program this process cannot run is rebuilt, never fatal);
+    ``sources``: the code it is keyed on (default the fit's)."""
+    code = _code(FIT_SOURCES, FIT_DISTRIBUTIONS) if sources is None else _code(sources)
+    cache = _cache()
+    program = cache.load(name, args, static=static, code=code)
+    if program is not None:
+        try:
+            return program(*args)
+        except Exception:  # rebuilt below
+            pass
+    return cache.export(name, make_fn(), args, static=static, code=code)(*args)
 
 
 def fit_polach(dataset, method: str, key, *, pop_size: int = 50, max_iter: int = 300, target=None):
     """:func:`jadhesion.identify.polach_fit.fit_polach` through a kept program (exported now on a
     miss). Returns a named tuple with :class:`~jadhesion.identify.polach_fit.PolachFit`'s fields
     (in alphabetical order), equal bit for bit to the library's result."""
-    use_target = target is not None
+    target = None if target is None else float(target)
+    make = functools.partial(_polach_program, method, pop_size, max_iter, target)
+    args = (dataset, jax.random.key_data(key))
     if not _enabled():
-        out = _polach_program(method, pop_size, max_iter, use_target)(
-            dataset, jax.random.key_data(key), target
-        )
-        return _result_type(tuple(out))(**out)
-    static = {
-        "method": method,
-        "pop_size": int(pop_size),
-        "max_iter": int(max_iter),
-        "use_target": use_target,
-        "prng": str(jax.random.key_impl(key)),
-    }
-    args = (
-        dataset,
-        jax.random.key_data(key),
-        np.asarray(0.0 if target is None else target, dataset.adhesion.dtype),
-    )
-    code = _code(FIT_SOURCES, FIT_DISTRIBUTIONS)
-    cache = _cache()
-    program = cache.load("polach_fit", args, static=static, code=code)
-    if program is not None:
-        try:
-            out = program(*args)
-        except Exception:  # a kept program this process cannot run is rebuilt below, never fatal
-            program = None
-    if program is None:
-        program = cache.export(
-            "polach_fit",
-            _polach_program(method, pop_size, max_iter, use_target),
-            args,
-            static=static,
-            code=code,
-        )
-        out = program(*args)
+        out = make()(*args)
+    else:
+        static = {
+            "method": method,
+            "pop_size": int(pop_size),
+            "max_iter": int(max_iter),
+            "target": target,
+            "prng": str(jax.random.key_impl(key)),
+        }
+        out = _kept("polach_fit", make, args, static)
     return _result_type(tuple(out))(**out)
+
+
+def trust_numbers(params, dataset):
+    """:func:`jadhesion.identify.trust.trust_numbers` (covariance and HAC bandwidth of a fit)
+    through a kept program; the same numbers bit for bit."""
+    args = (jnp.asarray(params), dataset)
+    if not _enabled():
+        return _trust_program()(*args)
+    return tuple(_kept("polach_trust", _trust_program, args, {}))

@@ -2,17 +2,16 @@
 
 One file gives today's document; several files (or a directory) give ``{"fits": [...]}``, one
 single-fit document per file with its ``file``. Every file is loaded and checked before any fit
-(a bad one: exit 2, one line naming it, nothing written). Polach fits go through
+(a bad one: exit 2, one line naming it, nothing written). Fits (Polach and Kiencke) go through
 :func:`jadhesion.identify.batch_fit.fit_datasets`: each dataset padded to its length bucket, one
-compiled (kept) program per method and bucket — a lone file takes the same path, so its result is
-the same whether it is fitted alone or with others.
+compiled program per method and bucket (Polach's kept, :mod:`.fit_program`) — a lone file takes
+the same path, so its result is the same whether it is fitted alone or with others.
 """
 
 from __future__ import annotations
 
 import csv
 import io
-import time
 from pathlib import Path
 
 import jax
@@ -25,10 +24,9 @@ from ..identify.kiencke_fit import fit_document, fit_kiencke
 from ..identify.polach_fit import MIN_SAMPLES, RECOMMENDED_SAMPLES, require_samples
 from ..identify.trust import fit_report
 from ..models.polach import PARAM_NAMES
-from ..plots.fit import fit_figure
 from ..status import status_of
 from .common import UserError, emit_json, require_at_least, table
-from .fit_program import fit_polach, to_dataset
+from .fit_program import fit_polach, to_dataset, trust_numbers
 from .loading import load_dataset, load_from_args
 
 
@@ -114,16 +112,6 @@ def _describe(doc) -> str:
     return "\n".join(lines)
 
 
-def _fit_kiencke(args, dataset) -> dict:
-    start = time.perf_counter()
-    fit = jax.block_until_ready(
-        fit_kiencke(
-            dataset, args.method, jax.random.key(args.seed), pop_size=args.pop_size, max_iter=args.max_iter
-        )
-    )
-    return {"method": args.method, **fit_document(fit), "seconds": time.perf_counter() - start}
-
-
 def _polach_doc(args, dataset, fit, seconds) -> dict:
     """One file's document (``fit.mae``/``sse`` over its own samples; the trust block from the
     unpadded dataset)."""
@@ -131,32 +119,37 @@ def _polach_doc(args, dataset, fit, seconds) -> dict:
     return {
         "model": "polach",
         "method": args.method,
-        "params": dict(zip(PARAM_NAMES, map(float, fit.params))),
+        "params": dict(zip(PARAM_NAMES, np.asarray(fit.params).tolist(), strict=True)),
         "mae": float(fit.mae),
         "iterations": int(fit.iterations),
         "evaluations": int(fit.evaluations),
         "seconds": seconds,
         "status": status.label,
         "converged": status.converged,
-        **fit_report(dataset, fit),
+        **fit_report(dataset, fit, numbers=trust_numbers(fit.params, dataset)),
     }
 
 
 def _fit_all(args, datasets) -> list[dict]:
-    if args.model == "kiencke":
-        return [_fit_kiencke(args, d) for d in datasets]
+    """Every dataset fitted padded to its length bucket (:func:`.batch_fit.fit_datasets`: one
+    compiled program per method and bucket, Polach's kept)."""
     fitted = fit_datasets(
         datasets,
         args.method,
         jax.random.key(args.seed),
         pop_size=args.pop_size,
         max_iter=args.max_iter,
-        fit=fit_polach,
+        fit=fit_kiencke if args.model == "kiencke" else fit_polach,
     )
-    return [_polach_doc(args, d, f.fit, f.seconds) for d, f in zip(datasets, fitted)]
+    if args.model == "kiencke":
+        return [{"method": args.method, **fit_document(f.fit), "seconds": f.seconds} for f in fitted]
+    return [_polach_doc(args, d, f.fit, f.seconds) for d, f in zip(datasets, fitted, strict=True)]
 
 
 def _plot(args, path, dataset, doc, many: bool) -> None:
+    # On purpose here, not at the top: matplotlib costs a fit process 0.4 s, and only --plot uses it.
+    from ..plots.fit import fit_figure
+
     out = Path(args.plot)
     out.mkdir(parents=True, exist_ok=True)
     theta = np.array([doc["params"][n] for n in PARAM_NAMES])
@@ -172,7 +165,7 @@ def table_rows(paths, docs) -> list[dict]:
     """``--out``'s rows: file, method, the parameters, mae, status, converged and (Polach) one
     ``stderr_<param>`` per parameter (empty: on a bound; ``inf``: undetermined)."""
     rows = []
-    for path, doc in zip(paths, docs):
+    for path, doc in zip(paths, docs, strict=True):
         row = {
             "file": str(path),
             "method": doc["method"],
@@ -220,7 +213,7 @@ def _print_many(args, paths, docs) -> None:
             "status": d["status"],
             "warnings": ",".join(sorted({w["code"] for w in d.get("warnings", [])})) or "-",
         }
-        for p, d in zip(paths, docs)
+        for p, d in zip(paths, docs, strict=True)
     ]
     print(
         f"{len(docs)} files, {args.model} by {args.method}, "
@@ -237,16 +230,18 @@ def run(args) -> int:
     loaded = [_load(args, p) for p in paths]  # every file checked before any fit
     datasets = [d for d, _ in loaded]
     docs = _fit_all(args, datasets)
-    for doc, (_, selection) in zip(docs, loaded):
+    for doc, (_, selection) in zip(docs, loaded, strict=True):
         doc["creep"] = args.creep
         doc["selection"] = selection.document()
     if args.plot is not None and args.model == "polach":
-        for path, dataset, doc in zip(paths, datasets, docs):
+        for path, dataset, doc in zip(paths, datasets, docs, strict=True):
             _plot(args, path, dataset, doc, many)
     if args.out is not None:
         write_table(args.out, table_rows(paths, docs))
     if args.json:
-        emit_json({"fits": [{"file": str(p), **d} for p, d in zip(paths, docs)]} if many else docs[0])
+        emit_json(
+            {"fits": [{"file": str(p), **d} for p, d in zip(paths, docs, strict=True)]} if many else docs[0]
+        )
     elif many:
         _print_many(args, paths, docs)
     else:

@@ -113,8 +113,9 @@ def adhesion_source(recording) -> str:
 
 def _raw_dataset(recording, observer_variant: str, k_eps=None) -> PolachDataset:
     cols = recording.columns
-    v = np.asarray(cols["vehicle_speed"])
+    v = cols["vehicle_speed"]
     if adhesion_source(recording) == "column":
+        v = np.asarray(v)
         mu = np.asarray(cols["adhesion"])
         if "slip_velocity" in cols:
             w = np.asarray(cols["slip_velocity"])
@@ -130,8 +131,8 @@ def _raw_dataset(recording, observer_variant: str, k_eps=None) -> PolachDataset:
         mu = observe_adhesion(
             cols["time"], cols["wheel_speed"], cols["traction_torque"], recording.vehicle, observer_variant
         )
-        w = np.asarray(kinematics.slip_velocity(cols["wheel_speed"], v))
-        s = np.asarray(kinematics.creepage(w, v))
+        w = kinematics.slip_velocity(cols["wheel_speed"], v)  # traceable: the CLI keeps it as a program
+        s = kinematics.creepage(w, v)
     if k_eps is None:
         k_eps = recording.vehicle.k_eps()
     return PolachDataset(

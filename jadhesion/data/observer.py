@@ -27,6 +27,8 @@ torque ``= T_0``): the derivative estimate starts at 0 and settles within a few 
 
 from __future__ import annotations
 
+import functools
+
 import jax
 import jax.numpy as jnp
 
@@ -66,11 +68,13 @@ def lowpass_foh(time, signal, t0):
     return jnp.concatenate([signal[:1], rest])
 
 
+@functools.partial(jax.jit, static_argnames="variant")
 def observer_core(
     time, wheel_speed, torque, inertia, wheel_radius, axle_load, t0, variant="paper", gravity=GRAVITY
 ):
-    """Observed adhesion coefficient ``mu_hat`` [-] (paper eq 19) from plain numbers; pure, jit- and
-    vmap-able (also over the constants).
+    """Observed adhesion coefficient ``mu_hat`` [-] (paper eq 19) from plain numbers; pure, jitted
+    (one compiled program rather than a dozen eager operations) and vmap-able (also over the
+    constants).
 
     Args:
         time: [s], shape (n,). wheel_speed: circumferential speed at the nominal radius [m/s].

@@ -12,10 +12,10 @@ Marquardt/MINPACK scaling) and projects, ``u' = clip(u + δ, 0, 1)``. The step i
 gain ratio ``ρ = (C − C')/(−gᵀs − ½ sᵀHs) > 10⁻⁴`` (``s = u' − u``, ``C = ½‖r‖²``); ``λ`` follows
 Nielsen's rule. It stops after an accepted step with ``C − C' ≤ ftol·C`` and
 ``‖s‖∞ ≤ xtol (xtol + ‖u‖∞)``; after any step whose predicted and actual decreases are both at most
-``ftol·C`` (MINPACK's test); when the projected gradient ``‖clip(u − g) − u‖∞ ≤ gtol`` (any of these three at a
-point where variables sit on a face with vanishing Jacobian columns — a plateau, e.g. ``μ0 = 0`` —
-is not a minimum when moving them :data:`PROBE` inwards lowers the cost: the run continues from
-there); and a stop whose undamped Gauss–Newton step still promises more than :data:`GN_GAIN`·C
+``ftol·C`` (MINPACK's test); when the projected gradient ``‖clip(u − g) − u‖∞ ≤ gtol`` (any of
+these three at a point where variables sit on a face with vanishing Jacobian columns — a plateau,
+e.g. ``μ0 = 0`` — is not a minimum when moving them :data:`PROBE` inwards lowers the cost: the run
+continues from there); and a stop whose undamped Gauss–Newton step still promises more than :data:`GN_GAIN`·C
 is ``STALLED`` (the damping, not the problem, made the model flat); when
 ``λ > 10¹⁶`` (no decrease is representable: status ``STALLED``); or at ``max_steps`` (status
 ``MAX_STEPS``). Only the three tests give ``CONVERGED`` (``success`` true).
@@ -48,6 +48,10 @@ class BoxLMOptions(NamedTuple):
     gtol: float = 1e-12
 
 
+#: The default coefficients (one shared value, so a default argument builds nothing).
+DEFAULT_OPTIONS = BoxLMOptions()
+
+
 class _BoxState(NamedTuple):
     """Iterate ``u`` (box-scaled); at ``u``: cost ``½‖r‖²``, gradient ``g = Jᵀr``, Gauss–Newton
     matrix ``H = JᵀJ`` and ``max |r|``; running ``max diag H``, damping ``λ`` and its growth factor
@@ -69,9 +73,47 @@ class _BoxState(NamedTuple):
     fresh: jax.Array
 
 
-def _box_lm_stepper(residual, bounds, options):
+def _reductions(res, lo, width, u, args):
+    """``½‖r‖²``, ``Jᵀr``, ``JᵀJ`` and ``max |r|`` at ``u`` (one residual and forward Jacobian)."""
+
+    def f(v):
+        r = res(lo + width * v, args)
+        return r, r
+
+    jac, r = jax.jacfwd(f, has_aux=True)(u)
+    return 0.5 * jnp.sum(r * r), jac.T @ r, jac.T @ jac, jnp.max(jnp.abs(r))
+
+
+def _blocked_reductions(res, lo, width, u, args, n, block):
+    """:func:`_reductions` of a row-wise residual of ``n`` rows, summed over blocks of ``block``
+    rows (``lax.scan``, then the remainder): memory ``O(block)`` instead of ``O(n)`` for the
+    Jacobian and its intermediates. ``args`` leaves of shape ``(n,)`` are split by rows, the others
+    passed whole to every block."""
+    leaves, tree = jax.tree.flatten(args)
+    is_row = [jnp.shape(x) == (n,) for x in leaves]
+    full = (n // block) * block
+
+    def add(acc, rows):
+        it = iter(rows)
+        part = jax.tree.unflatten(
+            tree, [next(it) if row else x for x, row in zip(leaves, is_row, strict=True)]
+        )
+        c, g, h, m = _reductions(res, lo, width, u, part)
+        return (acc[0] + c, acc[1] + g, acc[2] + h, jnp.maximum(acc[3], m)), None
+
+    row_leaves = [x for x, row in zip(leaves, is_row, strict=True) if row]
+    d, dtype = u.shape[0], u.dtype
+    zero = (jnp.zeros((), dtype), jnp.zeros(d, dtype), jnp.zeros((d, d), dtype), jnp.zeros((), dtype))
+    acc, _ = jax.lax.scan(add, zero, [x[:full].reshape(n // block, block) for x in row_leaves])
+    if full < n:
+        acc, _ = add(acc, [x[full:] for x in row_leaves])
+    return acc
+
+
+def _box_lm_stepper(residual, bounds, options, block_rows=None):
     """``(init, step)`` of the projected LM: ``init(p0)`` is a fresh state (no evaluation, so
-    restarting a lane is free), ``step(state, args)`` one iteration (one residual and Jacobian)."""
+    restarting a lane is free), ``step(state, args)`` one iteration (one residual and Jacobian;
+    with ``block_rows``, see :func:`box_lm`, reduced block by block)."""
     res = safe_residual(residual)
     lo, hi = bounds
     width = hi - lo
@@ -79,13 +121,10 @@ def _box_lm_stepper(residual, bounds, options):
 
     def linearise(u, args):
         """``½‖r‖²``, ``Jᵀr``, ``JᵀJ`` and ``max |r|`` at ``u``."""
-
-        def f(v):
-            r = res(lo + width * v, args)
-            return r, r
-
-        jac, r = jax.jacfwd(f, has_aux=True)(u)
-        return 0.5 * jnp.sum(r * r), jac.T @ r, jac.T @ jac, jnp.max(jnp.abs(r))
+        n = jax.eval_shape(res, lo, args).shape[0]
+        if block_rows is None or n <= block_rows:
+            return _reductions(res, lo, width, u, args)
+        return _blocked_reductions(res, lo, width, u, args, n, block_rows)
 
     def init(p0):
         dtype = p0.dtype
@@ -184,12 +223,18 @@ def _prepare(p0, bounds, options):
     return p0, bounds, BoxLMOptions(*(jnp.asarray(o, p0.dtype) for o in options))
 
 
-@functools.partial(jax.jit, static_argnames=("residual", "max_steps"))
-def box_lm(residual, p0, args, bounds, options=BoxLMOptions(), *, max_steps=100):
+@functools.partial(jax.jit, static_argnames=("residual", "max_steps", "block_rows"))
+def box_lm(residual, p0, args, bounds, options=DEFAULT_OPTIONS, *, max_steps=100, block_rows=None):
     """Projected LM on the box ``bounds = (lo, hi)`` from ``p0`` (see the module docstring).
-    ``steps`` counts iterations; each costs one residual and one forward Jacobian."""
+    ``steps`` counts iterations; each costs one residual and one forward Jacobian.
+
+    ``block_rows``: for a *row-wise* residual (row ``i`` depends only on the ``i``-th entry of
+    every ``args`` leaf of shape ``(n,)``), a residual longer than ``block_rows`` is linearised in
+    blocks of that many rows (:func:`_blocked_reductions`): the same sums to rounding, with
+    memory for one block's Jacobian instead of all ``n`` rows'. ``None`` (default): in one piece.
+    """
     p0, bounds, options = _prepare(p0, bounds, options)
-    init, step, result = _box_lm_stepper(residual, bounds, options)
+    init, step, result = _box_lm_stepper(residual, bounds, options, block_rows)
     final = jax.lax.while_loop(
         lambda st: ~st.done & (st.steps < max_steps), lambda st: step(st, args), init(p0)
     )

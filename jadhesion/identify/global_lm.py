@@ -6,7 +6,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from .box_lm import BoxLMOptions, box_lm
+from .box_lm import DEFAULT_OPTIONS, box_lm
 from .driver import run
 from .lm_result import best_of, sse_objective
 from .population import evaluate, uniform_population
@@ -40,20 +40,24 @@ def global_lm(
     search_iter=5,
     search_args=None,
     max_steps=100,
-    options=BoxLMOptions(),
+    options=DEFAULT_OPTIONS,
+    block_rows=None,
 ):
     """ "Global LM": :func:`seed_starts` (a search on ``‖r‖²``) seeds ``n_starts`` :func:`box_lm`
     runs from its best members; the lowest-SSE answer is returned.
 
     With ``search_args`` (e.g. a subsample of the data) the search *and* the multi-start LM use
     it, and only the best of them is polished by one :func:`box_lm` on ``args``: the expensive
-    full-data Jacobians are then paid once, not ``n_starts`` times. Returns ``(LMResult,
+    full-data Jacobians are then paid once, not ``n_starts`` times. ``block_rows``: see
+    :func:`box_lm` (row-wise residuals only). Returns ``(LMResult,
     population evaluations)``; ``steps`` sums every LM run's steps."""
     sub = args if search_args is None else search_args
     starts, n_evals = seed_starts(
         residual, bounds, key, sub, n_starts=n_starts, pop_size=pop_size, search_iter=search_iter
     )
-    solve = lambda p, a: box_lm(residual, p, a, bounds, options, max_steps=max_steps)  # noqa: E731
+    solve = lambda p, a: box_lm(  # noqa: E731
+        residual, p, a, bounds, options, max_steps=max_steps, block_rows=block_rows
+    )
     out = best_of(jax.vmap(solve, in_axes=(0, None))(starts, sub))
     if search_args is not None:
         polish = solve(out.params, args)

@@ -14,7 +14,9 @@ optimum creep.
 
 **Samples.** Only informative samples count (:func:`informative`): finite, ``|v| ≥``
 :data:`MIN_SPEED` (creep is undefined at standstill) and ``|μ̂| ≥`` :data:`MIN_ADHESION` (coasting
-carries no information about the curve). The others get weight 0, so shapes stay static and fits vmap.
+carries no information about the curve), and not padding. The others get weight 0, so shapes stay
+static and fits vmap; ``jadhesion fit --model kiencke`` pads each dataset to its length bucket
+(:func:`.batch_fit.fit_datasets`), one compiled program per method and bucket.
 
 **Methods.** ``lm``: global LM — :data:`LM_POP` uniform random points in the box seed
 :data:`LM_STARTS` projected-LM runs (:func:`.lm.global_lm`, :func:`.lm.box_lm`) on the weighted
@@ -39,7 +41,7 @@ from ..data.dataset import PolachDataset
 from ..models.kiencke import kiencke_adhesion, kiencke_optimum
 from ..status import Status
 from .driver import run
-from .lm import global_lm
+from .global_lm import global_lm
 from .pso import PSO
 from .tlbo import ITLBO, TLBO
 
@@ -89,14 +91,17 @@ def to_search(params):
 
 
 def informative(data: PolachDataset):
-    """Weights (n,) 1.0/0.0: finite creep and μ̂, ``|v| ≥ MIN_SPEED``, ``|μ̂| ≥ MIN_ADHESION``."""
+    """Weights (n,) 1.0/0.0: finite creep and μ̂, ``|v| ≥ MIN_SPEED``, ``|μ̂| ≥ MIN_ADHESION``,
+    and not padding (``data.weight``, :func:`.batch_fit.pad_dataset`: one program per length
+    bucket)."""
     ok = (
         jnp.isfinite(data.creep)
         & jnp.isfinite(data.adhesion)
         & (jnp.abs(data.vehicle_speed) >= MIN_SPEED)
         & (jnp.abs(data.adhesion) >= MIN_ADHESION)
     )
-    return ok.astype(data.adhesion.dtype)
+    ok = ok.astype(data.adhesion.dtype)
+    return ok if data.weight is None else ok * data.weight
 
 
 def kiencke_residual(z, data: PolachDataset):
@@ -191,7 +196,7 @@ def fit_document(fit: KienckeFit) -> dict:
 
     return {
         "model": "kiencke",
-        "params": dict(zip(PARAM_NAMES, map(num, fit.params))),
+        "params": dict(zip(PARAM_NAMES, map(num, fit.params), strict=True)),
         "mae": num(fit.mae),
         "mu_max": num(fit.mu_max),
         "creep_opt": num(fit.creep_opt),

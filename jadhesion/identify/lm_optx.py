@@ -13,6 +13,10 @@ system ``(JᵀJ + λI) δ = −Jᵀr`` (optimistix's trust-region form).
   (``finfo.max^¼``) with zero derivative, so LM rejects the step and shrinks its trust region.
 * **Evaluations** are reported as optimistix's accepted+rejected steps plus one: each costs one
   residual and one forward-mode Jacobian (``d`` JVPs).
+
+optimistix (with equinox and lineax: a third of a second) is imported by the functions that solve,
+on purpose, not at the top: the Polach fits run the projected LM of :mod:`.box_lm`, and a
+``jadhesion fit`` process must not pay for a library it does not call (issue #16 item 4).
 """
 
 from __future__ import annotations
@@ -21,7 +25,6 @@ import functools
 
 import jax
 import jax.numpy as jnp
-import optimistix as optx
 
 from ..status import Status
 from .lm_result import LMResult, best_of
@@ -52,6 +55,8 @@ def from_box(p, bounds):
 
 
 def _solve(fn, y0, args, rtol, atol, max_steps):
+    import optimistix as optx  # on purpose here: see the module docstring
+
     solver = optx.LevenbergMarquardt(rtol=rtol, atol=atol)
     sol = optx.least_squares(fn, solver, y0, args, max_steps=max_steps, throw=False)
     return sol.value, sol.stats["num_steps"], _optx_status(sol.result)
@@ -59,6 +64,8 @@ def _solve(fn, y0, args, rtol, atol, max_steps):
 
 def _optx_status(result):
     """optimistix's result as a :class:`Status` code (finiteness is checked by the caller)."""
+    import optimistix as optx  # on purpose here: see the module docstring
+
     return jnp.where(
         result == optx.RESULTS.successful,
         int(Status.CONVERGED),

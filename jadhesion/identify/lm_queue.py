@@ -11,21 +11,24 @@ import functools
 import jax
 import jax.numpy as jnp
 
-from .box_lm import BoxLMOptions, _box_lm_stepper, _prepare
+from .box_lm import DEFAULT_OPTIONS, _box_lm_stepper, _prepare
 
 
-@functools.partial(jax.jit, static_argnames=("residual", "max_steps", "lanes"))
-def box_lm_queue(residual, starts, args, bounds, options=BoxLMOptions(), *, max_steps=100, lanes=8):
+@functools.partial(jax.jit, static_argnames=("residual", "max_steps", "lanes", "block_rows"))
+def box_lm_queue(
+    residual, starts, args, bounds, options=DEFAULT_OPTIONS, *, max_steps=100, lanes=8, block_rows=None
+):
     """:func:`box_lm` on many problems — row ``i`` of ``starts`` (N, d) with the ``i``-th slice of
     the stacked pytree ``args`` — as a work queue: ``lanes`` problems iterate side by side (one
     vmapped step) and a lane that converges takes the next waiting problem at once. A plain
     ``vmap`` of :func:`box_lm` runs every member for as many steps as the slowest; the queue's
-    cost follows the *total* steps instead. Returns a stacked :class:`LMResult` in input order."""
+    cost follows the *total* steps instead. ``block_rows``: as in :func:`box_lm`. Returns a stacked
+    :class:`LMResult` in input order."""
     starts, bounds, options = _prepare(starts, bounds, options)
     n_problems = starts.shape[0]
     lanes = min(lanes, n_problems)
     take = lambda i: jax.tree.map(lambda a: a[i], args)  # noqa: E731
-    init, step, result = _box_lm_stepper(residual, bounds, options)
+    init, step, result = _box_lm_stepper(residual, bounds, options, block_rows)
     finished = lambda st: st.done | (st.steps >= max_steps)  # noqa: E731
     out0 = jax.vmap(lambda p: result(init(p)))(starts)
 

@@ -5,8 +5,9 @@ Population methods minimise the paper's fitness (eq 15), the mean absolute error
 sum of squares over the same box — of :func:`polach_eiv_residual`, the expected curve over the
 smoothed slip's uncertainty when the dataset has ``slip_sd`` (errors in variables), else of
 :func:`polach_residual` — (projected LM, :func:`.lm.box_lm`), seeded by a random search on
-a subsample ("global LM", :data:`LM_POP`), and reports the MAE as well. Datasets are pytrees: :func:`fit_polach_batch` vmaps
-over a leading axis of stacked datasets and keys, compiled once per shape.
+a subsample ("global LM", :data:`LM_POP`), and reports the MAE as well. Datasets are pytrees:
+:func:`fit_polach_batch` vmaps over a leading axis of stacked datasets and keys, compiled once per
+shape.
 """
 
 from __future__ import annotations
@@ -34,6 +35,9 @@ from .methods import POPULATION as ALGORITHMS
 #: Each LM run is capped at ``LM_MAX_STEPS``. (A random search compiles in a fraction of the time
 #: of an improved-TLBO search and found the global minimum as often on noisy 1000-point data.)
 LM_POP, LM_SEARCH_ITER, LM_STARTS, LM_MAX_STEPS = 64, 0, 4, 100
+#: Rows per block of a full-data LM linearisation (:func:`.box_lm.box_lm`'s ``block_rows``: the
+#: residuals are row-wise): an hour of data needs one block's Jacobian in memory, not all rows'.
+LM_BLOCK_ROWS = 8192
 
 
 class PolachFit(NamedTuple):
@@ -136,6 +140,7 @@ def _fit(method, pop_size, max_iter, use_target, data, key, target):
             search_iter=LM_SEARCH_ITER,
             search_args=None if seed_data is data else seed_data,
             max_steps=LM_MAX_STEPS,
+            block_rows=LM_BLOCK_ROWS,
         )
         theta, iterations, evaluations = out.params, out.steps, n_pop + out.steps
     else:
@@ -192,7 +197,9 @@ def _global_lm_many(data, keys, target, use_target):
         lanes=SEED_LANES,
     )
     seeded = jax.vmap(best_of)(jax.tree.map(lambda a: a.reshape((n, LM_STARTS) + a.shape[1:]), seeded))
-    polish = box_lm_queue(LM_RESIDUAL, seeded.params, data, bounds, max_steps=LM_MAX_STEPS)
+    polish = box_lm_queue(
+        LM_RESIDUAL, seeded.params, data, bounds, max_steps=LM_MAX_STEPS, block_rows=LM_BLOCK_ROWS
+    )
     r = jax.vmap(polach_residual)(polish.params, data)
     mae = mean_abs(r) if data.weight is None else jax.vmap(dataset_mae)(r, data)
     steps = seeded.steps + polish.steps
@@ -262,9 +269,9 @@ def fit_polach(
     target); without one it stops when the stall test of :mod:`.driver` passes (best MAE improved
     by < :data:`.driver.STALL_FTOL` relative over :data:`.driver.STALL_WINDOW` iterations),
     ``max_iter`` being only a cap. ``status`` says which. Refuses float32 data and fewer than
-    :data:`MIN_SAMPLES` samples (:class:`jadhesion.errors.InputError`). ``pop_size``/``max_iter`` do not apply to LM (see :data:`LM_POP`: the best 4 of 64 random
-    points, scored on at most 128 samples, seed projected LM there; the best is polished on all
-    samples).
+    :data:`MIN_SAMPLES` samples (:class:`jadhesion.errors.InputError`). ``pop_size``/``max_iter``
+    do not apply to LM (see :data:`LM_POP`: the best 4 of 64 random points, scored on at most 128
+    samples, seed projected LM there; the best is polished on all samples).
     """
     _check(method, dataset, pop_size, max_iter, target)
     target_ = jnp.asarray(0.0 if target is None else target, dataset.adhesion.dtype)

@@ -45,13 +45,27 @@ def _warning(code, params, message):
     return {"code": code, "params": list(params), "message": message}
 
 
-def fit_report(data, fit) -> dict:
-    """The trust block of a fit of ``data`` (see the module docstring)."""
+def held_fixed(params):
+    """Parameters within :data:`BOUND_TOL` of a face of the unit box (reported without a local
+    interval; free in the covariance)."""
+    return (params <= BOUND_TOL) | (params >= 1 - BOUND_TOL)
+
+
+@jax.jit
+def trust_numbers(params, data):
+    """``(cov, lags)`` of :func:`.uncertainty.covariance` for LM's residual at ``params`` (its
+    Jacobian over every row, one compiled program)."""
+    r = LM_RESIDUAL(params, data)
+    jac = jax.jacfwd(LM_RESIDUAL)(params, data)
+    return covariance(jac, r)  # bound parameters stay free (module docstring)
+
+
+def fit_report(data, fit, numbers=None) -> dict:
+    """The trust block of a fit of ``data`` (see the module docstring); ``numbers``:
+    :func:`trust_numbers` of it when already computed (the command line's kept program)."""
     theta = np.asarray(fit.params, float)
-    r = LM_RESIDUAL(fit.params, data)
-    jac = jax.jacfwd(LM_RESIDUAL)(fit.params, data)
-    fixed = (theta <= BOUND_TOL) | (theta >= 1 - BOUND_TOL)
-    cov, lags = covariance(jac, r)
+    fixed = held_fixed(theta)
+    cov, lags = trust_numbers(fit.params, data) if numbers is None else numbers
     cov = np.asarray(cov)
     sd = np.sqrt(np.diag(cov))
     uncertainty, warnings = {}, []
@@ -98,7 +112,7 @@ def fit_report(data, fit) -> dict:
                 (f"the solver stopped with status {status.label}: the parameters may not be a minimum"),
             )
         )
-    n = int(r.shape[0])
+    n = int(data.adhesion.shape[-1])
     if n < RECOMMENDED_SAMPLES:
         warnings.append(
             _warning(
