@@ -115,7 +115,7 @@ def summarise(results):
                     )
                 ),
                 "lm_mu0_abs_error_median": float(np.median(sum((r["lm_mu0_abs_error"] for r in rows), []))),
-                "coverage90": dict(zip(QUANTITIES, hits.mean(axis=0).tolist())),
+                "coverage90": dict(zip(QUANTITIES, hits.mean(axis=0).tolist(), strict=True)),
             }
     return table
 
@@ -124,7 +124,7 @@ def figure(summary, levels, path):
     """Slope error, μ0 error and coverage against noise level (x: speed-sensor sd [m/s])."""
     x = [5e-5 if lv == "clean" else float(lv) * REALISTIC.speed_sd() for lv in levels]
     fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))
-    for creep, style in zip(CREEPS, ("o--", "s-")):
+    for creep, style in zip(CREEPS, ("o--", "s-"), strict=True):
         rows = [summary[f"{lv}/{creep}"] for lv in levels]
         axes[0].plot(x, [r["lm_slope_rel_error_median"] for r in rows], style, label=f"LM, {creep}")
         axes[1].plot(x, [r["lm_mu0_abs_error_median"] for r in rows], style, label=f"LM, {creep}")
@@ -137,7 +137,7 @@ def figure(summary, levels, path):
         "LM |μ0 error| (median)",
         "posterior 90 % coverage (observer lik.)",
     )
-    for ax, title in zip(axes, titles):
+    for ax, title in zip(axes, titles, strict=True):
         ax.set_xscale("log")
         ax.set_xlabel("speed-sensor noise sd [m/s]")
         ax.set_title(title, fontsize=10)

@@ -97,7 +97,7 @@ def score(fits, seconds, truths):
         "true_slope": true_slope.tolist(),
         "slope_rel_error": rel.tolist(),
         "slope_within25": (np.abs(rel) <= 0.25).tolist(),
-        "mu0_abs_error": [abs(p[2] - t[2]) for (p, _), t in zip(fits, truths)],
+        "mu0_abs_error": [abs(p[2] - t[2]) for (p, _), t in zip(fits, truths, strict=True)],
         "mae": [m for _, m in fits],
         "params": [p.tolist() for p, _ in fits],
         "seconds": seconds,

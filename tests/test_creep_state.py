@@ -69,7 +69,7 @@ def test_any_spacing_standstill_and_vmap():
         est = _smooth(_signals(300, jax.random.PRNGKey(3), **kwargs))
         assert all(bool(jnp.all(jnp.isfinite(x))) for x in est), kwargs
     sigs = [_signals(300, jax.random.PRNGKey(k)) for k in (4, 5)]
-    batch = jax.vmap(lambda *a: _smooth(a))(*(jnp.stack(x) for x in zip(*sigs)))
+    batch = jax.vmap(lambda *a: _smooth(a))(*(jnp.stack(x) for x in zip(*sigs, strict=True)))
     np.testing.assert_allclose(batch.creep[1], _smooth(sigs[1]).creep, rtol=1e-9, atol=1e-12)
 
 

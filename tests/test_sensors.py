@@ -28,7 +28,7 @@ def test_zero_noise_measures_the_truth_and_scaling():
     x = jnp.linspace(0.5, 0.7, 50)
     zero = SensorModel(0.0, 0.0, 0.1, 0.0, 0.0, 0.0)
     out = measure(jax.random.PRNGKey(1), x, x, 1e4 * x, zero, 0.02)
-    for a, b in zip(out, (x, x, 1e4 * x)):
+    for a, b in zip(out, (x, x, 1e4 * x), strict=True):
         np.testing.assert_array_equal(a, b)
     model = sensor_model("realistic", 1700.0, 2.0)
     assert model.speed_white_mps == 2 * REALISTIC.speed_white_mps and model.torque_white_nm == 3400

@@ -21,10 +21,10 @@ smooth signal is nearly zero while white noise gives ``Var(Δ³e) = 20 σ²``, s
 ``σ = 1.4826 · MAD(Δ³y) / √20`` (robust to slip excursions). ``q_v``, ``q_w``: maximum of the
 Kalman filter's exact Gaussian log-likelihood (prediction-error decomposition) over a log grid
 (:data:`Q_GRID`, decade steps; first ``q_w`` at the smallest ``q_v`` — a heavy vehicle — then
-``q_v`` at that ``q_w``),
-each grid in one vmapped scan (2 × 13 filter passes: the cost of the smoother). Noise correlated over longer than a few samples
-(coloured sensor noise) is not separable from motion in one recording; it is partly tracked as
-signal, and the reported standard deviations then understate the error (see the README numbers).
+``q_v`` at that ``q_w``), each grid in one vmapped scan (2 × 13 filter passes: the cost of the
+smoother). Noise correlated over longer than a few samples (coloured sensor noise) is not
+separable from motion in one recording; it is partly tracked as signal, and the reported standard
+deviations then understate the error (by 10–30 % at the simulator's realistic sensors).
 
 **Outputs** (:class:`CreepEstimate`): smoothed ``v``, ``w``, ``s = w / max(|v|, floor)``
 (:data:`jadhesion.models.kinematics.SPEED_FLOOR`, never NaN at standstill), their standard
