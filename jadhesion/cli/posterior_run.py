@@ -50,7 +50,7 @@ def _document(result, theta0, note="", creep="raw") -> dict:
         "likelihood": result.likelihood,
         "likelihood_note": note,
         "creep": creep,
-        "lm_start": dict(zip(result.names, map(float, theta0), strict=True)),
+        "lm_start": dict(zip(result.names[: len(theta0)], map(float, theta0), strict=True)),  # no noise terms
         "params": result.params,
         "derived": result.derived,
         "vehicle_speed": result.vehicle_speed,
