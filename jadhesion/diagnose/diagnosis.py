@@ -20,6 +20,7 @@ import numpy as np
 
 from ..data.observer import lowpass_foh
 from ..data.vehicle import Vehicle
+from ..errors import InputError
 from ..models.polach import PARAM_NAMES
 from ..status import Status
 from . import extensions as ext
@@ -105,40 +106,53 @@ def _n_extra(names) -> int:
 
 def _generic(sig, residual, mu_pred) -> dict:
     """Sparse discrepancy (STLSQ) on the library of residual-analysis signals, cross-validated on
-    the same contiguous blocks."""
+    the same contiguous blocks (selected samples only)."""
     lib = features.library(sig, mu_pred)
     names = [k for k in lib if k != "time"] + ["time"]
     phi = np.column_stack([lib[k] for k in names])
-    weights = np.asarray(fitting.fold_weights(residual.size))
+    keep = np.asarray(sig.weight) > 0
+    weights = np.asarray(fitting.fold_weights(residual.size, weight=sig.weight))
     held = np.zeros_like(residual)
     for w in weights[1:]:
+        out = (w == 0) & keep
         fit = features.stlsq(phi, residual, w)
-        held[w == 0] = (residual - features.stlsq_predict(phi, fit))[w == 0]
+        held[out] = (residual - features.stlsq_predict(phi, fit))[out]
     fit = features.stlsq(phi, residual, weights[0])
     xi = fit[0]
+    mae = np.mean(np.abs(residual[keep]))
     return {
         "terms": {n: float(c) for n, c in zip(["const"] + names, xi) if c != 0.0},
-        "mae": float(np.mean(np.abs(residual - features.stlsq_predict(phi, fit)))),
-        "heldout_mae": float(np.mean(np.abs(held))),
-        "gain": float(1.0 - np.mean(np.abs(held)) / np.mean(np.abs(residual))),
+        "mae": float(np.mean(np.abs(residual - features.stlsq_predict(phi, fit))[keep])),
+        "heldout_mae": float(np.mean(np.abs(held[keep]))),
+        "gain": float(1.0 - np.mean(np.abs(held[keep])) / mae),
     }
 
 
 def diagnose(
-    columns: dict, vehicle: Vehicle, name: str = "recording", n_replicas: int = null.N_REPLICAS, seed: int = 0
+    columns: dict,
+    vehicle: Vehicle,
+    name: str = "recording",
+    n_replicas: int = null.N_REPLICAS,
+    seed: int = 0,
+    mask=None,
 ) -> dict:
     """Diagnose a recording's raw columns (time, vehicle_speed, wheel_speed, traction_torque);
-    ``n_replicas`` clean re-synthesised replicas (seeded by ``seed``) form its null
-    (:mod:`.null`; 0 skips it and every p-value is null)."""
-    sig = from_columns(columns, vehicle, name)
+    ``mask`` (n,) bool: the samples the fits use (default all; the signals are computed on the
+    whole recording, so a selected sample keeps its filter history); ``n_replicas`` clean
+    re-synthesised replicas (seeded by ``seed``) form its null (:mod:`.null`; 0 skips it and every
+    p-value is null)."""
+    sig = from_columns(columns, vehicle, name, mask)
+    keep = np.asarray(sig.weight) > 0
+    if keep.sum() < 50:
+        raise InputError(f"{name}: diagnosis needs at least 50 selected samples, got {int(keep.sum())}")
     n_valid = int(sig.time.shape[0])
     p_base, base_status = fitting.fit_base(fitting.pad_signals(sig), n_valid)
     none = np.zeros(ext.N_EXTRA, bool)
     target, pred = (np.asarray(x) for x in _predict(p_base, none, sig))
     r_base = target - pred
     lib = features.library(sig, pred)
-    sigs = features.signatures(r_base, lib)
-    drop, u_change, tau_th = features.starting_values(sig, r_base, pred)
+    sigs = features.signatures(r_base[keep], {k: v[keep] for k, v in lib.items()})
+    drop, u_change, tau_th = features.starting_values(sig, r_base * keep, pred * keep)
     sig = sig._replace(heat=lowpass_foh(sig.time, sig.power, tau_th))
     padded = fitting.pad_signals(sig)
     p0 = p_base.copy()
@@ -148,14 +162,16 @@ def diagnose(
 
     sets1 = [()] + [(n,) for n in ext.NAMES]
     t1, act1 = _fit_round(padded, n_valid, p0, sets1)
-    n_eff = select.effective_samples(r_base)
+    n_eff = select.effective_samples(r_base[keep])
     k1 = [_n_extra(s) for s in sets1]
     gain1, dbic1 = select.scores(t1["heldout_mae"], t1["sse"], k1, 0, n_eff)
     names1 = ["none"] + list(ext.NAMES)
-    p_values, noise = [None] * len(sets1), None
+    observed = null.statistic(t1)
+    p_values, noise, critical = [None] * len(sets1), None, None
     if n_replicas:
-        null_gain, noise = null.null_gains(
+        null_stats, noise = null.null_statistics(
             columns,
+            keep,
             vehicle,
             p_base,
             tau_th,
@@ -165,8 +181,9 @@ def diagnose(
             n_replicas,
             seed,
         )
-        ok = np.array([_status(t1, i) == "converged" for i in range(len(sets1))])
-        p_values = [None] + list(null.max_t_pvalues(np.where(ok[1:], gain1[1:], -np.inf), null_gain))
+        ok = np.array([_status(t1, i) == "converged" for i in range(1, len(sets1))])
+        p_values = [None] + list(null.max_t_pvalues(np.where(ok, observed, -np.inf), null_stats))
+        critical = float(np.quantile(np.max(null_stats, axis=1), 1.0 - null.ALPHA))
     candidates = []
     for i in np.argsort(t1["heldout_mae"][1:]) + 1:
         signal = features.REVEALING_SIGNAL[names1[i]]
@@ -178,6 +195,7 @@ def diagnose(
                 "heldout_mae": float(t1["heldout_mae"][i]),
                 "delta_bic": float(dbic1[i]),
                 "gain": float(gain1[i]),
+                "sse_reduction": float(observed[i - 1]),
                 "status": _status(t1, i),
                 "steps": int(t1["steps"][i]),
                 "p_value": None if p_values[i] is None else float(p_values[i]),
@@ -214,7 +232,7 @@ def diagnose(
         final = names1.index(effects[0])
     ext_params = _row(table["params"][final], acts[final], sig, tau_th)
     seen = sensitivity.detectable_magnitudes(
-        table["params"][final], acts[final], u_change, padded, n_valid, effects
+        table["params"][final], acts[final], u_change, padded, n_valid, effects, critical
     )
     t_ext, p_ext = (np.asarray(x) for x in _predict(table["params"][final], acts[final], sig))
     generic = _generic(sig, t_ext - p_ext, p_ext)
@@ -248,8 +266,10 @@ def diagnose(
         "null": {
             "replicas": n_replicas,
             "alpha": null.ALPHA,
-            "noise": noise,
-            "method": "parametric bootstrap on this recording, max-T p-values",
+            "torque_noise": noise,
+            "critical_sse_reduction": critical,
+            "method": "parametric bootstrap on this recording (measured speeds, torque from the base "
+            "fit along the smoothed creep), max-T p-values of the in-sample SSE reduction",
         },
     }
     result["explanation"] = explain(result, vehicle)

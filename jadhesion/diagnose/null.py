@@ -1,23 +1,25 @@
-"""A null for this recording: the distribution of each candidate's held-out gain on clean
+"""A null for this recording: the distribution of each candidate's statistic on clean
 re-synthesised versions of the very recording (parametric bootstrap), and max-T p-values.
 
 **Re-synthesis.** A replica keeps the recording's own measured speeds (its speed and creep
-history, with their noise) and replaces the torque: the replica's adhesion is the *base* Polach
-fit along the locally averaged creep (:func:`local_mean`, 2·:data:`HALF` + 1 samples, short
-enough to keep the slip excursions), and its torque follows the wheelset dynamics through the
-observer exactly, ``T/(m g r) = μ_base + J d/(m g r)`` with ``d`` from the measured wheel speed,
-so the observer returns ``μ_base``; then torque noise is drawn from the model estimated on the
-recording (:func:`noise_model`: level σ, colour as AR(1) with coefficient ρ, quantisation step q
-when the samples lie on a grid; the same model is reported for all three measured signals).
-The regressors carry the recording's own speed noise while the replica's target does not follow
-it, so the errors-in-variables bias of the base fit is present in the null too (only the part of
-the speed noise that the local average removes; the wheel speed's noise cannot be told from the
-stiff wheelset's slip dynamics by differences, so it is not re-drawn).
+history, with their noise: the regressors of every fit are exactly the recording's) and replaces
+the torque by what a clean Polach wheelset would have needed: the adhesion is the *base* fit along
+the latent creep ``ŝ`` of the Kalman/RTS smoother (:func:`jadhesion.data.creep_state.smooth_creep`,
+the recording's best estimate of the true creep), and the torque follows the wheelset dynamics
+along the smoothed wheel speed, ``T/(m g r) = μ_base(ŝ) + J d̂/(m g r)``; torque noise is drawn
+from the model estimated on the recording (:func:`noise_model`: level σ, colour as AR(1) with
+coefficient ρ, quantisation step q when the samples lie on a grid). The observer then returns
+``μ_base(ŝ) + J (d̂ − d)/(m g r)`` + torque noise, ``d`` from the measured wheel speed: as in the
+recording, the target follows the (estimated) true creep and carries the wheel-speed noise through
+the observer, while the regressor is the noisy measured creep, so the errors-in-variables bias of
+every fit is present in the null too. (Sensor noise correlated over longer than the smoother can
+separate from motion is partly taken as latent creep; such noise is then under-represented.)
 
-**Test.** Every replica runs the same round-1 candidate fits (one compiled program: vmapped over
-candidates × cross-validation folds, replicas one after another by ``lax.map`` so the Jacobian
-memory does not grow with R). With ``G_r = max_c gain_{r,c}`` the largest gain
-among the replica's candidates, candidate c's p-value is ``(1 + #{r: G_r ≥ gain_c})/(R + 1)``
+**Test.** The statistic of candidate c is its in-sample relative reduction of the sum of squares
+against the base fit, ``T_c = 1 − SSE_c/SSE_0`` (no cross-validation folds in the null: the
+replicas are fitted on all data only, one compiled program with candidates and replicas one after
+another by ``lax.map``, so memory does not grow with R). With ``M_r = max_c T_{r,c}`` the largest
+statistic among replica r's candidates, c's p-value is ``(1 + #{r: M_r ≥ T_c})/(R + 1)``
 (single-step max-T, Westfall & Young 1993): rejecting at ``p ≤ α`` holds the family-wise false
 alarm rate over all candidates at α by construction (up to the re-synthesis being faithful).
 Bonferroni or Holm would need R ≥ 7/α − 1 = 139 replicas to be able to reject at all.
@@ -26,13 +28,13 @@ Bonferroni or Holm would need R ≥ 7/α − 1 = 139 replicas to be able to reje
 from __future__ import annotations
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 from scipy.signal import lfilter
 
-from ..data.creep_state import difference_sd, smooth_creep
+from ..data.creep_state import smooth_creep
 from ..data.observer import lowpass_foh
 from ..data.vehicle import GRAVITY, Vehicle
+from ..status import Status
 from . import extensions as ext
 from . import fitting
 from .signals import from_columns
@@ -41,14 +43,7 @@ RAW = ("time", "vehicle_speed", "wheel_speed", "traction_torque")
 #: Replicas of the null (the smallest R for which p ≤ 0.05 is attainable is 19) and the level.
 N_REPLICAS = 19
 ALPHA = 0.05
-#: How replicas are made: ``"measured"`` keeps the recording's measured speeds (default) and
-#: ``"latent"`` re-draws speed noise about the smoothed speeds (experimental: measured on four
-#: clean foreign recordings of 30 s it flagged 1 of 3 finished and gave p = 1.0 to a 59 % gain on
-#: the third, i.e. its replicas are not faithful yet — see the branch report).
-RESYNTHESIS = "measured"
-#: Half-width [samples] of the moving average separating a signal's noise from its dynamics.
-HALF = 2
-#: Samples on a quantisation grid: at least this share of |x/q − round(x/q)| below 1e-6.
+#: Samples on a quantisation grid: at least this share within GRID_TOL steps of the grid.
 GRID_SHARE = 0.9
 #: Tolerance [steps] of "on the grid" (CSV files keep a finite number of digits).
 GRID_TOL = 1e-3
@@ -56,17 +51,14 @@ GRID_TOL = 1e-3
 
 @jax.jit
 def _fit_batch(starts, idx, actives, batch, n_valid):
-    """:func:`fitting.fit_candidates` of every replica in ``batch``, one after another."""
-    return jax.lax.map(
-        lambda s: fitting.fit_candidates(starts, idx, actives, s, n_valid)._replace(residual=jnp.zeros(0)),
-        batch,
-    )
+    """In-sample :func:`fitting.fit_candidates` (no folds) of every replica in ``batch``, one
+    after another: ``(sse (R, C), status (R, C))``."""
 
+    def one(s):
+        table = fitting.fit_candidates(starts, idx, actives, s, n_valid, folds=False)
+        return table.sse, table.status
 
-def local_mean(x, half: int = HALF) -> np.ndarray:
-    """Centred moving average over ``2·half + 1`` samples (edges padded with the end values)."""
-    kernel = np.ones(2 * half + 1) / (2 * half + 1)
-    return np.convolve(np.pad(np.asarray(x, float), half, mode="edge"), kernel, mode="valid")
+    return jax.lax.map(one, batch)
 
 
 def _second_difference_acf(rho):
@@ -84,22 +76,20 @@ _VAR_FACTOR, _LAG1 = _second_difference_acf(RHO_GRID)
 
 def noise_model(x) -> dict:
     """``{"sigma", "rho", "q"}`` of one signal's noise: level [signal units], AR(1) coefficient and
-    quantisation step (0 when the samples are not on a grid). Estimated from the second difference
-    ``Δ²x``, which suppresses the signal's slow dynamics (a 1 Hz swing is attenuated ~250× at
-    50 Hz): ρ matches the lag-1 correlation of ``Δ²x`` to its AR(1) value (−2/3 for white noise),
-    then ``σ² = var(Δ²x)/(6 − 8ρ + 2ρ²)``."""
+    quantisation step (:func:`grid_step`, 0 when the samples are not on a grid). Estimated from
+    the second difference ``Δ²x``, which suppresses the signal's slow dynamics (a 1 Hz swing is
+    attenuated ~250× at 50 Hz): ρ matches the lag-1 correlation of ``Δ²x`` to its AR(1) value
+    (−2/3 for white noise), then ``σ² = var(Δ²x)/(6 − 8ρ + 2ρ²)`` with the quantisation's share
+    ``q²/12`` taken out (it is put back by rounding the replica to the grid)."""
     x = np.asarray(x, float)
     d2 = np.diff(x, 2)
     d2 = d2 - d2.mean()
     r1 = float(np.dot(d2[1:], d2[:-1]) / max(np.dot(d2, d2), 1e-300))
     k = int(np.argmin(np.abs(_LAG1 - r1)))
     rho = float(RHO_GRID[k])
-    sigma = float(np.sqrt(np.mean(d2 * d2) / _VAR_FACTOR[k]))
-    steps = np.abs(np.diff(x))
-    steps = steps[steps > 0]
-    q = float(np.min(steps)) if steps.size else 0.0
-    on_grid = q > 0 and np.mean(np.abs(x / q - np.round(x / q)) < 1e-6) >= GRID_SHARE
-    return {"sigma": sigma, "rho": rho, "q": q if on_grid else 0.0}
+    var = float(np.mean(d2 * d2) / _VAR_FACTOR[k])
+    q = grid_step(x)
+    return {"sigma": float(np.sqrt(max(var - q * q / 12.0, 0.25 * var))), "rho": rho, "q": q}
 
 
 def _noisy(clean, model, rng):
@@ -114,7 +104,7 @@ def _noisy(clean, model, rng):
     return np.round(x / model["q"]) * model["q"] if model["q"] > 0 else x
 
 
-def _grid_step(x) -> float:
+def grid_step(x) -> float:
     """Quantisation step of a signal (0 when its samples are not on a grid)."""
     steps = np.abs(np.diff(x))
     steps = steps[steps > 0]
@@ -123,44 +113,9 @@ def _grid_step(x) -> float:
     return q if on_grid else 0.0
 
 
-def residual_model(raw, latent, floor: float = 0.0, q=None) -> dict:
-    """``{"sigma", "rho", "q"}`` of a speed sensor's noise from its residual about the smoothed
-    latent speed: lag-1 autocorrelation ρ (clipped to [0, 0.98]), the level σ with the
-    quantisation's share q²/12 taken out (it is put back by rounding the replica to the grid)."""
-    e = np.asarray(raw, float) - np.asarray(latent, float)
-    e = e - e.mean()
-    q = _grid_step(np.asarray(raw, float)) if q is None else q
-    rho = float(np.clip(np.dot(e[1:], e[:-1]) / max(np.dot(e, e), 1e-300), 0.0, 0.98))
-    sigma = float(np.sqrt(max(np.mean(e * e) - q * q / 12.0, 0.25 * np.mean(e * e), floor**2)))
-    return {"sigma": sigma, "rho": rho, "q": q}
-
-
-def replicas_measured(columns: dict, vehicle: Vehicle, p_base, n_replicas: int, seed: int) -> tuple:
-    """``(replica column dicts, noise models)``, speeds kept as measured (the default, see
-    :data:`RESYNTHESIS`): the torque follows the base fit along the locally averaged measured
-    speeds, plus torque noise from :func:`noise_model`."""
-    t = np.asarray(columns["time"], float)
-    raw = {k: np.asarray(columns[k], float) for k in RAW}
-    models = {k: noise_model(raw[k]) for k in RAW[1:]}
-    slow = from_columns({"time": t, **{k: local_mean(raw[k]) for k in RAW[1:]}}, vehicle)
-    _, mu = ext.predict(np.asarray(p_base), np.zeros(ext.N_EXTRA, bool), slow)
-    measured = from_columns(raw, vehicle)
-    scale = vehicle.axle_load_kg * GRAVITY * vehicle.wheel_radius_m
-    clean_torque = (np.asarray(mu) + np.asarray(measured.deriv_mu)) * scale
-    rng = np.random.default_rng(seed)
-    out = [
-        {**raw, "traction_torque": _noisy(clean_torque, models["traction_torque"], rng)}
-        for _ in range(n_replicas)
-    ]
-    return out, models
-
-
-def replicas_latent(columns: dict, vehicle: Vehicle, p_base, n_replicas: int, seed: int) -> tuple:
-    """``(replica column dicts, noise models)`` re-synthesised from the smoothed latent speeds
-    (experimental, :data:`RESYNTHESIS` = ``"latent"``): fresh speed noise (level and AR(1) from the
-    residual about the RTS-smoothed speeds, floored by the Δ³ white level; quantised on the
-    recording's grid), torque = base fit along the latent creep + the latent wheel dynamics, plus
-    white torque noise at the Δ³ level."""
+def replicas(columns: dict, vehicle: Vehicle, p_base, n_replicas: int, seed: int) -> tuple:
+    """``(replica column dicts, torque noise model)``: measured speeds kept, torque re-synthesised
+    from the base fit along the smoothed latent creep (module docstring)."""
     t = np.asarray(columns["time"], float)
     raw = {k: np.asarray(columns[k], float) for k in RAW}
     est = smooth_creep(
@@ -173,70 +128,54 @@ def replicas_latent(columns: dict, vehicle: Vehicle, p_base, n_replicas: int, se
         vehicle.axle_load_kg,
     )
     v_lat = np.asarray(est.vehicle_speed)
-    w_lat = v_lat + np.asarray(est.slip)
-    floor_w, floor_v = (float(x) for x in np.asarray(est.measurement_sd))
-    models = {
-        "vehicle_speed": residual_model(raw["vehicle_speed"], v_lat, floor_v),
-        "wheel_speed": residual_model(raw["wheel_speed"], w_lat, floor_w),
-    }
-    scale = vehicle.axle_load_kg * GRAVITY * vehicle.wheel_radius_m
-    none = np.zeros(ext.N_EXTRA, bool)
     latent = from_columns(
-        {"time": t, "vehicle_speed": v_lat, "wheel_speed": w_lat, "traction_torque": raw["traction_torque"]},
-        vehicle,
-    )
-    _, mu = ext.predict(np.asarray(p_base), none, latent)
-    clean_torque = (np.asarray(mu) + np.asarray(latent.deriv_mu)) * scale
-    q_t = _grid_step(raw["traction_torque"])
-    sd_t = float(difference_sd(raw["traction_torque"]))
-    models["traction_torque"] = {
-        "sigma": float(np.sqrt(max(sd_t**2 - q_t**2 / 12, 0.25 * sd_t**2))),
-        "rho": 0.0,
-        "q": q_t,
-    }
-    rng = np.random.default_rng(seed)
-    out = [
         {
             "time": t,
-            "vehicle_speed": _noisy(v_lat, models["vehicle_speed"], rng),
-            "wheel_speed": _noisy(w_lat, models["wheel_speed"], rng),
-            "traction_torque": _noisy(clean_torque, models["traction_torque"], rng),
-        }
-        for _ in range(n_replicas)
-    ]
-    return out, models
+            "vehicle_speed": v_lat,
+            "wheel_speed": v_lat + np.asarray(est.slip),
+            "traction_torque": raw["traction_torque"],
+        },
+        vehicle,
+    )
+    _, mu = ext.predict(np.asarray(p_base), np.zeros(ext.N_EXTRA, bool), latent)
+    scale = vehicle.axle_load_kg * GRAVITY * vehicle.wheel_radius_m
+    clean_torque = (np.asarray(mu) + np.asarray(latent.deriv_mu)) * scale
+    model = noise_model(raw["traction_torque"])
+    rng = np.random.default_rng(seed)
+    out = [{**raw, "traction_torque": _noisy(clean_torque, model, rng)} for _ in range(n_replicas)]
+    return out, model
 
 
-def null_gains(
-    columns, vehicle, p_base, tau_heat, rows, merge, n_valid: int, n_replicas: int = N_REPLICAS, seed: int = 0
+def null_statistics(
+    columns, mask, vehicle, p_base, tau_heat, rows, merge, n_valid: int, n_replicas: int = N_REPLICAS, seed=0
 ) -> tuple:
-    """Round-1 gains (R, C − 1) of every replica and the noise models.
+    """``(statistics (R, C − 1), torque noise model)``: every replica's :func:`statistic` of the
+    round-1 candidates.
 
     ``rows = (starts, idx, actives)`` are the observed recording's round-1 rows (base first) and
     ``merge(table) -> table`` the same post-processing (best radius start); ``tau_heat`` the
-    thermal lag picked on the recording. Replicas are fitted one after another
-    (:func:`jax.lax.map` inside one compiled program), so memory does not grow with R.
+    thermal lag picked on the recording; ``mask`` its selected samples.
     """
-    make = replicas_latent if RESYNTHESIS == "latent" else replicas_measured
-    cols, models = make(columns, vehicle, p_base, n_replicas, seed)
+    cols, model = replicas(columns, vehicle, p_base, n_replicas, seed)
     sigs = []
     for c in cols:
-        s = from_columns(c, vehicle)
+        s = from_columns(c, vehicle, mask=mask)
         s = s._replace(heat=lowpass_foh(s.time, s.power, tau_heat))
         sigs.append(fitting.pad_signals(s))
     batch = jax.tree_util.tree_map(lambda *x: np.stack(x), *sigs)
-    tables = _fit_batch(*rows, batch, n_valid)
-    gains = []
-    for r in range(n_replicas):
-        table = merge({k: np.array(v[r]) for k, v in tables._asdict().items() if k != "residual"})
-        held = table["heldout_mae"]
-        ok = (table["status"] == 0) & (table["fold_status"] == 0)
-        g = np.where(ok[1:], 1.0 - held[1:] / held[0], -np.inf)
-        gains.append(g)
-    return np.array(gains), models
+    sse, status = (np.asarray(x) for x in _fit_batch(*rows, batch, n_valid))
+    stats = [statistic(merge({"sse": sse[r].copy(), "status": status[r].copy()})) for r in range(n_replicas)]
+    return np.array(stats), model
+
+
+def statistic(table: dict) -> np.ndarray:
+    """``1 − SSE_c/SSE_0`` of the candidates (rows 1…) of a fit table against its base row 0;
+    −inf where a fit did not converge (such a candidate is never ranked)."""
+    ok = table["status"][1:] == int(Status.CONVERGED)
+    return np.where(ok, 1.0 - table["sse"][1:] / table["sse"][0], -np.inf)
 
 
 def max_t_pvalues(observed, null) -> np.ndarray:
-    """Max-T p-values of the observed gains (C,) against replica gains (R, C)."""
+    """Max-T p-values of the observed statistics (C,) against the replicas' (R, C)."""
     top = np.max(null, axis=1)
     return (1.0 + np.sum(top[None, :] >= np.asarray(observed)[:, None], axis=1)) / (top.size + 1.0)
