@@ -41,8 +41,8 @@ def _row(params, active, sig, tau_th: float) -> dict:
     """Named parameters of one fit: the Polach five, the active extras (with the rail change's time
     ``t_change_s`` beside its fraction ``u_change``) and thermal softening's grid-picked lag."""
     theta, extras = ext.unpack(np.asarray(params), np.asarray(active))
-    out = dict(zip(PARAM_NAMES, map(float, theta)))
-    out.update({k: float(extras[k]) for k, on in zip(ext.EXTRA_NAMES, np.asarray(active)) if on})
+    out = dict(zip(PARAM_NAMES, map(float, theta), strict=True))
+    out.update({k: float(extras[k]) for k, on in zip(ext.EXTRA_NAMES, np.asarray(active), strict=True) if on})
     if "u_change" in out:
         out["t_change_s"] = float(sig.time[0] + out["u_change"] * sig.duration)
     if "softening" in out:
@@ -121,7 +121,7 @@ def _generic(sig, residual, mu_pred) -> dict:
     xi = fit[0]
     mae = np.mean(np.abs(residual[keep]))
     return {
-        "terms": {n: float(c) for n, c in zip(["const"] + names, xi) if c != 0.0},
+        "terms": {n: float(c) for n, c in zip(["const"] + names, xi, strict=True) if c != 0.0},
         "mae": float(np.mean(np.abs(residual - features.stlsq_predict(phi, fit))[keep])),
         "heldout_mae": float(np.mean(np.abs(held[keep]))),
         "gain": float(1.0 - np.mean(np.abs(held[keep])) / mae),
@@ -141,10 +141,12 @@ def diagnose(
     whole recording, so a selected sample keeps its filter history); ``n_replicas`` clean
     re-synthesised replicas (seeded by ``seed``) form its null (:mod:`.null`; 0 skips it and every
     p-value is null)."""
-    sig = from_columns(columns, vehicle, name, mask)
-    keep = np.asarray(sig.weight) > 0
+    keep = np.ones(len(columns["time"]), bool) if mask is None else np.asarray(mask, bool)
     if keep.sum() < 50:
         raise InputError(f"{name}: diagnosis needs at least 50 selected samples, got {int(keep.sum())}")
+    from_columns(columns, vehicle, name)  # checks the columns before the smoother reads them
+    latent = null.latent_speeds(columns, vehicle)
+    sig = from_columns(columns, vehicle, name, keep, latent)
     n_valid = int(sig.time.shape[0])
     p_base, base_status = fitting.fit_base(fitting.pad_signals(sig), n_valid)
     none = np.zeros(ext.N_EXTRA, bool)
@@ -172,6 +174,7 @@ def diagnose(
         null_stats, noise = null.null_statistics(
             columns,
             keep,
+            latent,
             vehicle,
             p_base,
             tau_th,
@@ -266,7 +269,7 @@ def diagnose(
         "null": {
             "replicas": n_replicas,
             "alpha": null.ALPHA,
-            "torque_noise": noise,
+            "noise": noise,
             "critical_sse_reduction": critical,
             "method": "parametric bootstrap on this recording (measured speeds, torque from the base "
             "fit along the smoothed creep), max-T p-values of the in-sample SSE reduction",

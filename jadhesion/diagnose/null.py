@@ -43,6 +43,8 @@ RAW = ("time", "vehicle_speed", "wheel_speed", "traction_torque")
 #: Replicas of the null (the smallest R for which p ≤ 0.05 is attainable is 19) and the level.
 N_REPLICAS = 19
 ALPHA = 0.05
+#: Scales κ of the smoother's residual tried when matching the replicas' residual power (0.1 steps).
+KAPPA_GRID = np.arange(0.0, 3.01, 0.1)
 #: Samples on a quantisation grid: at least this share within GRID_TOL steps of the grid.
 GRID_SHARE = 0.9
 #: Tolerance [steps] of "on the grid" (CSV files keep a finite number of digits).
@@ -113,53 +115,77 @@ def grid_step(x) -> float:
     return q if on_grid else 0.0
 
 
-def replicas(columns: dict, vehicle: Vehicle, p_base, n_replicas: int, seed: int) -> tuple:
-    """``(replica column dicts, torque noise model)``: measured speeds kept, torque re-synthesised
-    from the base fit along the smoothed latent creep (module docstring)."""
-    t = np.asarray(columns["time"], float)
-    raw = {k: np.asarray(columns[k], float) for k in RAW}
+def error_scale(data_ms: float, torque_var: float, mu_of_kappa) -> float:
+    """The smallest κ in :data:`KAPPA_GRID` whose replica residual power ``mean(r_κ²) + torque_var``
+    about the base fit reaches the recording's own ``data_ms`` (the largest κ when none does);
+    ``mu_of_kappa(κ)`` is the deterministic replica residual r_κ on the selected samples."""
+    for kappa in KAPPA_GRID:
+        if np.mean(np.square(mu_of_kappa(kappa))) + torque_var >= data_ms:
+            return float(kappa)
+    return float(KAPPA_GRID[-1])
+
+
+def latent_speeds(columns: dict, vehicle: Vehicle) -> tuple:
+    """``(v̂, v̂_w)`` [m/s]: the Kalman/RTS smoother's latent vehicle and wheel speeds
+    (:func:`jadhesion.data.creep_state.smooth_creep`), the regressors of every diagnosis fit."""
     est = smooth_creep(
-        t,
-        raw["wheel_speed"],
-        raw["vehicle_speed"],
-        raw["traction_torque"],
+        *(np.asarray(columns[k], float) for k in ("time", "wheel_speed", "vehicle_speed", "traction_torque")),
         vehicle.wheelset_inertia_kgm2,
         vehicle.wheel_radius_m,
         vehicle.axle_load_kg,
     )
-    v_lat = np.asarray(est.vehicle_speed)
-    latent = from_columns(
-        {
-            "time": t,
-            "vehicle_speed": v_lat,
-            "wheel_speed": v_lat + np.asarray(est.slip),
-            "traction_torque": raw["traction_torque"],
-        },
-        vehicle,
-    )
-    _, mu = ext.predict(np.asarray(p_base), np.zeros(ext.N_EXTRA, bool), latent)
+    v = np.asarray(est.vehicle_speed)
+    return v, v + np.asarray(est.slip)
+
+
+def replicas(columns: dict, vehicle: Vehicle, p_base, n_replicas: int, seed: int, mask, latent) -> tuple:
+    """``(replica column dicts, {"torque": noise model, "kappa": κ})``: measured speeds kept (so
+    the regressors, the latent speeds ``latent = (v̂, v̂_w)``, are the recording's), torque
+    re-synthesised from the base fit along the creep path ``ŝ − κ ê`` (module docstring; κ matched
+    on the selected samples ``mask``)."""
+    raw = {k: np.asarray(columns[k], float) for k in RAW}
+    keep = np.asarray(mask, bool)
+    v_lat, w_lat = latent
+    e_v, e_w = raw["vehicle_speed"] - v_lat, raw["wheel_speed"] - w_lat
     scale = vehicle.axle_load_kg * GRAVITY * vehicle.wheel_radius_m
-    clean_torque = (np.asarray(mu) + np.asarray(latent.deriv_mu)) * scale
+    none = np.zeros(ext.N_EXTRA, bool)
+    measured = from_columns(raw, vehicle, regressors=latent)
+    smooth_deriv = np.asarray(from_columns({**raw, "wheel_speed": w_lat}, vehicle).deriv_mu)
     model = noise_model(raw["traction_torque"])
+
+    def path_mu(kappa):
+        sig = measured._replace(speed=v_lat - kappa * e_v, wheel_speed=w_lat - kappa * e_w)
+        return np.asarray(ext.predict(np.asarray(p_base), none, sig)[1])
+
+    mu_fit = path_mu(0.0)
+    dyn = smooth_deriv - np.asarray(measured.deriv_mu)
+    data_ms = float(np.mean(np.square(np.asarray(measured.adhesion) - mu_fit)[keep]))
+    kappa = error_scale(
+        data_ms,
+        (model["sigma"] ** 2 + model["q"] ** 2 / 12.0) / scale**2,
+        lambda k: (path_mu(k) + dyn - mu_fit)[keep],
+    )
+    clean_torque = (path_mu(kappa) + smooth_deriv) * scale
     rng = np.random.default_rng(seed)
     out = [{**raw, "traction_torque": _noisy(clean_torque, model, rng)} for _ in range(n_replicas)]
-    return out, model
+    return out, {"torque": model, "kappa": kappa}
 
 
 def null_statistics(
-    columns, mask, vehicle, p_base, tau_heat, rows, merge, n_valid: int, n_replicas: int = N_REPLICAS, seed=0
+    columns, mask, latent, vehicle, p_base, tau_heat, rows, merge, n_valid: int, n_replicas=N_REPLICAS, seed=0
 ) -> tuple:
-    """``(statistics (R, C − 1), torque noise model)``: every replica's :func:`statistic` of the
+    """``(statistics (R, C − 1), noise model)``: every replica's :func:`statistic` of the
     round-1 candidates.
 
     ``rows = (starts, idx, actives)`` are the observed recording's round-1 rows (base first) and
     ``merge(table) -> table`` the same post-processing (best radius start); ``tau_heat`` the
-    thermal lag picked on the recording; ``mask`` its selected samples.
+    thermal lag picked on the recording; ``mask`` its selected samples; ``latent`` its
+    :func:`latent_speeds`.
     """
-    cols, model = replicas(columns, vehicle, p_base, n_replicas, seed)
+    cols, model = replicas(columns, vehicle, p_base, n_replicas, seed, mask, latent)
     sigs = []
     for c in cols:
-        s = from_columns(c, vehicle, mask=mask)
+        s = from_columns(c, vehicle, mask=mask, regressors=latent)
         s = s._replace(heat=lowpass_foh(s.time, s.power, tau_heat))
         sigs.append(fitting.pad_signals(s))
     batch = jax.tree_util.tree_map(lambda *x: np.stack(x), *sigs)

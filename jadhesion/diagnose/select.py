@@ -7,8 +7,11 @@ confirms, and a threshold calibrated on clean simulated recordings bounds the fa
   lag-1 autocorrelation ρ1 of the reference residual (clipped to [10, n]).
 * Only candidates whose fits (full data and every fold) converged are ranked; the others are
   reported with their status.
-* An effect is accepted when it has the best held-out error, ``gain ≥ GAIN_THRESHOLD`` and
-  ``ΔBIC < 0``. Other candidates with ``gain ≥ AMBIGUITY · gain_best`` are reported with it as a set
+* An effect is accepted when it has the best held-out error, ``gain ≥ GAIN_THRESHOLD``,
+  ``ΔBIC < 0`` and, when the recording's null was run (:mod:`.null`), its max-T p-value is at
+  most :data:`ALPHA` (the null, not the threshold, is what holds the false alarms on recordings
+  from other generators and sensors; the second effect of round 2 has no null of its own).
+  Other candidates with ``gain ≥ AMBIGUITY · gain_best`` are reported with it as a set
   the recording cannot separate, with the experiment that would.
 
 :data:`GAIN_THRESHOLD` comes from :func:`validation.diagnose_cases.null_statistics` (the largest

@@ -17,7 +17,8 @@ this recording detects magnitudes above
     m_min = √(2 G SSE) / q,
 
 or, when the recording's null gave the critical in-sample SSE reduction ``T*`` (the 95th
-percentile of the replicas' largest, :mod:`.null`), above ``m_min = √(T* SSE) / q``.
+percentile of the replicas' largest, :mod:`.null`) and it is the stricter of the decision's two
+conditions, above ``m_min = √(T* SSE) / q``.
 
 and ``absorbed = 1 − q²/‖j − j̄‖²`` says how much of the signature the model takes up. The
 linearisation ignores the box (a Polach parameter on its bound absorbs less), held-out losses (a
@@ -95,7 +96,7 @@ def detectable_magnitudes(
         coef, *_ = np.linalg.lstsq(model, j, rcond=None)
         q2 = float(np.sum(np.square(j - model @ coef)))
         spread = float(np.sum(np.square(j - j.mean())))
-        level = 2.0 * threshold if critical is None else critical
+        level = 2.0 * threshold if critical is None else max(2.0 * threshold, critical)
         m_min = float(np.sqrt(level * sse / q2)) if q2 > 0 else float("inf")
         out[effect.name] = {
             "min_detectable": m_min,
