@@ -17,9 +17,9 @@ recovered parameter compares directly with a concealed magnitude. Effects (param
 typical magnitude, signature in the residual of the *base* fit):
 
 * ``rail_change`` — the rail condition changes at an unknown time: μ0 drops by the fraction m_R [-]
-  (0.1–0.5; negative = recovery) at ``t_c``, fitted as ``u = (t_c − t_0)/D`` ∈ [0.02, 0.98] (a change inside the recording: at
-  its very start a step would merely rescale μ0 past its bound); the
-  step is a logistic of width ``W = 1 % · D`` so ``t_c`` is differentiable. Signature: the residual
+  (0.1–0.5; negative = recovery) at ``t_c``, fitted as ``u = (t_c − t_0)/D`` ∈ [0.02, 0.98] (a
+  change inside the recording: at its very start a step would merely rescale μ0 past its bound);
+  the step is a logistic of width ``W = 1 % · D`` so ``t_c`` is differentiable. Signature: the residual
   changes level at one time (a CUSUM kink).
 * ``wheel_radius_error`` — true rolling radius ``r(1 + δ)`` (|δ| 0.5–5 %; wear 1220→1180 mm gives
   δ ≈ −0.03). The recorded wheel speed is ``ω r_nom``: the true slip is ``v_w(1 + δ) − v`` (an
@@ -106,7 +106,7 @@ def unpack(params, active):
     """Split ``params`` (N_PARAMS,) into Polach ``theta`` (5,) and a dict of extras (inactive ones
     at their neutral value)."""
     extra = jnp.where(active, params[5:], NEUTRAL)
-    return params[:5], dict(zip(EXTRA_NAMES, extra))
+    return params[:5], dict(zip(EXTRA_NAMES, extra, strict=True))
 
 
 def predict(params, active, sig: Signals):

@@ -12,20 +12,20 @@ recording's) and replaces the torque by what a clean Polach wheelset would have 
 the latent speeds and ``x̄`` their centred moving average over ±:data:`SLOW_HALF_WIDTH_S`. The
 regressor then differs from the replica's truth by ``(1 − γ)(x̂ − x̄)``: *classical* errors in
 variables (the truth is the smoother, slower path; the regressor scatters about it), which dilute
-Polach's slope and push an intercept into the fits as the recording's own sensor errors do. (A
-truth scattered about the regressor instead — Berkson errors — leaves the slope undiluted: such
-replicas gave radius/offset statistics 20× and more below the recording's on an effect-free
-recording of our simulator at realistic sensor noise.) γ ∈ [0, 1] is the largest value on :data:`GAMMA_GRID` whose replica residual power
-about the base fit reaches the recording's own (:func:`error_share`): the regressors' remaining
-error is not observable, and γ gives the replicas as much as the recording's base residual
-allows. The torque follows the wheelset dynamics along the smoothed wheel speed, ``T/(m g r) =
-μ_base + J d̂/(m g r)``, plus torque noise drawn from the model estimated on the recording
-(:func:`noise_model`: level σ, AR(1) coefficient ρ, quantisation step q); the observer then
-returns ``μ_base + J (d̂ − d)/(m g r)`` + noise, ``d`` from the measured wheel speed, as in the
+Polach's slope and push an intercept into the fits as the recording's own sensor errors do. (A truth
+scattered about the regressor instead — Berkson errors — leaves the slope undiluted: such replicas
+gave radius/offset statistics 20× and more below the recording's on an effect-free recording of our
+simulator at realistic sensor noise.) γ ∈ [0, 1] is the largest value on :data:`GAMMA_GRID` whose
+replica residual power about the base fit reaches the recording's own (:func:`error_share`): the
+regressors' remaining error is not observable, and γ gives the replicas as much as the recording's
+base residual allows. The torque follows the wheelset dynamics along the smoothed wheel speed,
+``T/(m g r) = μ_base + J d̂/(m g r)``, plus torque noise drawn from the model estimated on the
+recording (:func:`noise_model`: level σ, AR(1) coefficient ρ, quantisation step q); the observer
+then returns ``μ_base + J (d̂ − d)/(m g r)`` + noise, ``d`` from the measured wheel speed, as in the
 recording. Limits (measured in ``benchmarks/results/diagnose_null.json``): the regressor error of a
 replica is one fixed path, so replicas differ only by their torque noise (a narrow null); sensor
-noise correlated over longer than the window (the foreign generator's AR noise, τ 0.1–2 s) is
-only partly represented.
+noise correlated over longer than the window (the foreign generator's AR noise, τ 0.1–2 s) is only
+partly represented.
 
 **Test.** The statistic of candidate c is its in-sample relative reduction of the sum of squares
 against the base fit, ``T_c = 1 − SSE_c/SSE_0`` (no cross-validation folds in the null: the
