@@ -106,7 +106,7 @@ def main(argv=None) -> int:
     rng = np.random.default_rng(args.seed)
     gens = args.generators.split(",")
     cases = {g: [] for g in gens}
-    doc = {}
+    doc, head = {}, commit()  # the code this process imported
     with tempfile.TemporaryDirectory() as tmp:
         for i in range(args.n):  # interleaved, so a cut-short run has both generators
             for g in gens:
@@ -118,7 +118,7 @@ def main(argv=None) -> int:
                 cases[g].append(case)
                 print(f"{g} {i}: {case['verdict']} min p {case['min_p']} {case['seconds']:.1f} s", flush=True)
                 doc = {
-                    "commit": commit(),
+                    "commit": head,
                     "settings": {
                         **vars(args),
                         "replicas": 19,

@@ -52,7 +52,7 @@ def main(argv=None) -> int:
     parser.add_argument("--out", default=str(RESULTS / "diagnose_scale.json"))
     args = parser.parse_args(argv)
     env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parent.parent)}
-    rows = []
+    rows, head = [], commit()
     with tempfile.TemporaryDirectory() as tmp:
         for n in (int(x) for x in args.lengths.split(",")):
             path = str(Path(tmp) / f"rec_{n}.csv")
@@ -67,7 +67,7 @@ def main(argv=None) -> int:
             row = {"samples": n, **json.loads(out.strip().splitlines()[-1]), "loadavg": os.getloadavg()}
             rows.append(row)
             print(json.dumps(row), flush=True)
-            doc = {"commit": commit(), "settings": vars(args), "rows": rows}
+            doc = {"commit": head, "settings": vars(args), "rows": rows}
             Path(args.out).write_text(json.dumps(doc, indent=1))
     return 0
 

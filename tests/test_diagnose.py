@@ -108,10 +108,10 @@ def test_clean_is_none_and_base_fit(clean):
 def test_one_program_per_padded_length(clean):
     """Base fit, round 1 and round 2 share one compiled fit; another length in the same padding
     bucket compiles nothing new."""
-    diagnose(_raw(clean), clean.vehicle)
+    diagnose(_raw(clean), clean.vehicle, n_replicas=0)
     before = fitting.fit_candidates._cache_size()
     sim = simulate("sand", 4, [("rail_change", 0.3)], 1800, sensors="clean")
-    result = diagnose(_raw(sim), sim.vehicle)
+    result = diagnose(_raw(sim), sim.vehicle, n_replicas=0)
     assert result["second_round"] is not None  # round 2 ran
     assert fitting.fit_candidates._cache_size() == before
 
@@ -152,6 +152,19 @@ def test_unconverged_candidate_is_never_ranked():
     assert select.effects_from(rows, None) == (["speed_dependence"], [])
     rows[1]["status"] = "stalled"
     assert select.effects_from(rows, None) == ([], [])
+
+
+def test_effects_the_evidence_cannot_separate_form_a_set():
+    """A candidate with a positive held-out gain and a ΔBIC within BIC_SEPARATION of the verdict's
+    joins its indistinguishable set; one that the evidence separates does not."""
+    rows = [
+        {"name": "torque_offset", "gain": 0.05, "delta_bic": -50.0},
+        {"name": "wheel_radius_error", "gain": 0.01, "delta_bic": -50.0 + 0.5 * select.BIC_SEPARATION},
+        {"name": "load_transfer", "gain": 0.02, "delta_bic": -50.0 + 2.0 * select.BIC_SEPARATION},
+    ]
+    assert select.effects_from(rows, None) == (["torque_offset"], ["wheel_radius_error"])
+    rows[1]["gain"] = -0.01  # worse held out: not a rival
+    assert select.effects_from(rows, None) == (["torque_offset"], [])
 
 
 @pytest.mark.parametrize("name", sorted(CLEAR))

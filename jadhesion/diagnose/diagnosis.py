@@ -5,6 +5,8 @@ Output (JSON-ready dict, DESIGN §3): ``verdict`` (the primary effect's name or 
 ``effects`` (accepted effects in order, 0–2), ``candidates`` (round 1, best first: ``name``,
 ``params``, ``mae``, ``heldout_mae``, ``delta_bic``, ``gain``, ``evidence``), ``indistinguishable``
 (effects this recording cannot separate from the verdict, with the separating experiment),
+``verdict_set`` (the verdict and those effects: the data name one effect only when it has one
+member),
 ``second_round`` (gains of a second effect given the first, or null), ``base``/``extended``
 (``params``, ``mae``, ``heldout_mae``), ``generic`` (sparse discrepancy on
 the extended model's residual), ``sensitivity`` (per effect, the smallest magnitude this recording
@@ -246,6 +248,7 @@ def diagnose(
         "effects": effects,
         "candidates": candidates,
         "indistinguishable": [{"name": c, "experiment": select.experiment(effects[0], c)} for c in close],
+        "verdict_set": effects[:1] + list(close),
         "second_round": second_round,
         "base": {
             "params": _row(p_base, none, sig, tau_th),

@@ -48,8 +48,9 @@ def _effect_sentence(name: str, p: dict, vehicle: Vehicle) -> str:
         )
     if name == "load_transfer":
         return (
-            f"the measured axle's load changes with tractive effort: N(1 − {p['load_m']:.2f}·"
-            "F_t/(M g)); correct the axle load for load transfer"
+            f"the measured axle's load changes with the locomotive's pitch: N(1 − {p['load_m']:.2f}·"
+            f"F_t/(M g) − {p.get('load_accel', 0.0):.2f}·a/g) (tractive effort and acceleration); "
+            "correct the axle load for load transfer"
         )
     raise ValueError(name)
 

@@ -38,9 +38,9 @@ N_FOLDS = 5
 MAX_STEPS, MAX_STEPS_FOLD = 200, 100
 OPTIONS = BoxLMOptions(ftol=1e-9, xtol=1e-7, gtol=1e-10)
 #: Rows of every :func:`fit_candidates` call (base + 7 effects + 2 extra radius starts) and free
-#: parameters per row (the Polach five + at most three extras: a pair with the rail change).
+#: parameters per row (the Polach five + at most four extras: rail change with load transfer).
 N_CANDIDATES = 10
-WIDTH = 8
+WIDTH = 9
 #: Recordings are padded to a multiple of this many samples (one compiled program per multiple).
 PAD_BLOCK = 1000
 #: Base-fit starts: a fixed space-filling design — the first :data:`N_SCREEN` points of the
