@@ -17,7 +17,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import subprocess
 import sys
 import tempfile
 import time
@@ -25,21 +24,13 @@ from pathlib import Path
 
 import numpy as np
 
-from benchmarks.diagnose_blind import clopper_pearson
+from benchmarks.diagnose_blind import clopper_pearson, commit
 from jadhesion.cli.diagnose_run import diagnose_file
 from jadhesion.config import enable_compilation_cache, enable_x64
 from validation.diagnose_cases import run_case
 from validation.foreign_generator import generate, write
 
 RESULTS = Path(__file__).resolve().parent / "results"
-
-
-def commit() -> str:
-    """``git rev-parse HEAD`` (with ``+dirty`` when the tree has changes)."""
-    root = Path(__file__).resolve().parent.parent
-    head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=root, capture_output=True, text=True).stdout
-    dirty = subprocess.run(["git", "status", "--porcelain"], cwd=root, capture_output=True, text=True).stdout
-    return head.strip() + ("+dirty" if dirty.strip() else "")
 
 
 def summary_of(d: dict) -> dict:

@@ -3,8 +3,9 @@
 For each length a recording of our simulator (dry, seed 0, ``sensors="realistic"``) is written to
 CSV; a fresh process then runs the CLI's code path on it (load, selection, diagnosis with the
 null's replicas) and reports its wall time and peak resident memory (``ru_maxrss``, the whole
-process: Python, JAX, the compiled programs and the data). The result file records the commit,
-the settings and the load average (2 shared cores: timings are noisy).
+process: Python, JAX, the compiled programs and the data), and its CPU seconds (all threads; less
+sensitive than wall time to the other jobs on the 2 shared cores). The result file records the
+commit, the settings and the load average.
 
     python -m benchmarks.diagnose_scale [--lengths 5000,20000,60000,180000] [--replicas 19]
 """
@@ -19,7 +20,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from benchmarks.diagnose_null import commit
+from benchmarks.diagnose_blind import commit
 
 RESULTS = Path(__file__).resolve().parent / "results"
 CHILD = """
@@ -28,8 +29,10 @@ from jadhesion.config import enable_compilation_cache, enable_x64
 enable_x64(); enable_compilation_cache()
 from jadhesion.cli.diagnose_run import diagnose_file
 start = time.perf_counter()
+cpu = time.process_time()
 result, _ = diagnose_file(sys.argv[1], replicas=int(sys.argv[2]))
-print(json.dumps({"seconds": time.perf_counter() - start, "verdict": result["verdict"],
+print(json.dumps({"seconds": time.perf_counter() - start, "cpu_seconds": time.process_time() - cpu,
+    "verdict": result["verdict"],
     "used": result["selection"]["used"],
     "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}))
 """
