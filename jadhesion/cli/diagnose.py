@@ -12,11 +12,12 @@ This module defines the arguments only; :mod:`.diagnose_run` does the work.
 
 from __future__ import annotations
 
+from . import COMMANDS
 from .recording_options import add_recording_options
 
 
 def register(sub) -> None:
-    p = sub.add_parser("diagnose", help="name the missing physics behind a Polach misfit")
+    p = sub.add_parser("diagnose", help=COMMANDS["diagnose"])
     p.add_argument("file", help="recording (CSV, Parquet or .mat with the raw signals)")
     p.add_argument(
         "--report", metavar="DIR", default=None, help="write a Markdown report with figures into DIR"

@@ -14,6 +14,10 @@ the accuracy above the documented threshold on each new run.
 diagnoser can still report it inside an indistinguishable set (``in_set``, the magnitude above
 which the truth is the verdict *or* in its reported set ≥ 90 % of the time, where one exists).
 Units are those of the simulator's catalogue (:mod:`jadhesion.models.effects`).
+
+These thresholds were measured before the per-recording null (:mod:`.null`) joined the decision
+and before the simulator's default sensors became ``"realistic"``; the blind benchmark's
+``top1_above_documented`` says how they hold now (``benchmarks/results/diagnose_blind.json``).
 """
 
 from __future__ import annotations
