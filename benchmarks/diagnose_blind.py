@@ -247,6 +247,7 @@ def main(argv=None) -> int:
             cases = json.load(fh)
         redecide(cases)
         summary = summarise(cases)
+        summary["commit"] = commit()  # the summarising code; the cases carry no commit of their own
         summary["settings"] = {"from_cases": args.from_cases, "gain_threshold": GAIN_THRESHOLD}
         return report(summary, args.json, args.out)
     enable_x64()
