@@ -4,7 +4,8 @@ JSON keys (DESIGN §3): ``verdict`` — the primary effect (a catalogue name) or
 string; ``effects`` — the accepted effects in order (0, 1 or 2; with two, ``verdict`` is the first);
 ``candidates`` (name, params, mae, heldout_mae, delta_bic, gain, sse_reduction, status, p_value,
 evidence), ``indistinguishable``, ``base`` and ``extended`` (params, mae, heldout_mae, status),
-``generic``, ``null`` (replicas, level, the recording's torque noise model, critical statistic),
+``generic``, ``null`` (replicas, level, the recording's torque noise model and error share γ, critical
+statistic), ``verdict_set``,
 ``selection`` (the samples used: ``--phase``, ``--start``/``--end``), ``explanation``, ``seconds``.
 
 This module defines the arguments only; :mod:`.diagnose_run` does the work.
