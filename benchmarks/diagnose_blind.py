@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import subprocess
 import sys
 import tempfile
 from pathlib import Path
@@ -41,6 +42,14 @@ from validation.diagnose_cases import MAGNITUDE_RANGE, random_effects, run_case
 RESULTS = Path(__file__).resolve().parent / "results"
 #: Mix of the main cases: clean, one effect, two effects.
 P_CLEAN, P_PAIR = 0.15, 0.1
+
+
+def commit() -> str:
+    """``git rev-parse HEAD`` (with ``+dirty`` when the tree has changes)."""
+    root = Path(__file__).resolve().parent.parent
+    head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=root, capture_output=True, text=True).stdout
+    dirty = subprocess.run(["git", "status", "--porcelain"], cwd=root, capture_output=True, text=True).stdout
+    return head.strip() + ("+dirty" if dirty.strip() else "")
 
 
 def draw(rng) -> list:
@@ -120,7 +129,7 @@ def summarise(cases) -> dict:
         lo, hi = MAGNITUDE_RANGE[name]
         edges = np.exp(np.linspace(np.log(lo), np.log(hi), 4))
         bins = []
-        for a, b in zip(edges[:-1], edges[1:]):
+        for a, b in zip(edges[:-1], edges[1:], strict=True):
             sel = [i for i, m in enumerate(mags) if a <= m <= b]
             bins.append(
                 {
@@ -161,7 +170,7 @@ def summarise(cases) -> dict:
             "top1_below_min_detectable": _rate([hits[i] for i in hidden]),
             "confused_with": {k: v for k, v in confusion[name].items() if v and k != name},
             "median_rel_error": float(np.median(errors)) if errors else None,
-            "cases": [[m, bool(h), bool(s)] for m, h, s in zip(mags, hits, in_set)],
+            "cases": [[m, bool(h), bool(s)] for m, h, s in zip(mags, hits, in_set, strict=True)],
         }
     pairs = [c for c in main if len(c["effects"]) == 2]
     truth_sets = [{e[0] for e in c["effects"]} for c in pairs]
@@ -187,8 +196,12 @@ def summarise(cases) -> dict:
         },
         "pairs": {
             "n": len(pairs),
-            "both_named": _rate([set(c["diagnosis"]["effects"]) == t for c, t in zip(pairs, truth_sets)]),
-            "one_named": _rate([bool(set(c["diagnosis"]["effects"]) & t) for c, t in zip(pairs, truth_sets)]),
+            "both_named": _rate(
+                [set(c["diagnosis"]["effects"]) == t for c, t in zip(pairs, truth_sets, strict=True)]
+            ),
+            "one_named": _rate(
+                [bool(set(c["diagnosis"]["effects"]) & t) for c, t in zip(pairs, truth_sets, strict=True)]
+            ),
         },
         "base_params_clean_median_abs_error": {
             k: float(np.median(v)) if v else None for k, v in base_err.items()
@@ -234,10 +247,12 @@ def main(argv=None) -> int:
             cases = json.load(fh)
         redecide(cases)
         summary = summarise(cases)
+        summary["commit"] = commit()  # the summarising code; the cases carry no commit of their own
         summary["settings"] = {"from_cases": args.from_cases, "gain_threshold": GAIN_THRESHOLD}
         return report(summary, args.json, args.out)
     enable_x64()
     enable_compilation_cache()
+    head = commit()
     rng = np.random.default_rng(args.seed)
     total = args.n + args.null
     progress = Progress(total, "diagnoses", enabled=not args.json or sys.stderr.isatty())
@@ -255,6 +270,7 @@ def main(argv=None) -> int:
             with open(args.cases, "w") as fh:
                 json.dump(cases, fh, default=float)
     summary = summarise(cases)
+    summary["commit"] = head
     summary["settings"] = {
         "n": args.n,
         "null": args.null,
@@ -262,6 +278,9 @@ def main(argv=None) -> int:
         "seed": args.seed,
         "samples": args.samples,
         "gain_threshold": GAIN_THRESHOLD,
+        "replicas": 19,
+        "phase": "traction",
+        "sensors": "realistic",
     }
     return report(summary, args.json, args.out)
 

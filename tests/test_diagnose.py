@@ -108,10 +108,10 @@ def test_clean_is_none_and_base_fit(clean):
 def test_one_program_per_padded_length(clean):
     """Base fit, round 1 and round 2 share one compiled fit; another length in the same padding
     bucket compiles nothing new."""
-    diagnose(_raw(clean), clean.vehicle)
+    diagnose(_raw(clean), clean.vehicle, n_replicas=0)
     before = fitting.fit_candidates._cache_size()
     sim = simulate("sand", 4, [("rail_change", 0.3)], 1800, sensors="clean")
-    result = diagnose(_raw(sim), sim.vehicle)
+    result = diagnose(_raw(sim), sim.vehicle, n_replicas=0)
     assert result["second_round"] is not None  # round 2 ran
     assert fitting.fit_candidates._cache_size() == before
 
@@ -152,6 +152,19 @@ def test_unconverged_candidate_is_never_ranked():
     assert select.effects_from(rows, None) == (["speed_dependence"], [])
     rows[1]["status"] = "stalled"
     assert select.effects_from(rows, None) == ([], [])
+
+
+def test_effects_the_evidence_cannot_separate_form_a_set():
+    """A candidate with a positive held-out gain and a ΔBIC within BIC_SEPARATION of the verdict's
+    joins its indistinguishable set; one that the evidence separates does not."""
+    rows = [
+        {"name": "torque_offset", "gain": 0.05, "delta_bic": -50.0},
+        {"name": "wheel_radius_error", "gain": 0.01, "delta_bic": -50.0 + 0.5 * select.BIC_SEPARATION},
+        {"name": "load_transfer", "gain": 0.02, "delta_bic": -50.0 + 2.0 * select.BIC_SEPARATION},
+    ]
+    assert select.effects_from(rows, None) == (["torque_offset"], ["wheel_radius_error"])
+    rows[1]["gain"] = -0.01  # worse held out: not a rival
+    assert select.effects_from(rows, None) == (["torque_offset"], [])
 
 
 @pytest.mark.parametrize("name", sorted(CLEAR))
@@ -213,14 +226,42 @@ def test_max_t_pvalues_hold_their_level():
     assert rejections / 2000 <= 0.05 + 3 * np.sqrt(0.05 * 0.95 / 2000)
 
 
-def test_residual_model_and_grid_from_csv_digits():
-    """The speed-noise model of the latent re-synthesis: AR(1) level/colour about a known latent,
-    and a quantisation grid still found when values carry only ~9 significant digits."""
+def test_grid_from_csv_digits():
+    """A quantisation grid is still found when values carry only ~9 significant digits."""
     rng = np.random.default_rng(3)
     latent = np.linspace(2.0, 4.0, 20000)
     noise = null._noisy(np.zeros(latent.size), {"sigma": 2e-3, "rho": 0.6, "q": 0.0}, rng)
-    m = null.residual_model(latent + noise, latent)
-    assert abs(m["sigma"] / 2e-3 - 1) < 0.05 and abs(m["rho"] - 0.6) < 0.03 and m["q"] == 0.0
     q = 4.3239e-3
     x = np.array([float(f"{v:.9g}") for v in np.round((latent + noise) / q) * q])
-    assert abs(null._grid_step(x) / q - 1) < 1e-6
+    assert abs(null.grid_step(x) / q - 1) < 1e-6
+    assert null.grid_step(latent + noise) == 0.0
+
+
+def test_excluded_samples_do_not_enter_the_fits(clean):
+    """Samples outside the selection (weight 0) change neither the base fit nor the round-1 table:
+    garbage written into them leaves every fit as it was."""
+    raw = _raw(clean)
+    mask = np.ones(N, bool)
+    mask[200:400] = False
+    bad = {**raw, "traction_torque": np.where(mask, raw["traction_torque"], 5.0 * raw["traction_torque"])}
+    fits = []
+    for cols in (raw, bad):
+        sig = fitting.pad_signals(from_columns(cols, clean.vehicle, mask=mask))
+        fits.append(fitting.fit_base(sig, N))
+    np.testing.assert_allclose(fits[0][0], fits[1][0], rtol=1e-9, atol=1e-12)
+    assert fits[0][1] == fits[1][1] == Status.CONVERGED
+
+
+def test_cli_selection_options(tmp_path, capsys):
+    """``--start/--end`` and ``--phase`` choose the samples, and the JSON says which."""
+    sim = simulate("dry", 2, (), N, sensors="clean")
+    path = save_recording(_raw(sim), sim.vehicle, tmp_path / "rec.csv")
+    t = sim.columns["time"]
+    args = ["diagnose", str(path), "--json", "--replicas", "0", "--start", str(t[100]), "--end", str(t[1300])]
+    assert main(args) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["selection"]["phase"] == "traction"
+    assert 50 <= doc["selection"]["used"] <= 1201
+    assert all(c["p_value"] is None for c in doc["candidates"])
+    assert main(["diagnose", str(path), "--json", "--phase", "braking"]) == 2
+    assert "braking" in capsys.readouterr().err

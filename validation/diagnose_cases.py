@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from jadhesion.cli.common import Progress
-from jadhesion.cli.diagnose import diagnose_file
+from jadhesion.cli.diagnose_run import diagnose_file
 from jadhesion.config import enable_compilation_cache, enable_x64
 from jadhesion.data.recording import save_recording
 from jadhesion.data.scenarios import get_scenario

@@ -5,6 +5,8 @@ Output (JSON-ready dict, DESIGN §3): ``verdict`` (the primary effect's name or 
 ``effects`` (accepted effects in order, 0–2), ``candidates`` (round 1, best first: ``name``,
 ``params``, ``mae``, ``heldout_mae``, ``delta_bic``, ``gain``, ``evidence``), ``indistinguishable``
 (effects this recording cannot separate from the verdict, with the separating experiment),
+``verdict_set`` (the verdict and those effects: the data name one effect only when it has one
+member),
 ``second_round`` (gains of a second effect given the first, or null), ``base``/``extended``
 (``params``, ``mae``, ``heldout_mae``), ``generic`` (sparse discrepancy on
 the extended model's residual), ``sensitivity`` (per effect, the smallest magnitude this recording
@@ -20,6 +22,7 @@ import numpy as np
 
 from ..data.observer import lowpass_foh
 from ..data.vehicle import Vehicle
+from ..errors import InputError
 from ..models.polach import PARAM_NAMES
 from ..status import Status
 from . import extensions as ext
@@ -40,8 +43,8 @@ def _row(params, active, sig, tau_th: float) -> dict:
     """Named parameters of one fit: the Polach five, the active extras (with the rail change's time
     ``t_change_s`` beside its fraction ``u_change``) and thermal softening's grid-picked lag."""
     theta, extras = ext.unpack(np.asarray(params), np.asarray(active))
-    out = dict(zip(PARAM_NAMES, map(float, theta)))
-    out.update({k: float(extras[k]) for k, on in zip(ext.EXTRA_NAMES, np.asarray(active)) if on})
+    out = dict(zip(PARAM_NAMES, map(float, theta), strict=True))
+    out.update({k: float(extras[k]) for k, on in zip(ext.EXTRA_NAMES, np.asarray(active), strict=True) if on})
     if "u_change" in out:
         out["t_change_s"] = float(sig.time[0] + out["u_change"] * sig.duration)
     if "softening" in out:
@@ -105,40 +108,55 @@ def _n_extra(names) -> int:
 
 def _generic(sig, residual, mu_pred) -> dict:
     """Sparse discrepancy (STLSQ) on the library of residual-analysis signals, cross-validated on
-    the same contiguous blocks."""
+    the same contiguous blocks (selected samples only)."""
     lib = features.library(sig, mu_pred)
     names = [k for k in lib if k != "time"] + ["time"]
     phi = np.column_stack([lib[k] for k in names])
-    weights = np.asarray(fitting.fold_weights(residual.size))
+    keep = np.asarray(sig.weight) > 0
+    weights = np.asarray(fitting.fold_weights(residual.size, weight=sig.weight))
     held = np.zeros_like(residual)
     for w in weights[1:]:
+        out = (w == 0) & keep
         fit = features.stlsq(phi, residual, w)
-        held[w == 0] = (residual - features.stlsq_predict(phi, fit))[w == 0]
+        held[out] = (residual - features.stlsq_predict(phi, fit))[out]
     fit = features.stlsq(phi, residual, weights[0])
     xi = fit[0]
+    mae = np.mean(np.abs(residual[keep]))
     return {
-        "terms": {n: float(c) for n, c in zip(["const"] + names, xi) if c != 0.0},
-        "mae": float(np.mean(np.abs(residual - features.stlsq_predict(phi, fit)))),
-        "heldout_mae": float(np.mean(np.abs(held))),
-        "gain": float(1.0 - np.mean(np.abs(held)) / np.mean(np.abs(residual))),
+        "terms": {n: float(c) for n, c in zip(["const"] + names, xi, strict=True) if c != 0.0},
+        "mae": float(np.mean(np.abs(residual - features.stlsq_predict(phi, fit))[keep])),
+        "heldout_mae": float(np.mean(np.abs(held[keep]))),
+        "gain": float(1.0 - np.mean(np.abs(held[keep])) / mae),
     }
 
 
 def diagnose(
-    columns: dict, vehicle: Vehicle, name: str = "recording", n_replicas: int = null.N_REPLICAS, seed: int = 0
+    columns: dict,
+    vehicle: Vehicle,
+    name: str = "recording",
+    n_replicas: int = null.N_REPLICAS,
+    seed: int = 0,
+    mask=None,
 ) -> dict:
     """Diagnose a recording's raw columns (time, vehicle_speed, wheel_speed, traction_torque);
-    ``n_replicas`` clean re-synthesised replicas (seeded by ``seed``) form its null
-    (:mod:`.null`; 0 skips it and every p-value is null)."""
-    sig = from_columns(columns, vehicle, name)
+    ``mask`` (n,) bool: the samples the fits use (default all; the signals are computed on the
+    whole recording, so a selected sample keeps its filter history); ``n_replicas`` clean
+    re-synthesised replicas (seeded by ``seed``) form its null (:mod:`.null`; 0 skips it and every
+    p-value is null)."""
+    keep = np.ones(len(columns["time"]), bool) if mask is None else np.asarray(mask, bool)
+    if keep.sum() < 50:
+        raise InputError(f"{name}: diagnosis needs at least 50 selected samples, got {int(keep.sum())}")
+    from_columns(columns, vehicle, name)  # checks the columns before the smoother reads them
+    latent = null.latent_speeds(columns, vehicle)
+    sig = from_columns(columns, vehicle, name, keep, latent)
     n_valid = int(sig.time.shape[0])
     p_base, base_status = fitting.fit_base(fitting.pad_signals(sig), n_valid)
     none = np.zeros(ext.N_EXTRA, bool)
     target, pred = (np.asarray(x) for x in _predict(p_base, none, sig))
     r_base = target - pred
     lib = features.library(sig, pred)
-    sigs = features.signatures(r_base, lib)
-    drop, u_change, tau_th = features.starting_values(sig, r_base, pred)
+    sigs = features.signatures(r_base[keep], {k: v[keep] for k, v in lib.items()})
+    drop, u_change, tau_th = features.starting_values(sig, r_base * keep, pred * keep)
     sig = sig._replace(heat=lowpass_foh(sig.time, sig.power, tau_th))
     padded = fitting.pad_signals(sig)
     p0 = p_base.copy()
@@ -148,14 +166,17 @@ def diagnose(
 
     sets1 = [()] + [(n,) for n in ext.NAMES]
     t1, act1 = _fit_round(padded, n_valid, p0, sets1)
-    n_eff = select.effective_samples(r_base)
+    n_eff = select.effective_samples(r_base[keep])
     k1 = [_n_extra(s) for s in sets1]
     gain1, dbic1 = select.scores(t1["heldout_mae"], t1["sse"], k1, 0, n_eff)
     names1 = ["none"] + list(ext.NAMES)
-    p_values, noise = [None] * len(sets1), None
+    observed = null.statistic(t1)
+    p_values, noise, critical = [None] * len(sets1), None, None
     if n_replicas:
-        null_gain, noise = null.null_gains(
+        null_stats, noise = null.null_statistics(
             columns,
+            keep,
+            latent,
             vehicle,
             p_base,
             tau_th,
@@ -165,8 +186,9 @@ def diagnose(
             n_replicas,
             seed,
         )
-        ok = np.array([_status(t1, i) == "converged" for i in range(len(sets1))])
-        p_values = [None] + list(null.max_t_pvalues(np.where(ok[1:], gain1[1:], -np.inf), null_gain))
+        ok = np.array([_status(t1, i) == "converged" for i in range(1, len(sets1))])
+        p_values = [None] + list(null.max_t_pvalues(np.where(ok, observed, -np.inf), null_stats))
+        critical = float(np.quantile(np.max(null_stats, axis=1), 1.0 - null.ALPHA))
     candidates = []
     for i in np.argsort(t1["heldout_mae"][1:]) + 1:
         signal = features.REVEALING_SIGNAL[names1[i]]
@@ -178,6 +200,7 @@ def diagnose(
                 "heldout_mae": float(t1["heldout_mae"][i]),
                 "delta_bic": float(dbic1[i]),
                 "gain": float(gain1[i]),
+                "sse_reduction": float(observed[i - 1]),
                 "status": _status(t1, i),
                 "steps": int(t1["steps"][i]),
                 "p_value": None if p_values[i] is None else float(p_values[i]),
@@ -214,7 +237,7 @@ def diagnose(
         final = names1.index(effects[0])
     ext_params = _row(table["params"][final], acts[final], sig, tau_th)
     seen = sensitivity.detectable_magnitudes(
-        table["params"][final], acts[final], u_change, padded, n_valid, effects
+        table["params"][final], acts[final], u_change, padded, n_valid, effects, critical
     )
     t_ext, p_ext = (np.asarray(x) for x in _predict(table["params"][final], acts[final], sig))
     generic = _generic(sig, t_ext - p_ext, p_ext)
@@ -225,6 +248,7 @@ def diagnose(
         "effects": effects,
         "candidates": candidates,
         "indistinguishable": [{"name": c, "experiment": select.experiment(effects[0], c)} for c in close],
+        "verdict_set": effects[:1] + list(close),
         "second_round": second_round,
         "base": {
             "params": _row(p_base, none, sig, tau_th),
@@ -249,7 +273,9 @@ def diagnose(
             "replicas": n_replicas,
             "alpha": null.ALPHA,
             "noise": noise,
-            "method": "parametric bootstrap on this recording, max-T p-values",
+            "critical_sse_reduction": critical,
+            "method": "parametric bootstrap on this recording (measured speeds, torque from the base "
+            "fit along the smoothed creep), max-T p-values of the in-sample SSE reduction",
         },
     }
     result["explanation"] = explain(result, vehicle)

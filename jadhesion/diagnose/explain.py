@@ -18,7 +18,8 @@ def _effect_sentence(name: str, p: dict, vehicle: Vehicle) -> str:
         d = p["delta_r"]
         side = "larger" if d > 0 else "smaller"
         return (
-            f"the wheel's rolling radius is {abs(d):.1%} {side} than the nominal {r:.3f} m (≈ {r * (1 + d):.3f} m): the recorded wheel speed and the "
+            f"the wheel's rolling radius is {abs(d):.1%} {side} than the nominal {r:.3f} m "
+            f"(≈ {r * (1 + d):.3f} m): the recorded wheel speed and the "
             "torque-to-force conversion use the nominal radius, which shifts the creep in "
             "proportion to speed; measure the wheel diameter or calibrate it on a coasting run"
         )
@@ -42,12 +43,14 @@ def _effect_sentence(name: str, p: dict, vehicle: Vehicle) -> str:
     if name == "thermal_softening":
         return (
             "friction softens with recent frictional power: "
-            f"μ0/(1 + {p['softening']:.2f}·P/10 kW) with a thermal lag of about {p.get('tau_th_s', float('nan')):.1f} s"
+            f"μ0/(1 + {p['softening']:.2f}·P/10 kW) with a thermal lag of about "
+            f"{p.get('tau_th_s', float('nan')):.1f} s"
         )
     if name == "load_transfer":
         return (
-            f"the measured axle's load changes with tractive effort: N(1 − {p['load_m']:.2f}·"
-            "F_t/(M g)); correct the axle load for load transfer"
+            f"the measured axle's load changes with the locomotive's pitch: N(1 − {p['load_m']:.2f}·"
+            f"F_t/(M g) − {p.get('load_accel', 0.0):.2f}·a/g) (tractive effort and acceleration); "
+            "correct the axle load for load transfer"
         )
     raise ValueError(name)
 

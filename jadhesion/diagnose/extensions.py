@@ -8,7 +8,7 @@ cross-validation folds. The model predicts the observed adhesion ``mu_hat`` [-]:
 
     target = mu_hat + τ · d(torque_mu)/dt                   (observer output, torque re-aligned)
     w, s   = v_w (1 + δ) − v,  w / v                        (true rolling radius r (1 + δ))
-    L      = max(1 − m_L F_t/(M g), 0.1)                    (leading-axle load factor)
+    L      = max(1 − m_L F_t/(M g) − m_A a/g, 0.1)          (measured axle's load factor)
     μ0(t)  = μ0 (1 − m_R σ((t − t_c)/W)) (1 − m_V (v − v̄)/v̄) / (1 + m_T P_th/P_ref)
     pred   = (1 + δ) L μ_adh(s, w; kA, kS, μ0(t), A, B; k_eps L^(−1/3)) + β
 
@@ -17,9 +17,9 @@ recovered parameter compares directly with a concealed magnitude. Effects (param
 typical magnitude, signature in the residual of the *base* fit):
 
 * ``rail_change`` — the rail condition changes at an unknown time: μ0 drops by the fraction m_R [-]
-  (0.1–0.5; negative = recovery) at ``t_c``, fitted as ``u = (t_c − t_0)/D`` ∈ [0.02, 0.98] (a change inside the recording: at
-  its very start a step would merely rescale μ0 past its bound); the
-  step is a logistic of width ``W = 1 % · D`` so ``t_c`` is differentiable. Signature: the residual
+  (0.1–0.5; negative = recovery) at ``t_c``, fitted as ``u = (t_c − t_0)/D`` ∈ [0.02, 0.98] (a
+  change inside the recording: at its very start a step would merely rescale μ0 past its bound);
+  the step is a logistic of width ``W = 1 % · D`` so ``t_c`` is differentiable. Signature: the residual
   changes level at one time (a CUSUM kink).
 * ``wheel_radius_error`` — true rolling radius ``r(1 + δ)`` (|δ| 0.5–5 %; wear 1220→1180 mm gives
   δ ≈ −0.03). The recorded wheel speed is ``ω r_nom``: the true slip is ``v_w(1 + δ) − v`` (an
@@ -38,11 +38,15 @@ typical magnitude, signature in the residual of the *base* fit):
   ``mu_hat·m g·|w|`` through ``1/(1 + s τ_th)`` (:attr:`Signals.heat`; τ_th [s] is picked from a
   grid before the LM fit, :func:`jadhesion.diagnose.features.pick_thermal_lag`), ``P_ref`` = 10 kW;
   m_T [-] (0.1–2). Signature: residual falls with recent slip power.
-* ``load_transfer`` — the measured axle unloads with tractive effort ``F_t = n T/r``:
-  ``N1 = N (1 − m_L F_t/(M g))`` (``F_t/(M g)`` = :attr:`Signals.traction_ratio`; it equals the
-  locomotive's acceleration over g only without a trailing load). The observer divides by the static
-  load, so ``mu_hat = L μ`` with ``L = N1/N``, and Hertz gives ``k_eps ∝ L^(−1/3)``; m_L [-]
-  (0.3–1). Signature: residual ∝ −μ·F_t (nearly a curve-shape change: weakly identifiable).
+* ``load_transfer`` — the measured axle's load changes with the locomotive's pitch moment (DESIGN
+  §3: tractive effort, visible through its acceleration): ``N1 = N (1 − m_L F_t/(M g) − m_A a/g)``
+  with ``F_t/(M g) = n T/(r M g)`` (:attr:`Signals.traction_ratio`, all axles pulling like this
+  one) and the vehicle's acceleration ``a`` (:attr:`Signals.accel`). Without a trailing load
+  ``F_t ≈ M a + R`` and the two terms are one (only their sum is identified); with a trailing load
+  the drawbar pull ``F_t − M a − R`` acts at coupler height and the inertial force ``M a`` at the
+  centre of gravity, so they separate. The observer divides by the static load, so
+  ``mu_hat = L μ``, and Hertz gives ``k_eps ∝ L^(−1/3)``; m_L [-] (0.3–1), m_A [-]. Signature:
+  residual ∝ −μ·F_t (nearly a curve-shape change: weakly identifiable).
 """
 
 from __future__ import annotations
@@ -53,6 +57,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..data.vehicle import GRAVITY
 from ..models.kinematics import creepage
 from ..models.polach import BOUNDS as POLACH_BOUNDS
 from ..models.polach import PARAM_NAMES, polach_adhesion
@@ -81,7 +86,7 @@ EFFECTS = (
     Effect("speed_dependence", ("slope",), (-2.0,), (2.0,), (0.0,)),
     Effect("torque_offset", ("offset",), (-0.3,), (0.3,), (0.0,)),
     Effect("thermal_softening", ("softening",), (-0.5,), (10.0,), (0.0,)),
-    Effect("load_transfer", ("load_m",), (-0.3,), (3.0,), (0.0,)),
+    Effect("load_transfer", ("load_m", "load_accel"), (-0.3, -3.0), (3.0, 3.0), (0.0, 0.0)),
 )
 NAMES = tuple(e.name for e in EFFECTS)
 EXTRA_NAMES = tuple(p for e in EFFECTS for p in e.params)
@@ -106,7 +111,7 @@ def unpack(params, active):
     """Split ``params`` (N_PARAMS,) into Polach ``theta`` (5,) and a dict of extras (inactive ones
     at their neutral value)."""
     extra = jnp.where(active, params[5:], NEUTRAL)
-    return params[:5], dict(zip(EXTRA_NAMES, extra))
+    return params[:5], dict(zip(EXTRA_NAMES, extra, strict=True))
 
 
 def predict(params, active, sig: Signals):
@@ -123,7 +128,7 @@ def predict(params, active, sig: Signals):
         * (1.0 - e["slope"] * (sig.speed - sig.speed_ref) / sig.speed_ref)
         / jnp.maximum(1.0 + e["softening"] * sig.heat / POWER_REF, 0.05)
     )
-    load = jnp.maximum(1.0 - e["load_m"] * sig.traction_ratio, 0.1)
+    load = jnp.maximum(1.0 - e["load_m"] * sig.traction_ratio - e["load_accel"] * sig.accel / GRAVITY, 0.1)
     ones = jnp.ones_like(creep)
     thetas = jnp.stack(
         [theta[0] * ones, theta[1] * ones, theta[2] * scale, theta[3] * ones, theta[4] * ones], axis=-1

@@ -17,6 +17,7 @@ through the same program with :data:`N_CANDIDATES` rows.
 
 from __future__ import annotations
 
+import functools
 from typing import NamedTuple
 
 import jax
@@ -37,9 +38,9 @@ N_FOLDS = 5
 MAX_STEPS, MAX_STEPS_FOLD = 200, 100
 OPTIONS = BoxLMOptions(ftol=1e-9, xtol=1e-7, gtol=1e-10)
 #: Rows of every :func:`fit_candidates` call (base + 7 effects + 2 extra radius starts) and free
-#: parameters per row (the Polach five + at most three extras: a pair with the rail change).
+#: parameters per row (the Polach five + at most four extras: rail change with load transfer).
 N_CANDIDATES = 10
-WIDTH = 8
+WIDTH = 9
 #: Recordings are padded to a multiple of this many samples (one compiled program per multiple).
 PAD_BLOCK = 1000
 #: Base-fit starts: a fixed space-filling design — the first :data:`N_SCREEN` points of the
@@ -89,12 +90,13 @@ class FitTable(NamedTuple):
     steps: jax.Array
 
 
-def fold_weights(n: int, n_folds: int = N_FOLDS, n_total=None) -> jax.Array:
-    """(n_folds + 1, n_total) weights: row 0 one on the ``n`` valid samples; row k + 1 also zero
-    on contiguous block k. Samples from ``n`` to ``n_total`` (padding) are zero in every row."""
+def fold_weights(n: int, n_folds: int = N_FOLDS, n_total=None, weight=None) -> jax.Array:
+    """(n_folds + 1, n_total) weights: row 0 one on the ``n`` valid samples (times ``weight``,
+    the selection); row k + 1 also zero on contiguous block k. Samples from ``n`` to ``n_total``
+    (padding) are zero in every row."""
     n_total = n if n_total is None else n_total
     i = jnp.arange(n_total)
-    valid = (i < n).astype(float)
+    valid = (i < n).astype(float) * (1.0 if weight is None else weight)
     block = jnp.minimum(i * n_folds // n, n_folds - 1)
     rows = [valid] + [(block != k).astype(float) * valid for k in range(n_folds)]
     return jnp.stack(rows)
@@ -106,12 +108,14 @@ def padded_length(n: int) -> int:
 
 
 def pad_signals(sig: Signals) -> Signals:
-    """``sig`` with its (n,) arrays extended by their last value to :func:`padded_length`."""
+    """``sig`` with its (n,) arrays extended by their last value to :func:`padded_length` (the
+    weight by zeros)."""
     n = sig.time.shape[0]
     extra = padded_length(n) - n
-    return jax.tree_util.tree_map(
+    padded = jax.tree_util.tree_map(
         lambda x: np.pad(np.asarray(x), (0, extra), mode="edge") if np.ndim(x) == 1 else x, sig
     )
+    return padded._replace(weight=np.pad(np.asarray(sig.weight), (0, extra)))
 
 
 def free_indices(names, width: int = WIDTH):
@@ -167,12 +171,13 @@ def screen_starts(sig: Signals, n_valid) -> jax.Array:
     """SSE of the plain Polach model at each :data:`BASE_STARTS` point, shape (N_SCREEN,)."""
     slip = sig.wheel_speed - sig.speed
     creep = creepage(slip, sig.speed)
-    valid = jnp.arange(sig.time.shape[0]) < n_valid
-    sse = jax.vmap(
+    valid = (jnp.arange(sig.time.shape[0]) < n_valid) & (sig.weight > 0)
+    sse = jax.lax.map(
         lambda th: jnp.sum(
             jnp.where(valid, (sig.adhesion - polach_adhesion(th, creep, slip, sig.k_eps)) ** 2, 0.0)
-        )
-    )(jnp.asarray(BASE_STARTS))
+        ),
+        jnp.asarray(BASE_STARTS),
+    )
     return jnp.where(jnp.isfinite(sse), sse, jnp.inf)
 
 
@@ -185,36 +190,47 @@ def base_rows(sig: Signals, n_valid: int) -> tuple:
     return starts, idx, np.zeros((N_CANDIDATES, ext.N_EXTRA), bool)
 
 
-@jax.jit
-def fit_candidates(p0, idx, actives, sig: Signals, n_valid) -> FitTable:
+@functools.partial(jax.jit, static_argnames="folds")
+def fit_candidates(p0, idx, actives, sig: Signals, n_valid, folds: bool = True) -> FitTable:
     """Fit every candidate — free indices ``idx`` (C, K), effect masks ``actives`` (C, N_EXTRA),
-    starts ``p0`` (C, P) — on the first ``n_valid`` samples of the (padded) recording, then on
-    each CV fold warm-started from that fit; evaluate in-sample and held-out errors."""
+    starts ``p0`` (C, P) — on the weighted first ``n_valid`` samples of the (padded) recording,
+    then (``folds``) on each CV fold warm-started from that fit; evaluate in-sample and held-out
+    errors (``heldout_mae`` NaN and ``fold_status`` converged without folds).
+
+    Candidates and folds are solved one after another (:func:`jax.lax.map`): each LM stops at its
+    own convergence test, and memory is that of one fit (linear in the samples)."""
     n = sig.time.shape[0]
-    weights = fold_weights(n_valid, N_FOLDS, n)
-    full, status, steps = jax.vmap(lambda p, i, a: _solve(_pad(p), i, a, weights[0], sig, MAX_STEPS))(
-        p0, idx, actives
-    )
-    folds, fold_status, _ = jax.vmap(
-        lambda p, i, a: jax.vmap(lambda w: _solve(p, i, a, w, sig, MAX_STEPS_FOLD))(weights[1:])
-    )(full, idx, actives)
+    weights = fold_weights(n_valid, N_FOLDS, n, sig.weight)
+    used = jnp.sum(weights[0])
 
     def resid(p, a):
         target, pred = ext.predict(p[:PAD], a, sig)
         return (target - pred) * weights[0]
 
-    r_full = jax.vmap(resid)(full, actives)  # (C, n)
-    r_folds = jax.vmap(lambda ps, a: jax.vmap(lambda p: resid(p, a))(ps))(folds, actives)
-    heldout = jnp.sum(jnp.abs(r_folds) * (1.0 - weights[None, 1:]), axis=(1, 2)) / n_valid
+    def one(row):
+        p, i, a = row
+        full, status, steps = _solve(_pad(p), i, a, weights[0], sig, MAX_STEPS)
+        r_full = resid(full, a)
+        if not folds:
+            return full, status, steps, r_full, jnp.nan, jnp.int32(int(Status.CONVERGED))
+
+        def fold(w):
+            pk, sk, _ = _solve(full, i, a, w, sig, MAX_STEPS_FOLD)
+            return jnp.sum(jnp.abs(resid(pk, a)) * (weights[0] - w)), sk
+
+        held, fold_status = jax.lax.map(fold, weights[1:])
+        return full, status, steps, r_full, jnp.sum(held) / used, jnp.max(fold_status)
+
+    full, status, steps, r_full, heldout, fold_status = jax.lax.map(one, (p0, idx, actives))
     sse = jnp.sum(r_full**2, axis=1)
     return FitTable(
         full[:, :PAD],
-        jnp.sum(jnp.abs(r_full), axis=1) / n_valid,
+        jnp.sum(jnp.abs(r_full), axis=1) / used,
         jnp.where(jnp.isfinite(sse), sse, jnp.inf),
         heldout,
         r_full,
         status,
-        jnp.max(fold_status, axis=1),
+        fold_status,
         steps,
     )
 
@@ -226,7 +242,7 @@ def fit_base(sig: Signals, n_valid=None) -> tuple:
     status."""
     n_valid = sig.time.shape[0] if n_valid is None else n_valid
     starts, idx, actives = base_rows(sig, n_valid)
-    table = fit_candidates(starts, idx, actives, sig, n_valid)
+    table = fit_candidates(starts, idx, actives, sig, n_valid, folds=False)
     sse, status = np.asarray(table.sse), np.asarray(table.status)
     ok = status == int(Status.CONVERGED)
     i = int(np.argmin(np.where(ok, sse, np.inf))) if ok.any() else int(np.argmin(sse))

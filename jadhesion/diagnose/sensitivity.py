@@ -16,6 +16,10 @@ this recording detects magnitudes above
 
     m_min = √(2 G SSE) / q,
 
+or, when the recording's null gave the critical in-sample SSE reduction ``T*`` (the 95th
+percentile of the replicas' largest, :mod:`.null`) and it is the stricter of the decision's two
+conditions, above ``m_min = √(T* SSE) / q``.
+
 and ``absorbed = 1 − q²/‖j − j̄‖²`` says how much of the signature the model takes up. The
 linearisation ignores the box (a Polach parameter on its bound absorbs less), held-out losses (a
 little more is needed in practice) and curvature (large magnitudes of load transfer are not
@@ -57,7 +61,7 @@ def _linearise(params, active, sig):
 
 
 def detectable_magnitudes(
-    params, active, u_change, sig, n_valid: int, accepted=(), threshold: float = GAIN_THRESHOLD
+    params, active, u_change, sig, n_valid: int, accepted=(), critical=None, threshold: float = GAIN_THRESHOLD
 ) -> dict:
     """Per effect: ``min_detectable`` (|magnitude| in the catalogue's units, ``inf`` when the fitted
     model absorbs the signature entirely), ``absorbed`` (share of the signature the fitted model
@@ -68,14 +72,16 @@ def detectable_magnitudes(
     ``u_change`` places the rail change's step where it is not fitted (its signature depends on
     the time); ``sig`` the recording's signals padded as for the fits
     (:func:`.fitting.pad_signals`, one compiled program per padded length), of which the first
-    ``n_valid`` samples are the recording.
+    ``n_valid`` samples are the recording (those of weight 0 are left out); ``critical`` the null's
+    critical SSE reduction (None: the held-out gain ``threshold``).
     """
     theta, extras = ext.unpack(np.asarray(params, float), np.asarray(active))
     full = np.concatenate([np.asarray(theta), np.array([float(extras[k]) for k in ext.EXTRA_NAMES])])
     if "rail_change" not in accepted:
         full[5 + ext.EXTRA_NAMES.index("u_change")] = u_change
     r, jac = _linearise(jnp.asarray(full), jnp.ones(ext.N_EXTRA, bool), sig)
-    r, jac = np.asarray(r)[:n_valid], np.asarray(jac)[:n_valid]
+    keep = np.asarray(sig.weight)[:n_valid] > 0
+    r, jac = np.asarray(r)[:n_valid][keep], np.asarray(jac)[:n_valid][keep]
     sse = float(np.sum(r * r))
     out = {}
     for effect in ext.EFFECTS:
@@ -90,7 +96,8 @@ def detectable_magnitudes(
         coef, *_ = np.linalg.lstsq(model, j, rcond=None)
         q2 = float(np.sum(np.square(j - model @ coef)))
         spread = float(np.sum(np.square(j - j.mean())))
-        m_min = float(np.sqrt(2.0 * threshold * sse / q2)) if q2 > 0 else float("inf")
+        level = 2.0 * threshold if critical is None else max(2.0 * threshold, critical)
+        m_min = float(np.sqrt(level * sse / q2)) if q2 > 0 else float("inf")
         out[effect.name] = {
             "min_detectable": m_min,
             "absorbed": float(np.clip(1.0 - q2 / spread, 0.0, 1.0)) if spread > 0 else 1.0,

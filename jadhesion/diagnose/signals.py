@@ -37,7 +37,9 @@ class Signals(NamedTuple):
     (frictional power of the axle); heat: power through ``1/(1 + s τ_th)`` [W] (the exact
     first-order-hold filter :func:`~jadhesion.data.observer.lowpass_foh`; τ_th =
     :data:`THERMAL_LAG_S` until :func:`jadhesion.diagnose.features.pick_thermal_lag` sets it);
-    traction_ratio ``F_t/(M g) = n T/(r M g)`` [-] from the smoothed torque; dt () [s];
+    traction_ratio ``F_t/(M g) = n T/(r M g)`` [-] from the smoothed torque; weight [-] 1 on the
+    samples the fits use, 0 on those excluded (``--phase``: standstill, coasting, …) and on
+    padding; dt () [s];
     speed_ref () mean speed [m/s];
     duration () [s]; k_eps () Polach gradient constant [-].
     """
@@ -53,6 +55,7 @@ class Signals(NamedTuple):
     power: jax.Array
     heat: jax.Array
     traction_ratio: jax.Array
+    weight: jax.Array
     dt: jax.Array
     speed_ref: jax.Array
     duration: jax.Array
@@ -72,9 +75,15 @@ def smooth_derivative(time: np.ndarray, x: np.ndarray) -> np.ndarray:
     return smooth(np.gradient(x, time), float(np.median(np.diff(time))))
 
 
-def from_columns(columns: dict, vehicle: Vehicle, name: str = "recording") -> Signals:
+def from_columns(
+    columns: dict, vehicle: Vehicle, name: str = "recording", mask=None, regressors=None
+) -> Signals:
     """Build :class:`Signals` from raw recording columns (time, vehicle_speed, wheel_speed,
-    traction_torque) and the vehicle's constants; raises :class:`InputError` if they are missing."""
+    traction_torque) and the vehicle's constants; ``mask`` (n,) bool marks the samples the fits use
+    (default all); ``regressors = (v, v_w)`` [m/s] replace the measured speeds as the models' inputs
+    (speed, wheel speed, slip, power, acceleration: the diagnosis passes the smoothed latent
+    speeds), while the observer's target always uses the measured wheel speed. Raises
+    :class:`InputError` if columns are missing."""
     missing = [c for c in ("time", "vehicle_speed", "wheel_speed", "traction_torque") if c not in columns]
     if missing:
         raise InputError(f"{name}: diagnosis needs the raw signals; missing column(s) {', '.join(missing)}")
@@ -98,6 +107,8 @@ def from_columns(columns: dict, vehicle: Vehicle, name: str = "recording") -> Si
     )
     torque_mu = torque / scale
     adhesion = torque_mu - deriv_mu
+    if regressors is not None:
+        v, vw = (np.asarray(x, float) for x in regressors)
     slip = np.asarray(kinematics.slip_velocity(vw, v))
     power = np.abs(adhesion * slip) * vehicle.axle_weight_n
     dt = float(np.median(np.diff(t)))
@@ -117,8 +128,9 @@ def from_columns(columns: dict, vehicle: Vehicle, name: str = "recording") -> Si
         power=f(power),
         heat=lowpass_foh(f(t), f(power), THERMAL_LAG_S),
         traction_ratio=f(traction),
+        weight=f(np.ones(t.size) if mask is None else np.asarray(mask, float)),
         dt=f(dt),
-        speed_ref=f(np.mean(v)),
+        speed_ref=f(np.mean(v) if mask is None else np.mean(v[np.asarray(mask, bool)])),
         duration=f(t[-1] - t[0]),
         k_eps=f(vehicle.k_eps()),
     )

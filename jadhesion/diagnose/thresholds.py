@@ -14,6 +14,10 @@ the accuracy above the documented threshold on each new run.
 diagnoser can still report it inside an indistinguishable set (``in_set``, the magnitude above
 which the truth is the verdict *or* in its reported set ≥ 90 % of the time, where one exists).
 Units are those of the simulator's catalogue (:mod:`jadhesion.models.effects`).
+
+These thresholds were measured before the per-recording null (:mod:`.null`) joined the decision
+and before the simulator's default sensors became ``"realistic"``; the blind benchmark's
+``top1_above_documented`` says how they hold now (``benchmarks/results/diagnose_blind.json``).
 """
 
 from __future__ import annotations
@@ -21,15 +25,15 @@ from __future__ import annotations
 TARGET_ACCURACY = 0.9
 MIN_CASES = 5
 
-#: Per effect: ``magnitude`` (|m| threshold for ≥ 90 % top-1, or None), ``in_set`` (threshold for
-#: the truth in the reported set), ``unit``, ``note``. Measured by ``python
-#: benchmarks/diagnose_blind.py --n 220 --null 100 --seed 2026`` (320 recordings; 170 with one
-#: effect, 16–30 per effect; thresholds rounded up to two significant figures). A threshold equal
-#: to the bottom of the registry's :attr:`~jadhesion.models.effects.EffectSpec.typical` range means "from the smallest
-#: magnitude simulated"; below it nothing was measured. Confirmed on a run they were not fitted to,
-#: ``--n 250 --null 50 --seed 11`` (``benchmarks/results/diagnose_blind_seed11.json``): top-1 above
-#: the thresholds 21/21 (rail change), 21/21 (radius), 25/25 (speed), 14/15 (thermal), 81/82 in
-#: all; false alarms 0/92 clean recordings (95 % CI 0–3.9 %).
+#: Per effect: ``magnitude`` (|m| threshold for ≥ 90 % top-1, or None), ``in_set`` (threshold for the truth
+#: in the reported set), ``unit``, ``note``. Measured by ``python benchmarks/diagnose_blind.py --n 220
+#: --null 100 --seed 2026`` (320 recordings; 170 with one effect, 16–30 per effect; thresholds rounded up
+#: to two significant figures). A threshold equal to the bottom of the registry's
+#: :attr:`~jadhesion.models.effects.EffectSpec.typical` range means "from the smallest magnitude
+#: simulated"; below it nothing was measured. Confirmed on a run they were not fitted to, ``--n 250 --null
+#: 50 --seed 11`` (``benchmarks/results/diagnose_blind_seed11.json``): top-1 above the thresholds 21/21
+#: (rail change), 21/21 (radius), 25/25 (speed), 14/15 (thermal), 81/82 in all; false alarms 0/92 clean
+#: recordings (95 % CI 0–3.9 %).
 DETECTION_THRESHOLDS = {
     "rail_change": {
         "magnitude": 0.023,

@@ -1,0 +1,134 @@
+"""False alarms of ``jadhesion diagnose`` on clean recordings of both generators, with the
+per-recording null (:mod:`jadhesion.diagnose.null`).
+
+``ours``: :func:`validation.diagnose_cases.run_case` without effects (random scenario, seed,
+vehicle, driving profile; the simulator's default ``sensors="realistic"``). ``foreign``:
+:func:`validation.foreign_generator.generate` with ``effect="none"`` (its own vehicles, profiles,
+sampling rates 20–200 Hz and realistic sensor model). Every recording goes through a CSV and the
+CLI's code path. Reported per generator: false alarms k/n with a 95 % Clopper–Pearson interval,
+the verdicts, the smallest p-value per recording, seconds per diagnosis; the result file records
+the commit, the settings and the load average (2 shared cores: timings are noisy).
+
+    python -m benchmarks.diagnose_null [--n 10] [--seed 0] [--duration 30] [--out FILE]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from benchmarks.diagnose_blind import clopper_pearson, commit
+from jadhesion.cli.diagnose_run import diagnose_file
+from jadhesion.config import enable_compilation_cache, enable_x64
+from validation.diagnose_cases import run_case
+from validation.foreign_generator import generate, write
+
+RESULTS = Path(__file__).resolve().parent / "results"
+
+
+def summary_of(d: dict) -> dict:
+    """The parts of a diagnosis a false-alarm count needs."""
+    ps = [c["p_value"] for c in d["candidates"] if c["p_value"] is not None]
+    return {
+        "verdict": d["verdict"],
+        "effects": d["effects"],
+        "min_p": min(ps) if ps else None,
+        "top": [
+            {k: c[k] for k in ("name", "gain", "sse_reduction", "p_value", "status")}
+            for c in d["candidates"][:3]
+        ],
+        "critical_sse_reduction": d["null"]["critical_sse_reduction"],
+        "base_status": d["base"]["status"],
+        "used": d.get("selection", {}).get("used"),
+        "seconds": d["seconds"],
+    }
+
+
+def foreign_case(seed: int, directory, duration: float) -> dict:
+    rec = generate(seed, effect="none", duration_s=duration)
+    path = write(rec, Path(directory) / f"foreign_{seed}.csv", truth=False)
+    start = time.perf_counter()
+    result, _ = diagnose_file(path)
+    result["seconds"] = time.perf_counter() - start
+    return {
+        "seed": seed,
+        "rate_hz": rec.truth["rate_hz"],
+        "profile": rec.truth["profile"]["kind"],
+        "vehicle": rec.truth["vehicle"].get("name"),
+        "n_samples": rec.truth["n_samples"],
+        **summary_of(result),
+    }
+
+
+def ours_case(rng, directory) -> dict:
+    case = run_case([], rng, directory, p_varied_profile=0.3)
+    return {
+        "scenario": case["scenario"],
+        "seed": case["seed"],
+        "vehicle_varied": case["vehicle_varied"],
+        "profile_varied": case["profile_varied"],
+        "n_samples": case["n_samples"],
+        **summary_of(case["diagnosis"]),
+    }
+
+
+def rate(cases) -> dict:
+    k, n = sum(c["verdict"] != "none" for c in cases), len(cases)
+    return {"k": k, "n": n, "rate": k / n if n else None, "ci95": clopper_pearson(k, n) if n else None}
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--n", type=int, default=10, help="clean recordings per generator (default 10)")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--duration", type=float, default=30.0, help="foreign recordings' length [s]")
+    parser.add_argument("--generators", default="ours,foreign")
+    parser.add_argument("--out", default=str(RESULTS / "diagnose_null.json"))
+    args = parser.parse_args(argv)
+    enable_x64()
+    enable_compilation_cache()
+    rng = np.random.default_rng(args.seed)
+    gens = args.generators.split(",")
+    cases = {g: [] for g in gens}
+    doc, head = {}, commit()  # the code this process imported
+    with tempfile.TemporaryDirectory() as tmp:
+        for i in range(args.n):  # interleaved, so a cut-short run has both generators
+            for g in gens:
+                case = (
+                    ours_case(rng, tmp)
+                    if g == "ours"
+                    else foreign_case(args.seed * 1000 + i, tmp, args.duration)
+                )
+                cases[g].append(case)
+                print(f"{g} {i}: {case['verdict']} min p {case['min_p']} {case['seconds']:.1f} s", flush=True)
+                doc = {
+                    "commit": head,
+                    "settings": {
+                        **vars(args),
+                        "replicas": 19,
+                        "phase": "traction",
+                        "ours_sensors": "realistic",
+                    },
+                    "loadavg_end": os.getloadavg(),
+                    "false_alarms": {g: rate(c) for g, c in cases.items()},
+                    "seconds_median": {
+                        g: float(np.median([x["seconds"] for x in c])) if c else None
+                        for g, c in cases.items()
+                    },
+                    "cases": cases,
+                }
+                Path(args.out).write_text(json.dumps(doc, indent=1, default=float))
+    for g, r in doc["false_alarms"].items():
+        print(f"{g}: false alarms {r['k']}/{r['n']} (95 % CI {r['ci95'][0]:.1%}–{r['ci95'][1]:.1%})")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
