@@ -357,7 +357,7 @@ def substeps_for(period: float) -> int:
 
 def _truth(scenario, seed, mags, vehicle, duration, model, period=SAMPLE_PERIOD, braking=False) -> dict:
     active = {}
-    for name, mag in zip(fx.EFFECT_NAMES, mags):
+    for name, mag in zip(fx.EFFECT_NAMES, mags, strict=True):
         if mag != 0.0:
             spec = fx.EFFECTS[name]
             active[name] = {"magnitude": float(mag), "unit": spec.unit, "summary": spec.summary}
@@ -372,7 +372,7 @@ def _truth(scenario, seed, mags, vehicle, duration, model, period=SAMPLE_PERIOD,
     return {
         "scenario": scenario.name,
         "seed": int(seed),
-        "params": dict(zip(PARAM_NAMES, map(float, scenario.params))),
+        "params": dict(zip(PARAM_NAMES, map(float, scenario.params), strict=True)),
         "k_eps": vehicle.k_eps(),
         "effects": active,
         "noise": {
