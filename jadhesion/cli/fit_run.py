@@ -68,7 +68,8 @@ def expand_files(names) -> tuple[list[Path], bool]:
 
 def _load(args, path):
     """``(dataset, selection)`` of one file: :func:`.loading.load_dataset` after a row count
-    check (the creep smoother needs a few rows itself)."""
+    check that names no model (it serves Polach and Kiencke fits, before any observer work);
+    :func:`require_samples` then counts the samples the selection kept."""
     recording = load_from_args(args, path)
     rows = min((len(c) for c in recording.columns.values()), default=0)
     if rows < MIN_SAMPLES:

@@ -13,6 +13,7 @@ from ..identify.laplace import initial_spread, lm_optimum
 from ..identify.likelihood import recording_observer_terms
 from ..identify.mcmc import sample_posterior
 from ..identify.polach_fit import require_samples
+from ..models.polach import PARAM_NAMES
 from ..plots.posterior import corner_plot, predictive_plot
 from .common import Progress, UserError, emit_json, table
 from .loading import load_dataset
@@ -50,7 +51,7 @@ def _document(result, theta0, note="", creep="raw") -> dict:
         "likelihood": result.likelihood,
         "likelihood_note": note,
         "creep": creep,
-        "lm_start": dict(zip(result.names[: len(theta0)], map(float, theta0), strict=True)),  # no noise terms
+        "lm_start": dict(zip(PARAM_NAMES, map(float, theta0), strict=True)),
         "params": result.params,
         "derived": result.derived,
         "vehicle_speed": result.vehicle_speed,

@@ -14,9 +14,8 @@ RAW_COLUMNS = ("time", "vehicle_speed", "wheel_speed", "traction_torque")
 DATASET_COLUMNS = ("vehicle_speed", "adhesion")
 CREEP_COLUMNS = ("creepage", "slip_velocity", "wheel_speed")
 #: Columns that are always validated when present; any other column is carried along unchecked.
-KNOWN_COLUMNS = frozenset(
-    RAW_COLUMNS + DATASET_COLUMNS + CREEP_COLUMNS
-)  #: Largest plausible |speed| [m/s] (252 km/h, above any locomotive traction test). A larger value
+KNOWN_COLUMNS = frozenset(RAW_COLUMNS + DATASET_COLUMNS + CREEP_COLUMNS)
+#: Largest plausible |speed| [m/s] (252 km/h, above any locomotive traction test). A larger value
 #: almost always means the column is in km/h.
 MAX_SPEED = 70.0
 #: Largest plausible |adhesion coefficient| [-] (a larger value is a force or a percentage).

@@ -55,11 +55,15 @@ class PolachFit(NamedTuple):
     status: jax.Array
 
 
-def polach_residual(theta, data: PolachDataset):
-    """``mu_adh(theta) − mu_hat`` per sample, shape (n,); times ``data.weight`` when the dataset
-    has one (padding: 0), so padded samples add nothing to any sum."""
-    r = polach_adhesion(theta, data.creep, data.slip, data.k_eps) - data.adhesion
+def _masked(r, data: PolachDataset):
+    """``r`` times ``data.weight`` when the dataset has one (padding: 0), so padded samples add
+    nothing to any sum."""
     return r if data.weight is None else r * data.weight
+
+
+def polach_residual(theta, data: PolachDataset):
+    """``mu_adh(theta) − mu_hat`` per sample, shape (n,), masked by the padding weight."""
+    return _masked(polach_adhesion(theta, data.creep, data.slip, data.k_eps) - data.adhesion, data)
 
 
 def polach_eiv_residual(theta, data: PolachDataset):
@@ -73,8 +77,7 @@ def polach_eiv_residual(theta, data: PolachDataset):
     ``O(slip_sd²)`` on clean sensors."""
     if data.slip_sd is None:
         return polach_residual(theta, data)
-    r = curve_moments(theta, data)[0] - data.adhesion
-    return r if data.weight is None else r * data.weight
+    return _masked(curve_moments(theta, data)[0] - data.adhesion, data)
 
 
 def mean_abs(r):
