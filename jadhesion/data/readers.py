@@ -114,7 +114,10 @@ def _fast_parse(text: str):
         table = pacsv.read_csv(
             io.BytesIO(body.encode()),
             convert_options=options,
-            read_options=pacsv.ReadOptions(column_names=header),
+            # One thread: pyarrow's CSV thread pool can abort the interpreter at exit when torn
+            # down with a worker alive (apache/arrow#34314; measured: 2 of 88 `fit` processes
+            # that stopped on an input error exited 134 under load).
+            read_options=pacsv.ReadOptions(column_names=header, use_threads=False),
         )
     except (pa.ArrowInvalid, ValueError):
         return None
