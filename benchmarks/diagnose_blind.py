@@ -5,11 +5,12 @@ Each case: random scenario (dry/wet/sand), seed (profile wander, excursions, noi
 22E or a variant: worn radius 0.57–0.61 m, inertia ±25 %, axle load 18–23 t), driving profile (the
 published test or, with probability ``--p-varied``, a different one: speed, ramp, creep level,
 wander, excursions, Polach parameters ×0.8–1.2, 1500–3000 samples) and effects with log-uniform
-magnitudes over :data:`validation.diagnose_cases.MAGNITUDE_RANGE` (reaching well below the
-detection thresholds). The diagnoser sees only the CSV and a vehicle-only sidecar, through the CLI's
+magnitudes over the effect registry's ``typical`` ranges (reaching well below the detection
+thresholds). The diagnoser sees only the CSV and a vehicle-only sidecar, through the CLI's
 code path. Reported: confusion matrix (true primary effect × verdict), false alarms on clean
 recordings (k/n with a 95 % Clopper–Pearson interval), per effect top-1 accuracy in magnitude bins
-and above its documented detection threshold (:data:`jadhesion.diagnose.DETECTION_THRESHOLDS`),
+and above its documented detection threshold (the registry's ``detection.top1``, measured under an
+older decision rule: :data:`jadhesion.models.effects.DETECTION_PROVENANCE`),
 "truth in the reported set" (verdict or its indistinguishable set), the measured 90 % threshold,
 relative error of the recovered magnitude, base-fit parameter errors, seconds per diagnosis, and
 top-1 accuracy above and below each recording's own predicted ``min_detectable`` magnitude
@@ -34,12 +35,15 @@ from jadhesion.cli.common import Progress, emit_json, table
 from jadhesion.config import enable_compilation_cache, enable_x64
 from jadhesion.diagnose.extensions import NAMES
 from jadhesion.diagnose.select import GAIN_THRESHOLD, effects_from
-from jadhesion.diagnose.sensitivity import MAGNITUDE_PARAM
-from jadhesion.diagnose.thresholds import DETECTION_THRESHOLDS, MIN_CASES, TARGET_ACCURACY
+from jadhesion.models.effects import DETECTION_PROVENANCE, EFFECTS
 from jadhesion.models.polach import PARAM_NAMES
-from validation.diagnose_cases import MAGNITUDE_RANGE, random_effects, run_case
+from validation.diagnose_cases import random_effects, run_case
 
 RESULTS = Path(__file__).resolve().parent / "results"
+#: A measured detection threshold: the smallest |magnitude| above which at least MIN_CASES cases
+#: are named with top-1 accuracy ≥ TARGET_ACCURACY.
+TARGET_ACCURACY = 0.9
+MIN_CASES = 5
 #: Mix of the main cases: clean, one effect, two effects.
 P_CLEAN, P_PAIR = 0.15, 0.1
 
@@ -126,7 +130,7 @@ def summarise(cases) -> dict:
         mags = [abs(c["effects"][0][1]) for c in single]
         hits = [c["diagnosis"]["verdict"] == name for c in single]
         in_set = [name in reported_set(c["diagnosis"]) for c in single]
-        lo, hi = MAGNITUDE_RANGE[name]
+        lo, hi = EFFECTS[name].typical
         edges = np.exp(np.linspace(np.log(lo), np.log(hi), 4))
         bins = []
         for a, b in zip(edges[:-1], edges[1:], strict=True):
@@ -139,13 +143,13 @@ def summarise(cases) -> dict:
                     "in_set": float(np.mean([in_set[i] for i in sel])) if sel else None,
                 }
             )
-        documented = DETECTION_THRESHOLDS.get(name, {}).get("magnitude")
+        documented = EFFECTS[name].detection.top1
         above = [i for i, m in enumerate(mags) if documented is not None and m >= documented]
         errors = []
         for c in single:
             if c["diagnosis"]["verdict"] == name:
                 cand = next(x for x in c["diagnosis"]["candidates"] if x["name"] == name)
-                est, true = cand["params"][MAGNITUDE_PARAM[name]], c["effects"][0][1]
+                est, true = cand["params"][EFFECTS[name].magnitude_param], c["effects"][0][1]
                 errors.append(abs(est - true) / abs(true))
         # The recording's own prediction (diagnosis["sensitivity"]): is |m| above what it can see?
         seen = [i for i, c in enumerate(single) if "sensitivity" in c["diagnosis"]]
@@ -248,7 +252,11 @@ def main(argv=None) -> int:
         redecide(cases)
         summary = summarise(cases)
         summary["commit"] = commit()  # the summarising code; the cases carry no commit of their own
-        summary["settings"] = {"from_cases": args.from_cases, "gain_threshold": GAIN_THRESHOLD}
+        summary["settings"] = {
+            "from_cases": args.from_cases,
+            "gain_threshold": GAIN_THRESHOLD,
+            "documented_thresholds": DETECTION_PROVENANCE,
+        }
         return report(summary, args.json, args.out)
     enable_x64()
     enable_compilation_cache()
@@ -281,6 +289,7 @@ def main(argv=None) -> int:
         "replicas": 19,
         "phase": "traction",
         "sensors": "realistic",
+        "documented_thresholds": DETECTION_PROVENANCE,
     }
     return report(summary, args.json, args.out)
 

@@ -1,7 +1,10 @@
-"""Conformance of every catalogue effect, looping over the registry: the extension at its neutral
-values is the base model exactly, its gradients are finite, its explanation renders, and a clean
-simulated recording with the effect at its default magnitude gives the magnitude back from the
-extended fit (started at the truth's Polach parameters and the neutral extra)."""
+"""Conformance of every catalogue effect, looping over the registry: the record is complete for
+every reader, the extension at its neutral values is the base model exactly, its gradients are
+finite, its explanation renders with its parameters, every pair of effects has a separating run,
+and a clean simulated recording with the effect at its default magnitude gives the magnitude back
+from the extended fit (started at the truth's Polach parameters and the neutral extra)."""
+
+import itertools
 
 import jax
 import jax.numpy as jnp
@@ -10,11 +13,12 @@ import pytest
 
 from jadhesion.data.simulator import simulate
 from jadhesion.diagnose import extensions as ext
-from jadhesion.diagnose import fitting
-from jadhesion.diagnose.explain import _effect_sentence
-from jadhesion.diagnose.sensitivity import MAGNITUDE_PARAM
+from jadhesion.diagnose import features, fitting, select
+from jadhesion.diagnose.explain import effect_sentence
 from jadhesion.diagnose.signals import from_columns
-from jadhesion.models.effects import EFFECTS
+from jadhesion.models.effects import EFFECT_NAMES, EFFECTS
+from jadhesion.models.kinematics import creepage
+from jadhesion.models.polach import polach_adhesion
 from jadhesion.status import Status
 
 N = 1000
@@ -43,33 +47,84 @@ def clean():
     return _signals(None, 0.0)
 
 
-@pytest.mark.parametrize("name", ext.NAMES)
+@pytest.mark.parametrize("name", EFFECT_NAMES)
 def test_neutral_extension_is_the_base_model(name, clean):
+    """With the effect switched on at its record's neutral values (every other extra off, at
+    values far from neutral) the extended model is the plain Polach curve and the target the
+    observer's adhesion, bit for bit."""
     _, sig = clean
-    params = jnp.concatenate([jnp.array([0.43, 0.9, 0.35, 0.36, 0.13]), ext.NEUTRAL])
-    base = ext.predict(params, ext.active_mask([]), sig)
-    on = ext.predict(params, ext.active_mask([name]), sig)
-    for a, b in zip(base, on, strict=True):
-        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+    theta = jnp.array([0.43, 0.9, 0.35, 0.36, 0.13])
+    extras = ext.NEUTRAL + 0.3
+    for p in EFFECTS[name].extension:
+        extras[ext.EXTRA_NAMES.index(p.name)] = p.neutral
+    target, pred = ext.predict(jnp.concatenate([theta, extras]), ext.active_mask([name]), sig)
+    slip = sig.wheel_speed - sig.speed
+    base = polach_adhesion(theta, creepage(slip, sig.speed), slip, sig.k_eps)
+    np.testing.assert_array_equal(np.asarray(pred), np.asarray(base))
+    np.testing.assert_array_equal(np.asarray(target), np.asarray(sig.adhesion))
 
 
-@pytest.mark.parametrize("name", ext.NAMES)
+@pytest.mark.parametrize("name", EFFECT_NAMES)
 def test_gradient_of_each_extension_is_finite(name, clean):
     _, sig = clean
     params = jnp.concatenate([jnp.array([0.43, 0.9, 0.35, 0.36, 0.13]), ext.NEUTRAL])
     args = (ext.active_mask([name]), sig.weight, sig)
     g = np.asarray(jax.grad(lambda p: jnp.sum(ext.residual(p, args) ** 2))(params))
     assert np.all(np.isfinite(g))
-    assert g[5 + ext.EXTRA_NAMES.index(MAGNITUDE_PARAM[name])] != 0.0
+    assert g[5 + ext.EXTRA_NAMES.index(EFFECTS[name].magnitude_param)] != 0.0
 
 
-@pytest.mark.parametrize("name", ext.NAMES)
-def test_explanation_renders(name, clean):
-    sim, sig = clean
-    params = {p: float(v) for p, v in zip(ext.EXTRA_NAMES, ext.NEUTRAL + 0.02, strict=True)}
-    params.update(t_change_s=10.0, tau_th_s=2.0)
-    text = _effect_sentence(name, params, sim.vehicle)
-    assert isinstance(text, str) and len(text) > 40
+@pytest.mark.parametrize("name", EFFECT_NAMES)
+def test_registry_record_is_complete(name, clean):
+    """Every record is usable by every reader: the extension tables hold its parameters, its
+    magnitude parameter is 0 at no effect and its box holds the typical range (as does the
+    simulator's interval), the revealing signal is one the residual analysis computes, and the
+    documented detection thresholds lie inside the typical range they were measured over."""
+    _, sig = clean
+    spec = EFFECTS[name]
+    assert name in ext.NAMES and spec.magnitude_param == spec.extension[0].name
+    for p in spec.extension:
+        i = 5 + ext.EXTRA_NAMES.index(p.name)
+        assert ext.BOUNDS[0][i] == p.lower <= p.neutral == ext.NEUTRAL[i - 5] <= p.upper == ext.BOUNDS[1][i]
+        assert p.unit
+    mag = spec.extension[0]
+    lo, hi = spec.typical
+    assert 0.0 < lo < hi and mag.neutral == 0.0
+    assert mag.lower <= (-hi if spec.signed else 0.0) and hi <= mag.upper
+    assert spec.low <= (-hi if spec.signed else 0.0) and hi <= spec.high
+    assert spec.signal in features.library(sig, sig.adhesion)
+    assert len(spec.exposing_run) > 20 and len(spec.factor) > 20
+    for threshold in (spec.detection.top1, spec.detection.in_set):
+        assert threshold is None or lo <= threshold <= hi, (name, threshold)
+
+
+@pytest.mark.parametrize("name", EFFECT_NAMES)
+def test_explanation_renders_with_its_parameters(name, clean):
+    """The sentence renders from the fitted extension parameters (and the diagnosis' derived
+    change time and thermal lag) and the vehicle, and it says the magnitude: two magnitudes give
+    two sentences."""
+    sim, _ = clean
+    spec = EFFECTS[name]
+    texts = set()
+    for magnitude in (0.05, 0.2):
+        params = {p.name: p.neutral + 0.02 for p in spec.extension}
+        params.update({spec.magnitude_param: magnitude, "t_change_s": 10.0, "tau_th_s": 2.0})
+        text = effect_sentence(name, params, sim.vehicle)
+        assert len(text) > 40 and "{" not in text
+        texts.add(text)
+    assert len(texts) == 2
+
+
+def test_every_pair_has_one_separating_run():
+    """Each of the 21 pairs is written once, in the record of the effect that comes first, and the
+    diagnosis' lookup finds it in either order."""
+    for i, name in enumerate(EFFECT_NAMES):
+        assert set(EFFECTS[name].separating) <= set(EFFECT_NAMES[i + 1 :]), name
+    pairs = list(itertools.combinations(EFFECT_NAMES, 2))
+    assert sum(len(s.separating) for s in EFFECTS.values()) == len(pairs) == 21
+    for a, b in pairs:
+        run = select.experiment(a, b)
+        assert len(run) > 20 and run == select.experiment(b, a)
 
 
 @pytest.mark.parametrize(
@@ -78,7 +133,7 @@ def test_explanation_renders(name, clean):
         pytest.param(n, marks=pytest.mark.xfail(strict=True, reason=NOT_RECOVERED[n]))
         if n in NOT_RECOVERED
         else n
-        for n in ext.NAMES
+        for n in EFFECT_NAMES
     ],
 )
 def test_extended_fit_recovers_the_magnitude(name):
@@ -90,5 +145,5 @@ def test_extended_fit_recovers_the_magnitude(name):
     rows = (p0[None], np.array([fitting.free_indices((name,))]), np.asarray(ext.active_mask([name]))[None])
     table = fitting.fit_candidates(*rows, fitting.pad_signals(sig), N, folds=False)
     assert int(table.status[0]) == Status.CONVERGED
-    est = float(table.params[0, 5 + ext.EXTRA_NAMES.index(MAGNITUDE_PARAM[name])])
+    est = float(table.params[0, 5 + ext.EXTRA_NAMES.index(EFFECTS[name].magnitude_param)])
     assert abs(est - magnitude) <= TOL.get(name, 0.1) * abs(magnitude), (est, magnitude)

@@ -6,12 +6,11 @@ models), :mod:`.fitting` (vmapped LM + blocked CV), :mod:`.features` (residual a
 sparse discrepancy), :mod:`.select` (statistics, decision), :mod:`.null` (the per-recording
 null: clean re-synthesised replicas, max-T p-values), :mod:`.sensitivity` (the
 smallest magnitude of each effect a recording could show), :mod:`.diagnosis` (the pipeline),
-:mod:`.explain`, :mod:`.report`, :mod:`.thresholds` (documented detection
-thresholds).
+:mod:`.explain`, :mod:`.report`. What the code knows about each effect is the effect registry
+(:data:`jadhesion.models.effects.EFFECTS`).
 """
 
 from .diagnosis import diagnose
 from .extensions import NAMES as EFFECT_NAMES
-from .thresholds import DETECTION_THRESHOLDS
 
-__all__ = ["diagnose", "EFFECT_NAMES", "DETECTION_THRESHOLDS"]
+__all__ = ["diagnose", "EFFECT_NAMES"]

@@ -1,58 +1,21 @@
-"""One sentence per finding, in a traction engineer's terms."""
+"""The diagnosis in words, one sentence per finding in a traction engineer's terms (each effect's
+sentence is the effect registry's template, :data:`jadhesion.models.effects.EFFECTS`)."""
 
 from __future__ import annotations
 
 from ..data.vehicle import GRAVITY, Vehicle
+from ..models.effects import EFFECTS
 
 
-def _effect_sentence(name: str, p: dict, vehicle: Vehicle) -> str:
-    r = vehicle.wheel_radius_m
-    if name == "rail_change":
-        word = "dropped" if p["drop"] > 0 else "rose"
-        return (
-            f"the rail condition changed at t ≈ {p['t_change_s']:.1f} s: the "
-            f"friction level μ0 {word} by {abs(p['drop']):.0%} (a contaminated or cleaned section); "
-            "identify the two stretches separately"
-        )
-    if name == "wheel_radius_error":
-        d = p["delta_r"]
-        side = "larger" if d > 0 else "smaller"
-        return (
-            f"the wheel's rolling radius is {abs(d):.1%} {side} than the nominal {r:.3f} m "
-            f"(≈ {r * (1 + d):.3f} m): the recorded wheel speed and the "
-            "torque-to-force conversion use the nominal radius, which shifts the creep in "
-            "proportion to speed; measure the wheel diameter or calibrate it on a coasting run"
-        )
-    if name == "signal_delay":
-        return (
-            f"the torque signal lags the speed signals by {1e3 * p['delay_s']:.0f} ms: the "
-            "observer mixes torque and wheel acceleration from different instants; align the "
-            "signals before identifying"
-        )
-    if name == "speed_dependence":
-        return (
-            f"the friction level falls by {p['slope']:.0%} per 100 % speed increase about the "
-            "mean speed (Curtius–Kniffler-like); identify per speed band or add a speed term"
-        )
-    if name == "torque_offset":
-        bias = p["offset"] * vehicle.axle_load_kg * GRAVITY * r
-        return (
-            f"the torque signal carries a bias of {bias / 1e3:+.1f} kN·m "
-            f"({p['offset']:+.3f} in adhesion units); re-zero it on a coasting run"
-        )
-    if name == "thermal_softening":
-        return (
-            "friction softens with recent frictional power: "
-            f"μ0/(1 + {p['softening']:.2f}·P/10 kW) with a thermal lag of about "
-            f"{p.get('tau_th_s', float('nan')):.1f} s"
-        )
-    if name == "load_transfer":
-        return (
-            f"the measured axle's load changes with the locomotive's pitch: N(1 − {p['load_m']:.2f}·"
-            f"F_t/(M g) − {p.get('load_accel', 0.0):.2f}·a/g) (tractive effort and acceleration); "
-            "correct the axle load for load transfer"
-        )
-    raise ValueError(name)
+def effect_sentence(name: str, params: dict, vehicle: Vehicle) -> str:
+    """The registry's sentence for effect ``name`` (:meth:`.EffectSpec.explain`) rendered with the
+    fitted ``params`` and the vehicle's wheel radius and axle load."""
+    context = {
+        "wheel_radius_m": vehicle.wheel_radius_m,
+        "axle_load_kg": vehicle.axle_load_kg,
+        "gravity": GRAVITY,
+    }
+    return EFFECTS[name].explain({**params, **context})
 
 
 def _blind_spots(sensitivity: dict) -> str:
@@ -87,7 +50,7 @@ def explain(result: dict, vehicle: Vehicle) -> str:
                 f"lowers the held-out error by {result['generic']['gain']:.1%}."
             )
         return text + _blind_spots(result["sensitivity"])
-    parts = [_effect_sentence(n, extended["params"], vehicle) for n in result["effects"]]
+    parts = [effect_sentence(n, extended["params"], vehicle) for n in result["effects"]]
     text = "; and ".join(parts)
     text = (
         text[0].upper()

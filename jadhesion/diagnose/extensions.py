@@ -12,32 +12,33 @@ cross-validation folds. The model predicts the observed adhesion ``mu_hat`` [-]:
     μ0(t)  = μ0 (1 − m_R σ((t − t_c)/W)) (1 − m_V (v − v̄)/v̄) / (1 + m_T P_th/P_ref)
     pred   = (1 + δ) L μ_adh(s, w; kA, kS, μ0(t), A, B; k_eps L^(−1/3)) + β
 
-The magnitudes are those of the simulator's catalogue (:mod:`jadhesion.models.effects`), so a
-recovered parameter compares directly with a concealed magnitude. Effects (parameter, unit,
-typical magnitude, signature in the residual of the *base* fit):
+The parameters, their boxes, neutral values and units, and the typical magnitudes are the effect
+registry's (:data:`jadhesion.models.effects.EFFECTS`, each record's ``extension``; the first
+parameter estimates the simulator's magnitude, so a recovered parameter compares directly with a
+concealed one). How each enters, and its signature in the residual of the *base* fit:
 
-* ``rail_change`` — the rail condition changes at an unknown time: μ0 drops by the fraction m_R [-]
-  (0.1–0.5; negative = recovery) at ``t_c``, fitted as ``u = (t_c − t_0)/D`` ∈ [0.02, 0.98] (a
+* ``rail_change`` — the rail condition changes at an unknown time: μ0 drops by the fraction m_R
+  (negative = recovery) at ``t_c``, fitted as ``u = (t_c − t_0)/D`` ∈ [0.02, 0.98] (a
   change inside the recording: at its very start a step would merely rescale μ0 past its bound);
   the step is a logistic of width ``W = 1 % · D`` so ``t_c`` is differentiable. Signature: the residual
   changes level at one time (a CUSUM kink).
-* ``wheel_radius_error`` — true rolling radius ``r(1 + δ)`` (|δ| 0.5–5 %; wear 1220→1180 mm gives
-  δ ≈ −0.03). The recorded wheel speed is ``ω r_nom``: the true slip is ``v_w(1 + δ) − v`` (an
-  offset ∝ speed) and the force is ``T/(r(1 + δ))``, so ``mu_hat = (1 + δ) μ``. Signature: the
-  residual against creep bends at small creep and grows with speed.
-* ``signal_delay`` — the recorded torque lags the speed signals by τ [s] (10–300 ms): re-aligned
+* ``wheel_radius_error`` — true rolling radius ``r(1 + δ)``. The recorded wheel speed is
+  ``ω r_nom``: the true slip is ``v_w(1 + δ) − v`` (an offset ∝ speed) and the force is
+  ``T/(r(1 + δ))``, so ``mu_hat = (1 + δ) μ``. Signature: the residual against creep bends at small
+  creep and grows with speed.
+* ``signal_delay`` — the recorded torque lags the speed signals by τ: re-aligned
   to first order, ``T(t) ≈ T_rec(t) + τ dT_rec/dt``, with the smoothed torque rate
   (:attr:`Signals.torque_rate`). Not an interpolation of the noisy torque: a fractional shift
   averages neighbouring noise samples and would "detect" half-sample delays on clean data.
   Signature: residual ≈ −τ·d(torque_mu)/dt.
 * ``speed_dependence`` — Curtius–Kniffler-like μ0 linear in speed about the mean speed v̄,
-  relative slope m_V [-] per relative speed change (0.1–0.5). Signature: residual linear in v.
-* ``torque_offset`` — additive torque bias ``b = β m g r`` [N·m]; β [-] (0.005–0.05). Signature:
+  relative slope m_V per relative speed change. Signature: residual linear in v.
+* ``torque_offset`` — additive torque bias ``b = β m g r`` [N·m]. Signature:
   a constant residual; collinear with a μ0 change where the curve is saturated.
 * ``thermal_softening`` — ``μ0 / (1 + m_T P_th/P_ref)``: ``P_th`` [W] is the frictional power
   ``mu_hat·m g·|w|`` through ``1/(1 + s τ_th)`` (:attr:`Signals.heat`; τ_th [s] is picked from a
-  grid before the LM fit, :func:`jadhesion.diagnose.features.pick_thermal_lag`), ``P_ref`` = 10 kW;
-  m_T [-] (0.1–2). Signature: residual falls with recent slip power.
+  grid before the LM fit, :func:`jadhesion.diagnose.features.pick_thermal_lag`), ``P_ref`` = 10 kW.
+  Signature: residual falls with recent slip power.
 * ``load_transfer`` — the measured axle's load changes with the locomotive's pitch moment (DESIGN
   §3: tractive effort, visible through its acceleration): ``N1 = N (1 − m_L F_t/(M g) − m_A a/g)``
   with ``F_t/(M g) = n T/(r M g)`` (:attr:`Signals.traction_ratio`, all axles pulling like this
@@ -45,19 +46,19 @@ typical magnitude, signature in the residual of the *base* fit):
   ``F_t ≈ M a + R`` and the two terms are one (only their sum is identified); with a trailing load
   the drawbar pull ``F_t − M a − R`` acts at coupler height and the inertial force ``M a`` at the
   centre of gravity, so they separate. The observer divides by the static load, so
-  ``mu_hat = L μ``, and Hertz gives ``k_eps ∝ L^(−1/3)``; m_L [-] (0.3–1), m_A [-]. Signature:
+  ``mu_hat = L μ``, and Hertz gives ``k_eps ∝ L^(−1/3)``. Signature:
   residual ∝ −μ·F_t (nearly a curve-shape change: weakly identifiable).
 """
 
 from __future__ import annotations
-
-from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
 from ..data.vehicle import GRAVITY
+from ..models.effects import EFFECTS as REGISTRY
+from ..models.effects import THERMAL_POWER_SCALE as POWER_REF
 from ..models.kinematics import creepage
 from ..models.polach import BOUNDS as POLACH_BOUNDS
 from ..models.polach import PARAM_NAMES, polach_adhesion
@@ -65,37 +66,19 @@ from .signals import Signals
 
 #: Logistic width of the rail-change step, as a fraction of the recording's duration.
 STEP_WIDTH = 0.01
-#: Reference frictional power of the thermal term [W] (as in :mod:`jadhesion.models.effects`).
-POWER_REF = 10e3
 
-
-class Effect(NamedTuple):
-    """A catalogue effect: its extra parameters, their box and neutral (no-effect) values."""
-
-    name: str
-    params: tuple
-    lower: tuple
-    upper: tuple
-    neutral: tuple
-
-
-EFFECTS = (
-    Effect("rail_change", ("drop", "u_change"), (-1.5, 0.02), (0.95, 0.98), (0.0, 0.5)),
-    Effect("wheel_radius_error", ("delta_r",), (-0.2,), (0.2,), (0.0,)),
-    Effect("signal_delay", ("delay_s",), (-0.3,), (0.6,), (0.0,)),
-    Effect("speed_dependence", ("slope",), (-2.0,), (2.0,), (0.0,)),
-    Effect("torque_offset", ("offset",), (-0.3,), (0.3,), (0.0,)),
-    Effect("thermal_softening", ("softening",), (-0.5,), (10.0,), (0.0,)),
-    Effect("load_transfer", ("load_m", "load_accel"), (-0.3, -3.0), (3.0, 3.0), (0.0, 0.0)),
-)
-NAMES = tuple(e.name for e in EFFECTS)
-EXTRA_NAMES = tuple(p for e in EFFECTS for p in e.params)
+#: The catalogue's records (:class:`jadhesion.models.effect_spec.EffectSpec`), in the registry's order;
+#: the tables below are derived from their ``extension`` parameters.
+EFFECTS = tuple(REGISTRY.values())
+NAMES = tuple(REGISTRY)
+PARAMS = tuple(p for e in EFFECTS for p in e.extension)
+EXTRA_NAMES = tuple(p.name for p in PARAMS)
 N_EXTRA = len(EXTRA_NAMES)
 N_PARAMS = len(PARAM_NAMES) + N_EXTRA
-NEUTRAL = np.array([x for e in EFFECTS for x in e.neutral])
+NEUTRAL = np.array([p.neutral for p in PARAMS])
 BOUNDS = (
-    np.concatenate([POLACH_BOUNDS[0], np.array([x for e in EFFECTS for x in e.lower])]),
-    np.concatenate([POLACH_BOUNDS[1], np.array([x for e in EFFECTS for x in e.upper])]),
+    np.concatenate([POLACH_BOUNDS[0], np.array([p.lower for p in PARAMS])]),
+    np.concatenate([POLACH_BOUNDS[1], np.array([p.upper for p in PARAMS])]),
 )
 
 

@@ -13,8 +13,9 @@ confirms, and a threshold calibrated on clean simulated recordings bounds the fa
   from other generators and sensors; the second effect of round 2 has no null of its own).
   Other candidates with ``gain ≥ AMBIGUITY · gain_best``, or with a positive held-out gain and a
   ``ΔBIC`` within :data:`BIC_SEPARATION` of the best's (the recording's evidence between the two is
-  not strong), are reported with it as a set the recording cannot separate, with the experiment
-  that would (torque offset, load transfer and radius error are the usual members).
+  not strong), are reported with it as a set the recording cannot separate, with the run that
+  would from the effect registry (torque offset, load transfer and radius error are the usual
+  members).
 
 :data:`GAIN_THRESHOLD` comes from :func:`validation.diagnose_cases.null_statistics` (the largest
 round-1 gain on clean simulated recordings, 95th percentile, across scenarios, seeds and profiles);
@@ -24,6 +25,8 @@ round-1 gain on clean simulated recordings, 95th percentile, across scenarios, s
 from __future__ import annotations
 
 import numpy as np
+
+from ..models.effects import separating_run
 
 #: Calibrated held-out-gain threshold. ``python -m validation.diagnose_cases --n 24
 #: --samples 1500 --seed 12345`` (24 clean recordings, random scenario/seed/vehicle) gave a largest
@@ -46,33 +49,6 @@ AMBIGUITY = 0.8
 #: ... and so are those whose ΔBIC is within this of the best's (Kass & Raftery 1995: a BIC
 #: difference below 6 is not strong evidence for one model over the other).
 BIC_SEPARATION = 6.0
-
-#: Experiments that separate near-collinear pairs (and each effect's own confirming test).
-SEPARATING_EXPERIMENT = {
-    frozenset({"torque_offset", "rail_change"}): "a coasting run (zero torque) reads the bias",
-    frozenset({"torque_offset", "speed_dependence"}): "a coasting run (zero torque) reads the bias",
-    frozenset({"torque_offset", "load_transfer"}): "a coasting run (zero torque) reads the bias; a "
-    "run with a trailing load separates tractive effort from acceleration",
-    frozenset({"wheel_radius_error", "load_transfer"}): "a coasting run at two speeds (a radius error "
-    "shows as creep ∝ speed without torque; load transfer needs torque)",
-    frozenset({"torque_offset", "thermal_softening"}): "a coasting run (zero torque) reads the bias",
-    frozenset({"speed_dependence", "rail_change"}): "a speed sweep at constant creep on one rail section",
-    frozenset(
-        {"speed_dependence", "wheel_radius_error"}
-    ): "a coasting run at two speeds (a radius error shows as creep ∝ speed without torque)",
-    frozenset(
-        {"thermal_softening", "rail_change"}
-    ): "a repeat run after a pause: a thermal drop recovers as the rail cools, a rail change does not",
-    frozenset(
-        {"thermal_softening", "speed_dependence"}
-    ): "a speed sweep at low creep (little frictional heating)",
-    frozenset({"signal_delay", "load_transfer"}): "a torque step: compare its timing with the "
-    "wheel acceleration",
-    frozenset(
-        {"wheel_radius_error", "torque_offset"}
-    ): "a coasting run (radius error: creep ∝ speed; torque bias: torque ≠ 0)",
-}
-GENERIC_EXPERIMENT = "a coasting run and a slow speed sweep at constant creep"
 
 
 def effective_samples(residual) -> float:
@@ -139,5 +115,6 @@ def effects_from(candidates: list, second_round, threshold: float = GAIN_THRESHO
 
 
 def experiment(a: str, b: str) -> str:
-    """The experiment separating effects ``a`` and ``b``."""
-    return SEPARATING_EXPERIMENT.get(frozenset({a, b}), GENERIC_EXPERIMENT)
+    """The run separating effects ``a`` and ``b`` (the effect registry's
+    :func:`~jadhesion.models.effects.separating_run`)."""
+    return separating_run(a, b)

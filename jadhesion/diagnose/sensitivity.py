@@ -37,15 +37,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..models.effects import EFFECTS
 from . import extensions as ext
 from .select import GAIN_THRESHOLD
-
-#: Each effect's magnitude parameter (the one the simulator's catalogue magnitude maps to).
-MAGNITUDE_PARAM = {e.name: e.params[0] for e in ext.EFFECTS}
-
-#: The run that would expose each effect when this recording cannot (from the effect registry).
-EXPOSING_EXPERIMENT = {name: spec.exposing_run for name, spec in EFFECTS.items()}
 
 
 @jax.jit
@@ -66,7 +59,7 @@ def detectable_magnitudes(
     """Per effect: ``min_detectable`` (|magnitude| in the catalogue's units, ``inf`` when the fitted
     model absorbs the signature entirely), ``absorbed`` (share of the signature the fitted model
     takes up), ``visible`` (``min_detectable`` within the catalogue's typical range,
-    :attr:`~jadhesion.models.effects.EffectSpec.typical`) and ``experiment`` (:data:`EXPOSING_EXPERIMENT`).
+    :attr:`~jadhesion.models.effect_spec.EffectSpec.typical`) and ``experiment`` (its ``exposing_run``).
 
     ``params`` (N_PARAMS,) and ``active`` (N_EXTRA,) are the final fit, ``accepted`` its effects;
     ``u_change`` places the rail change's step where it is not fitted (its signature depends on
@@ -92,7 +85,7 @@ def detectable_magnitudes(
             for p in e.params
         ]
         model = jac[:, list(range(5)) + fitted]
-        j = jac[:, 5 + ext.EXTRA_NAMES.index(MAGNITUDE_PARAM[effect.name])]
+        j = jac[:, 5 + ext.EXTRA_NAMES.index(effect.magnitude_param)]
         coef, *_ = np.linalg.lstsq(model, j, rcond=None)
         q2 = float(np.sum(np.square(j - model @ coef)))
         spread = float(np.sum(np.square(j - j.mean())))
@@ -101,7 +94,7 @@ def detectable_magnitudes(
         out[effect.name] = {
             "min_detectable": m_min,
             "absorbed": float(np.clip(1.0 - q2 / spread, 0.0, 1.0)) if spread > 0 else 1.0,
-            "visible": m_min <= EFFECTS[effect.name].typical[1],
-            "experiment": EXPOSING_EXPERIMENT[effect.name],
+            "visible": m_min <= effect.typical[1],
+            "experiment": effect.exposing_run,
         }
     return out

@@ -1,0 +1,82 @@
+"""The shape of an effect's record in the registry (:data:`jadhesion.models.effects.EFFECTS`): what
+the simulator, the diagnosis' extension, its explanation and its benchmarks know about one effect."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from typing import NamedTuple, Optional
+
+
+class Param(NamedTuple):
+    """A parameter of an effect's extension (:mod:`jadhesion.diagnose.extensions`): its name, the
+    fit's box ``[lower, upper]``, the ``neutral`` value at which the extension is the base model
+    exactly, and its ``unit``."""
+
+    name: str
+    lower: float
+    upper: float
+    neutral: float
+    unit: str
+
+
+class Detection(NamedTuple):
+    """A documented detection threshold (|magnitude| in the simulator's units; ``None``: not reached
+    in the typical range): ``top1`` — named in ≥ 90 % of blind cases above it; ``in_set`` — the
+    verdict or its indistinguishable set ≥ 90 %; ``note`` — the counts behind it. Measured under
+    an older decision rule (:data:`jadhesion.models.effects.DETECTION_PROVENANCE`)."""
+
+    top1: Optional[float]
+    in_set: Optional[float]
+    note: str
+
+
+def _no_terms(values: Mapping) -> dict:
+    return {}
+
+
+class EffectSpec(NamedTuple):
+    """One effect's record.
+
+    Simulator: ``factor`` (its law, naming the pure function of :mod:`jadhesion.models.effects`
+    that applies it), ``default``/``low``/``high`` (default magnitude and allowed interval), ``unit``,
+    ``summary`` (one line). Diagnosis: ``extension`` (its :class:`Param` s, the first estimating the
+    simulator's magnitude), ``typical`` (the log-uniform |magnitude| range of blind cases and of
+    "visible at typical magnitudes"), ``signed`` (the sign is drawn at random), ``signal`` (the
+    signal its residual signature follows, a :func:`jadhesion.diagnose.features.library` key),
+    ``exposing_run`` (the run that exposes it when a recording cannot), ``separating`` (neighbour →
+    the run that separates the two; each pair is written once, in the record of the effect that
+    comes first in the registry), ``sentence`` and ``terms`` (the explanation: a :meth:`str.format`
+    template over the fitted parameters, the vehicle's ``wheel_radius_m``, ``axle_load_kg`` and
+    ``gravity``, and the derived ``terms``), ``detection`` (:class:`Detection`).
+    """
+
+    name: str
+    factor: str
+    default: float
+    low: float
+    high: float
+    unit: str
+    summary: str
+    extension: tuple
+    typical: tuple
+    signed: bool
+    signal: str
+    exposing_run: str
+    separating: dict
+    sentence: str
+    detection: Detection
+    terms: Callable[[Mapping], dict] = _no_terms
+
+    @property
+    def params(self) -> tuple:
+        """The extension's parameter names."""
+        return tuple(p.name for p in self.extension)
+
+    @property
+    def magnitude_param(self) -> str:
+        """The extension parameter that estimates the simulator's magnitude."""
+        return self.extension[0].name
+
+    def explain(self, values: Mapping) -> str:
+        """The explanation sentence from the fitted parameters and the vehicle (class docstring)."""
+        return self.sentence.format_map({**values, **self.terms(values)})
