@@ -187,12 +187,22 @@ def test_reproduce_table2_json_rows_include_mcmc(env):
             assert row["floor"] > clean_floor[row["scenario"]], row
 
 
-def test_posterior_auto_likelihood_uses_the_observer_on_a_raw_recording(env, recording):
+def test_posterior_auto_likelihood_is_the_gaussian_tempered_by_the_residual_colour(env, recording):
+    """The observer colours the residuals (lag-1 autocorrelation near 1 at 50 Hz): the default
+    counts n/κ effective samples and says so; ``--likelihood observer`` stays on request."""
     proc = jadhesion(env, "posterior", recording, "--walkers", "16", "--steps", "120", "--json")
     doc = json.loads(proc.stdout)
-    assert doc["likelihood"] == "observer" and doc["likelihood_note"].startswith("auto")
-    assert set(doc["params"]) == {"kA", "kS", "mu0", "A", "B", "sigma", "rho"}
+    temp = doc["tempering"]
+    assert doc["likelihood"] == "gauss" and doc["likelihood_note"].startswith("auto: Gaussian tempered")
+    assert temp["residual_rho"] > 0.5 and temp["kappa"] > 2.0
+    assert temp["weight"] == pytest.approx(1.0 / temp["kappa"])
+    assert temp["effective_samples"] == pytest.approx(temp["samples"] / temp["kappa"])
+    assert set(doc["params"]) == {"kA", "kS", "mu0", "A", "B", "sigma"}
     assert doc["diagnostics"]["compile_seconds"] >= 0
+    args = ("--walkers", "16", "--steps", "60", "--likelihood", "observer", "--json")
+    obs = json.loads(jadhesion(env, "posterior", recording, *args).stdout)
+    assert obs["likelihood"] == "observer" and obs["tempering"]["weight"] == 1.0
+    assert set(obs["params"]) == {"kA", "kS", "mu0", "A", "B", "sigma", "rho"}
 
 
 def test_fit_warns_few_samples_in_process(tmp_path, capsys):

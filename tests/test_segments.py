@@ -172,16 +172,13 @@ def test_adhesion_column_is_ignored_when_raw_signals_are_present(tmp_path):
     np.testing.assert_array_equal(np.asarray(to_dataset(load_recording(ds)).adhesion), 0.3)
 
 
-def test_posterior_falls_back_to_gauss_when_samples_are_excluded(tmp_path):
+def test_posterior_runs_on_the_selected_samples_and_refuses_the_observer_likelihood(tmp_path):
     path = write_logger_file(tmp_path / "log.csv")
     proc = _cli(tmp_path, "posterior", path, "--walkers", "12", "--steps", "60", "--creep", "raw", "--json")
     assert proc.returncode == 0, proc.stderr
     doc = json.loads(proc.stdout)
-    assert doc["likelihood"] == "gauss" and doc["likelihood_note"].startswith(
-        "auto: samples excluded (samples: 700 of 1200 used (traction, 2 stretch(es), 1 gap(s)); "
-        "excluded: braking 300, coasting 100, standstill 100)"
-    )
-    assert doc["selection"]["used"] == 700
+    assert doc["likelihood"] == "gauss" and doc["likelihood_note"].startswith("auto: Gaussian tempered")
+    assert doc["selection"]["used"] == 700 == doc["tempering"]["samples"]
     bad = _cli(tmp_path, "posterior", path, "--steps", "60", "--likelihood", "observer")
     assert bad.returncode == 2 and bad.stdout == "" and bad.stderr.count("\n") == 1
     assert "--likelihood observer needs one contiguous series" in bad.stderr

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ..identify.ensemble import ChainTooShortWarning
-from ..identify.laplace import initial_spread, lm_optimum
+from ..identify.laplace import colour_check, initial_spread, lm_optimum
 from ..identify.likelihood import recording_observer_terms
 from ..identify.mcmc import sample_posterior
 from ..identify.polach_fit import require_samples
@@ -20,29 +20,21 @@ from .loading import load_dataset
 
 
 def _choose_likelihood(recording, requested: str):
-    """``(likelihood, ObserverTerms or None, note)`` for the loaded recording."""
-    if requested not in ("auto", "observer"):
+    """``(likelihood, ObserverTerms or None, note)`` for the loaded recording; ``auto`` is the
+    Gaussian (tempered in :func:`run`)."""
+    if requested == "auto":
+        return "gauss", None, "auto"
+    if requested != "observer":
         return requested, None, "requested"
     if not recording.has_raw_signals:
-        if requested == "observer":
-            raise UserError(
-                f"{recording.path}: --likelihood observer needs the columns time, "
-                f"vehicle_speed, wheel_speed and traction_torque"
-            )
-        return "gauss", None, "auto: no raw signals (time, speeds, torque), i.i.d. Gaussian"
-    # With the raw signals mu_hat is the observer's output (an adhesion column is ignored:
-    # jadhesion.data.dataset.adhesion_source), so the observer likelihood applies.
+        raise UserError(
+            f"{recording.path}: --likelihood observer needs the columns time, "
+            f"vehicle_speed, wheel_speed and traction_torque"
+        )
     try:
-        obs = recording_observer_terms(recording)
+        return "observer", recording_observer_terms(recording), "requested"
     except ValueError as err:
         raise UserError(f"{recording.path}: {err}") from None
-    return (
-        "observer",
-        obs,
-        "requested"
-        if requested == "observer"
-        else ("auto: raw signals present, the observer's lag modelled"),
-    )
 
 
 def _document(result, theta0, note="", creep="raw") -> dict:
@@ -77,20 +69,24 @@ def run(args) -> int:
         raise UserError(f"--steps must be at least 50, got {args.steps}")
     recording, data, selection = load_dataset(args, args.file)
     require_samples(data, args.file)
-    if selection.complete:
-        likelihood, obs, note = _choose_likelihood(recording, args.likelihood)
-    elif args.likelihood == "observer":
+    if args.likelihood == "observer" and not selection.complete:
         raise UserError(
             f"{recording.path}: --likelihood observer needs one contiguous series, but "
-            f"{selection.summary()}; use --likelihood gauss or --start/--end"
+            f"{selection.summary()}; use --likelihood auto or --start/--end"
         )
-    elif args.likelihood == "auto":  # the observer likelihood needs one contiguous series
-        likelihood, obs = "gauss", None
-        note = f"auto: samples excluded ({selection.summary()}), i.i.d. Gaussian"
-    else:
-        likelihood, obs, note = args.likelihood, None, "requested"
+    likelihood, obs, note = _choose_likelihood(recording, args.likelihood)
     theta0 = lm_optimum(data, obs=obs)
-    spread = np.asarray(initial_spread(theta0, data, obs=obs))
+    # the check it prints: the residuals' colour; auto tempers the Gaussian by 1/κ, a requested
+    # likelihood runs as asked (ar1/observer model the colour themselves)
+    tempering = colour_check(data, theta0, likelihood, obs)
+    tempering["weight"] = 1.0 / tempering["kappa"] if args.likelihood == "auto" else 1.0
+    if args.likelihood == "auto":
+        note = (
+            f"auto: Gaussian tempered by 1/κ, κ = {tempering['kappa']:.1f} (residuals at the LM "
+            f"optimum: lag-1 autocorrelation {tempering['residual_rho']:.2f}, "
+            f"{tempering['effective_samples']:.0f} effective of {tempering['samples']} samples)"
+        )
+    spread = np.asarray(initial_spread(theta0, data, obs=obs)) * np.sqrt(1.0 / tempering["weight"])
     theta0 = np.asarray(theta0)
     progress = Progress(args.steps, "posterior", "steps", enabled=not args.json or sys.stderr.isatty())
     with warnings.catch_warnings():
@@ -104,6 +100,7 @@ def run(args) -> int:
             seed=args.seed,
             spread=spread,
             obs=obs,
+            weight=tempering["weight"],
             callback=lambda i: progress.update(i - progress.done),
         )
     for message in result.diagnostics.warnings:
@@ -114,6 +111,7 @@ def run(args) -> int:
         corner_plot(result).savefig(out / "posterior_corner.png", dpi=90)
         predictive_plot(result, data).savefig(out / "posterior_predictive.png", dpi=110)
     doc = _document(result, theta0, note, "smoothed" if data.slip_sd is not None else "raw")
+    doc["tempering"] = tempering
     doc["selection"] = selection.document()
     if args.json:
         emit_json(doc)

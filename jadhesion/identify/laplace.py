@@ -21,7 +21,7 @@ from .box_lm import box_lm
 from .likelihood import ObserverTerms, prediction
 from .lm_result import best_of
 from .polach_fit import polach_residual
-from .uncertainty import covariance
+from .uncertainty import colour_factor, covariance
 
 #: Multi-start points of :func:`lm_optimum` (rows of [kA, kS, mu0, A, B]).
 STARTS = np.array(
@@ -78,3 +78,20 @@ def initial_spread(
     deviation, kept within ``[floor, cap]`` (the cap also covers a singular ``JᵀJ``)."""
     std = jnp.sqrt(jnp.diag(laplace_covariance(theta_hat, data, obs)))
     return jnp.clip(jnp.where(jnp.isfinite(std), 0.5 * std, cap), floor, cap)
+
+
+def colour_check(data: PolachDataset, theta, likelihood: str = "gauss", obs: ObserverTerms | None = None):
+    """The residuals' colour at ``theta`` (e.g. the LM optimum), rows in time order: ``{"kappa"``
+    (:func:`.uncertainty.colour_factor`, ≥ 1), ``"effective_samples"`` (n/κ), ``"samples"`` (n),
+    ``"residual_rho"`` (lag-1 autocorrelation), ``"lags"`` (bandwidth)``}``. A Gaussian
+    likelihood tempered by 1/κ counts n/κ independent samples instead of n correlated ones."""
+    r = np.asarray(data.adhesion) - np.asarray(prediction(jnp.asarray(theta), data, likelihood, obs))
+    kappa, lags = colour_factor(jnp.asarray(r))
+    n = r.shape[0]
+    return {
+        "kappa": float(kappa),
+        "effective_samples": n / float(kappa),
+        "samples": n,
+        "residual_rho": float(np.sum(r[1:] * r[:-1]) / max(float(np.sum(r * r)), 1e-300)),
+        "lags": int(lags),
+    }

@@ -278,17 +278,19 @@ def log_posterior(
     fixed_log_scale=0.0,
     likelihood: str = "gauss",
     obs: Optional[ObserverTerms] = None,
+    weight=1.0,
 ):
     """Unnormalised log-posterior of one parameter vector ``phi`` (see the module docstring for its
-    layout; the scale fixed at ``exp(fixed_log_scale)`` when left out). ``-inf`` outside the prior
-    support or when not finite."""
+    layout; the scale fixed at ``exp(fixed_log_scale)`` when left out), the log-likelihood
+    multiplied by ``weight`` = 1/κ (tempering, :func:`.uncertainty.colour_factor`; 1: none).
+    ``-inf`` outside the prior support or when not finite."""
     theta, log_scale, rho = _split(phi, likelihood)
     # The likelihood is evaluated at the point clipped into the support: finite everywhere, so an
     # out-of-box walker gets exactly -inf from the prior and never a NaN.
     log_scale = fixed_log_scale if log_scale is None else jnp.clip(log_scale, *LOG_SCALE_BOUNDS)
     rho = 0.0 if rho is None else jnp.clip(rho, -RHO_MAX, RHO_MAX)
     ll = log_likelihood(jnp.clip(theta, lower, upper), log_scale, data, likelihood, rho, obs)
-    value = log_prior(phi, lower, upper, likelihood) + ll
+    value = log_prior(phi, lower, upper, likelihood) + weight * ll
     return jnp.where(jnp.isfinite(value), value, -jnp.inf)
 
 
@@ -301,10 +303,11 @@ def batch_log_posterior(
     fixed_log_scale=0.0,
     likelihood: str = "gauss",
     obs: Optional[ObserverTerms] = None,
+    weight=1.0,
 ):
     """:func:`log_posterior` of a whole ensemble ``phis`` (W, d) in one jitted, vmapped call."""
-    return jax.vmap(log_posterior, in_axes=(0, None, None, None, None, None, None))(
-        phis, data, lower, upper, fixed_log_scale, likelihood, obs
+    return jax.vmap(log_posterior, in_axes=(0, None, None, None, None, None, None, None))(
+        phis, data, lower, upper, fixed_log_scale, likelihood, obs, weight
     )
 
 
@@ -314,6 +317,7 @@ def ensemble_log_prob(
     bounds=None,
     fixed_scale: float | None = None,
     obs: Optional[ObserverTerms] = None,
+    weight: float = 1.0,
 ):
     """A NumPy-in/NumPy-out log-probability for ``emcee.EnsembleSampler(vectorize=True)``.
 
@@ -325,7 +329,7 @@ def ensemble_log_prob(
     ``data``: the dataset; ``likelihood``: one of :data:`LIKELIHOODS`; ``bounds``: prior box
     ``(lower, upper)`` of the Polach parameters (default ``[0, 1]^5``); ``fixed_scale``: a fixed
     noise scale [-] instead of sampling ``log_scale``; ``obs``: :class:`ObserverTerms` (required by
-    ``"observer"``, ignored otherwise).
+    ``"observer"``, ignored otherwise); ``weight``: the tempering 1/κ of :func:`log_posterior`.
     """
     if likelihood not in LIKELIHOODS:
         raise ValueError(f"likelihood must be one of {LIKELIHOODS}, got {likelihood!r}")
@@ -344,10 +348,13 @@ def ensemble_log_prob(
     data = jax.tree_util.tree_map(f64, data)
     obs = None if obs is None else jax.tree_util.tree_map(f64, obs)
     fixed = f64(0.0 if fixed_scale is None else math.log(fixed_scale))
+    weight = f64(weight)
 
     def log_prob(phis: np.ndarray) -> np.ndarray:
         return np.asarray(
-            batch_log_posterior(np.asarray(phis, np.float64), data, lower, upper, fixed, likelihood, obs)
+            batch_log_posterior(
+                np.asarray(phis, np.float64), data, lower, upper, fixed, likelihood, obs, weight
+            )
         )
 
     return log_prob

@@ -143,6 +143,7 @@ def sample_posterior(
     callback: Optional[Callable[[int], None]] = None,
     callback_every: int = 100,
     obs: Optional[ObserverTerms] = None,
+    weight: float = 1.0,
 ) -> PosteriorResult:
     """Sample the posterior of ``[kA, kS, mu0, A, B]`` (and the noise scale) with emcee.
 
@@ -163,6 +164,9 @@ def sample_posterior(
         max_derived: at most this many (evenly spaced) samples feed ``mu_max`` / ``creep_opt``.
         callback: called with the number of steps done every ``callback_every`` steps (progress).
         obs: :class:`ObserverTerms` of the recording (``"observer"`` only).
+        weight: the log-likelihood's tempering 1/κ (1: none): with κ the residuals' colour factor
+            (:func:`jadhesion.identify.uncertainty.colour_factor`) the posterior counts n/κ
+            effective samples instead of n correlated ones.
 
     Emits :class:`ChainTooShortWarning` when ``steps − burn < 50 τ_max``.
     """
@@ -170,7 +174,7 @@ def sample_posterior(
     burn = steps // 4 if burn is None else burn
     rng = np.random.default_rng(seed)
     names = PARAM_NAMES + noise_names(likelihood, fixed_scale is not None)
-    log_prob = ensemble_log_prob(data, likelihood, bounds, fixed_scale, obs)
+    log_prob = ensemble_log_prob(data, likelihood, bounds, fixed_scale, obs, weight)
     log_scale0, rho0 = initial_noise(data, theta0, likelihood, obs)
     p0 = initial_ball(
         theta0, None if fixed_scale is not None else log_scale0, walkers, rng, bounds, spread, rho0

@@ -85,6 +85,19 @@ def covariance(jac, r, fixed=None, hac=True):
     return cov, lags
 
 
+@jax.jit
+def colour_factor(r):
+    """``(κ, L)``: the residuals' long-run variance over their variance, ``κ = max(1, 1 + 2 Σ_{l=1..L}
+    (1 − l/(L+1)) ρ_l)`` (Bartlett weights, ``ρ_l`` the lag-l autocorrelation of ``r`` (n,) in time
+    order, ``L`` = :func:`bandwidth`). ``n/κ`` is the effective number of independent samples: for
+    AR(1) residuals κ → (1 + ρ)/(1 − ρ). Floored at 1 so that negatively correlated residuals never
+    narrow an interval."""
+    lags = bandwidth(r)
+    rc = r - jnp.mean(r)
+    ratio = _long_run(rc[:, None], lags)[0, 0] / jnp.maximum(jnp.sum(rc * rc), jnp.finfo(r.dtype).tiny)
+    return jnp.maximum(ratio, 1.0), lags
+
+
 def correlation(cov):
     """Correlation matrix (NumPy) of ``cov``; ``nan`` where a variance is infinite, zero or nan."""
     cov = np.asarray(cov, float)

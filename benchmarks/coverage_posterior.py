@@ -1,0 +1,136 @@
+"""Coverage of ``jadhesion posterior``'s 90 % intervals on two generators, per likelihood.
+
+    python -m benchmarks.coverage_posterior --per 8 --steps 2000
+
+Recordings: our simulator (dry, wet, sand; realistic sensors, ``--per`` seeds each, 40 s at 50 Hz)
+and the independent generator of ``validation/foreign_generator.py`` (``3 × --per`` clean
+recordings: no concealed effect, its own vehicles, profiles, rates and sensor noise). Each is
+written as a CSV + sidecar and run through the command line in this process
+(``jadhesion posterior FILE --json``), once per ``--likelihoods`` entry: ``auto`` (the default:
+the Gaussian tempered by the residuals' colour) and ``observer`` (the observer's lag modelled,
+AR(1) noise). Recorded per generator and likelihood: the share of 90 % intervals holding the truth
+of kA, kS, μ0 and of the derived μ_max, creep_opt (at the recording's median speed, from the true
+parameters; a truth on a face of the prior box is left out of that parameter's share and counted),
+the median interval width, and per recording the truth, the interval and κ. The JSON
+records the git commit, the settings and ``os.getloadavg()``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import io
+import json
+import os
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jadhesion.cli import main as cli
+from jadhesion.data.recording import load_recording
+from jadhesion.models.polach import PARAM_NAMES, adhesion_peak
+from validation import foreign_generator
+
+QUANTITIES = ("kA", "kS", "mu0", "mu_max", "creep_opt")
+#: Parameters bounded by the prior box [0, 1]; a truth within FACE_TOL of a face is left out of
+#: their coverage (a central 90 % interval cannot hold it) and counted in ``on_face``.
+FACE_PARAMS, FACE_TOL = ("kA", "kS", "mu0"), 1e-3
+
+
+def _ours(out: Path, per: int) -> list:
+    cases = []
+    for name in ("dry", "wet", "sand"):
+        for seed in range(per):
+            path = out / f"ours_{name}_{seed}.csv"
+            with contextlib.redirect_stdout(io.StringIO()):
+                cli(["simulate", "--scenario", name, "--seed", str(700 + seed), "--out", str(path)])
+            truth = json.loads(path.with_suffix(".truth.json").read_text())["params"]
+            cases.append(("ours", f"{name}/{seed}", path, truth))
+    return cases
+
+
+def _foreign(out: Path, n: int) -> list:
+    cases = []
+    for i in range(n):
+        rec = foreign_generator.generate(5100 + i, effect="none")
+        path = foreign_generator.write(rec, out / f"foreign_{i}.csv", truth=False)
+        cases.append(("foreign", f"{i}", path, rec.truth["params"]))
+    return cases
+
+
+def _derived_truth(truth: dict, path: Path, speed: float) -> dict:
+    """True μ_max and creep_opt at the speed the posterior reports them for."""
+    theta = jnp.asarray([truth[n] for n in PARAM_NAMES])
+    mu_max, creep_opt = adhesion_peak(theta, load_recording(path).vehicle.k_eps(), speed)
+    return {"mu_max": float(mu_max), "creep_opt": float(creep_opt)}
+
+
+def _run(path: Path, likelihood: str, steps: int, walkers: int) -> dict | None:
+    buf = io.StringIO()
+    args = ["posterior", str(path), "--json", "--steps", str(steps), "--walkers", str(walkers)]
+    with contextlib.redirect_stdout(buf), contextlib.redirect_stderr(io.StringIO()):
+        code = cli([*args, "--likelihood", likelihood])
+    return json.loads(buf.getvalue()) if code == 0 else None
+
+
+def summarise(rows: list) -> dict:
+    """Per ``generator/likelihood``: n, failed runs, 90 % coverage and median width per quantity."""
+    out = {}
+    for gen in sorted({r["generator"] for r in rows}):
+        for lik in sorted({r["likelihood"] for r in rows}):
+            sel = [r for r in rows if r["generator"] == gen and r["likelihood"] == lik]
+            ok = [r for r in sel if r["hit"] is not None]
+            cell = {"n": len(sel), "failed": len(sel) - len(ok), "coverage90": {}, "median_width90": {}}
+            cell["on_face"] = {q: sum(r["hit"][q] is None for r in ok) for q in FACE_PARAMS}
+            for q in QUANTITIES if ok else ():
+                hits = [r["hit"][q] for r in ok if r["hit"][q] is not None]
+                cell["coverage90"][q] = float(np.mean(hits)) if hits else None
+                cell["median_width90"][q] = float(np.median([r["width"][q] for r in ok]))
+            out[f"{gen}/{lik}"] = cell
+    return out
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--per", type=int, default=8, help="recordings per scenario of ours (foreign: 3×)")
+    p.add_argument("--steps", type=int, default=2000)
+    p.add_argument("--walkers", type=int, default=32)
+    p.add_argument("--likelihoods", default="auto,observer")
+    p.add_argument("--save", default=str(Path(__file__).parent / "results" / "coverage_posterior.json"))
+    args = p.parse_args(argv)
+    jax.config.update("jax_enable_x64", True)
+    commit = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True).stdout.strip()
+    doc = {"commit": commit, "settings": vars(args), "rows": []}
+    start = time.perf_counter()
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp)
+        cases = _ours(out, args.per) + _foreign(out, 3 * args.per)
+        for gen, label, path, truth in cases:
+            for lik in args.likelihoods.split(","):
+                res = _run(path, lik, args.steps, args.walkers)
+                row = {"generator": gen, "case": label, "likelihood": lik, "truth": truth, "hit": None}
+                if res is not None:
+                    row["truth"] = truth = {**truth, **_derived_truth(truth, path, res["vehicle_speed"])}
+                    q = {**res["params"], **res["derived"]}
+                    row["interval"] = {k: [q[k]["q05"], q[k]["q95"]] for k in QUANTITIES}
+                    row["hit"] = {k: bool(q[k]["q05"] <= truth[k] <= q[k]["q95"]) for k in QUANTITIES}
+                    for k in FACE_PARAMS:  # a central interval never holds a face of the prior box
+                        if not FACE_TOL < truth[k] < 1 - FACE_TOL:
+                            row["hit"][k] = None
+                    row["width"] = {k: q[k]["q95"] - q[k]["q05"] for k in QUANTITIES}
+                    row["tempering"] = res["tempering"]
+                doc["rows"].append(row)
+                print(gen, label, lik, row["hit"], flush=True)
+            doc["summary"] = summarise(doc["rows"])
+            doc["wall_seconds"], doc["loadavg"] = time.perf_counter() - start, os.getloadavg()
+            Path(args.save).write_text(json.dumps(doc, indent=1) + "\n")
+    print(json.dumps(doc["summary"], indent=1))
+
+
+if __name__ == "__main__":
+    main()
