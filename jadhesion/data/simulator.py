@@ -30,6 +30,7 @@ from .scenarios import envelope, get_scenario
 from .sensors import measure, sensor_model
 from .traction_plant import KI, KP, LOAD_DROOP, contact, controller, integrate
 from .traction_profile import profile_constants, random_profile
+from .validate import RAW_COLUMNS
 from .vehicle import LOCO_22E, Vehicle
 
 #: Recording sample period [s] (50 Hz) and ROS2 steps per sample (internal step 2 ms).
@@ -37,6 +38,9 @@ SAMPLE_PERIOD = 0.02
 SUBSTEPS = 10
 INTERNAL_STEP = SAMPLE_PERIOD / SUBSTEPS
 DEFAULT_SAMPLES = 2000
+#: Columns of a simulated recording, in file order: the raw signals and, computed from the recorded
+#: speeds and the observer, creepage [-], slip velocity [m/s] and adhesion (``mu_hat``) [-].
+COLUMNS = RAW_COLUMNS + ("creepage", "slip_velocity", "adhesion")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -44,8 +48,8 @@ class SimulationResult:
     """A simulated recording.
 
     Attributes:
-        columns: numpy arrays in the recording format (``time``, ``vehicle_speed``, ``wheel_speed``,
-            ``traction_torque``) plus ``creepage``, ``slip_velocity``, ``adhesion`` (= ``mu_hat``).
+        columns: numpy arrays of the recording, :data:`COLUMNS` in that order (the raw signals plus
+            ``creepage``, ``slip_velocity``, ``adhesion`` = ``mu_hat``).
         vehicle: the :class:`Vehicle` (nominal radius).
         truth: JSON-ready metadata: scenario, seed, true parameters, effects, noise, envelope.
         latent: noise-free true signals (``creepage``, ``slip_velocity``, ``adhesion``, ``torque``).
@@ -214,7 +218,7 @@ def simulate_many(
     results = []
     for i, seed in enumerate(seeds):
         result = SimulationResult(
-            columns={k: np.asarray(v[i]) for k, v in columns.items()},
+            columns={k: np.asarray(columns[k][i]) for k in COLUMNS},
             vehicle=vehicle,
             truth=_truth(scenario, seed, mags, vehicle, float(c["duration"]), model, sample_period, braking),
             latent={k: np.asarray(v[i]) for k, v in latent.items()},
