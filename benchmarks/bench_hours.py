@@ -101,14 +101,13 @@ def _stages(path: str, method: str) -> dict:
 
 
 def _simulate(path: Path, rows: int) -> None:
-    from jadhesion.cli.simulate import RECORDING_COLUMNS
     from jadhesion.config import enable_x64
     from jadhesion.data.recording import save_recording
     from jadhesion.data.simulator import simulate
 
     enable_x64()
     result = simulate("dry", seed=0, n_samples=rows, sample_period=1.0 / RATE_HZ)
-    save_recording({k: result.columns[k] for k in RECORDING_COLUMNS}, result.vehicle, path)
+    save_recording(result.columns, result.vehicle, path)
 
 
 _READERS = {

@@ -13,10 +13,10 @@ timed warm (a short warm-up run first, so JAX's compile is excluded and reported
 **Calibration.** (a) ``N`` synthetic datasets, truths drawn uniformly in an interior sub-box, iid
 Gaussian noise σ = 0.013 (the sampler's model is exact, so the 90 % intervals should contain the
 truth in 85–95 % of cases); (b) ``N // 4`` simulated recordings per paper scenario
-(:func:`jadhesion.data.simulator.simulate_batch`; observer noise is filtered, hence correlated, so the
-iid likelihood is misspecified there) with the paper's parameters as truth. Truths on a box face use
-the one-sided interval reaching that face. A parameter counts as *identified* when its median 90 %
-interval is narrower than a quarter of the box.
+(:func:`jadhesion.data.simulated_datasets.simulate_batch`; observer noise is filtered, hence
+correlated, so the iid likelihood is misspecified there) with the paper's parameters as truth.
+Truths on a box face use the one-sided interval reaching that face. A parameter counts as
+*identified* when its median 90 % interval is narrower than a quarter of the box.
 
 **Likelihoods on recordings** (``--recordings M``): ``M`` simulated 22E recordings (a third per
 scenario, seeds 1000…, ``--recording-points`` samples each) with the paper's
@@ -39,12 +39,12 @@ jax.config.update("jax_enable_x64", True)
 
 from jadhesion.cli.common import emit_json, table  # noqa: E402
 from jadhesion.data.scenarios import SCENARIOS  # noqa: E402
-from jadhesion.data.simulator import (  # noqa: E402
+from jadhesion.data.simulated_datasets import (  # noqa: E402
     result_dataset,
     simulate_batch,
     simulate_dataset,
-    simulate_many,
 )
+from jadhesion.data.simulator import simulate_many  # noqa: E402
 from jadhesion.identify.ensemble import ChainTooShortWarning, run_ensemble  # noqa: E402
 from jadhesion.identify.laplace import initial_spread, lm_optimum  # noqa: E402
 from jadhesion.identify.likelihood import (  # noqa: E402

@@ -18,7 +18,7 @@ import jax
 
 from jadhesion.cli.common import emit_json, table
 from jadhesion.config import enable_x64
-from jadhesion.data.simulator import simulate_dataset
+from jadhesion.data.simulated_datasets import simulate_dataset
 from jadhesion.experiments import online as ex
 from jadhesion.identify import online as ol
 

@@ -72,7 +72,7 @@ def loop_rates(args) -> dict:
     """Fits/s of Python loops over single fits: jitted ``fit_polach``, and scipy if installed."""
     import jax
 
-    from jadhesion.data.simulator import simulate_batch
+    from jadhesion.data.simulated_datasets import simulate_batch
     from jadhesion.identify.polach_fit import fit_polach
     from jadhesion.models.polach import polach_adhesion
     from jadhesion.sweeps import fit_key

@@ -132,7 +132,8 @@ def test_lowpass_matches_the_observer_filter():
 def test_observer_prediction_is_exact_on_a_noise_free_recording():
     """The observer's lag and torque leak, modelled, leave ~nothing at the true parameters; the
     plain curve leaves the lag (large in the sand test's fast slip excursion)."""
-    from jadhesion.data.simulator import result_dataset, simulate
+    from jadhesion.data.simulated_datasets import result_dataset
+    from jadhesion.data.simulator import simulate
     from jadhesion.identify.likelihood import recording_observer_terms
 
     sim = simulate("sand", 1, n_samples=400, noise=False)

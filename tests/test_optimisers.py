@@ -11,7 +11,7 @@ import scipy.optimize
 import jadhesion
 from jadhesion.cli import fit as cli_fit
 from jadhesion.data.dataset import PolachDataset
-from jadhesion.data.simulator import simulate_dataset
+from jadhesion.data.simulated_datasets import simulate_dataset
 from jadhesion.experiments import table2
 from jadhesion.identify import (
     ALGORITHMS,

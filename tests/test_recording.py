@@ -10,7 +10,8 @@ from hypothesis import strategies as st
 
 from jadhesion.data.dataset import PolachDataset, to_dataset
 from jadhesion.data.observer import observe_adhesion
-from jadhesion.data.recording import MAX_SPEED, Recording, load_recording, save_recording, vehicle_sidecar
+from jadhesion.data.recording import Recording, load_recording, save_recording, vehicle_sidecar
+from jadhesion.data.validate import MAX_SPEED
 from jadhesion.data.vehicle import LOCO_22E, Vehicle
 from jadhesion.errors import InputError, RecordingError
 from jadhesion.models.kinematics import SPEED_FLOOR

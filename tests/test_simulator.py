@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 from jadhesion.data.scenarios import SCENARIOS, envelope, paper_envelope
-from jadhesion.data.simulator import simulate, simulate_batch, simulate_dataset, simulate_many
+from jadhesion.data.simulated_datasets import simulate_batch, simulate_dataset
+from jadhesion.data.simulator import simulate, simulate_many
 from jadhesion.errors import InputError
 from jadhesion.models.effects import EFFECTS, magnitudes
 

@@ -7,8 +7,9 @@ import json
 import math
 from pathlib import Path
 
-from ..data.recording import _load_sidecar, save_recording
+from ..data.recording import save_recording
 from ..data.scenarios import get_scenario
+from ..data.sidecar import _load_sidecar
 from ..data.simulator import DEFAULT_SAMPLES, SAMPLE_PERIOD, simulate
 from ..data.vehicle import LOCO_22E
 from ..errors import RecordingError
@@ -16,15 +17,6 @@ from ..models.effects import magnitudes
 from ..models.polach import PARAM_NAMES
 from .common import UserError, emit_json
 
-RECORDING_COLUMNS = (
-    "time",
-    "vehicle_speed",
-    "wheel_speed",
-    "traction_torque",
-    "creepage",
-    "slip_velocity",
-    "adhesion",
-)
 #: Accepted ranges of ``--params`` values (physical validity, not the fit's box): name → (lo, hi,
 #: whether lo itself is allowed).
 PARAM_RANGES = {
@@ -122,7 +114,7 @@ def run(args) -> int:
         braking=args.test == "braking",
         sensor_noise=args.sensor_noise,
     )
-    save_recording({k: result.columns[k] for k in RECORDING_COLUMNS}, result.vehicle, out)
+    save_recording(result.columns, result.vehicle, out)
     truth_path = out.with_suffix(".truth.json")
     truth_path.write_text(json.dumps(result.truth, indent=2, allow_nan=False) + "\n", encoding="utf-8")
     summary = {

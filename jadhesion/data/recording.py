@@ -14,14 +14,15 @@ they are never validated. Blank lines and lines starting with ``#`` are skipped.
 take the 22E defaults, a JSON ``null`` means "default", unknown keys are ignored (listed in
 :attr:`Recording.notes`), a wrong type or value is an error.
 
-Validation raises :class:`~jadhesion.errors.RecordingError` with one line naming the file, the
-column and the 1-based data row (and the file's line number), e.g.
+Validation (:mod:`.validate`) raises :class:`~jadhesion.errors.RecordingError` with one line
+naming the file, the column and the 1-based data row (and the file's line number), e.g.
 ``data.csv: column 'vehicle_speed', row 17 (line 18): 'abc' is not a number``. Checked: missing file,
 directory, empty file, binary or non-UTF-8 content, missing header, duplicate/empty column names,
 missing required columns, rows with the wrong number of fields, empty cells, text, NaN/inf, time not
-strictly increasing, implausible magnitudes (speeds above :data:`MAX_SPEED` — km/h instead of m/s —,
-wheel and vehicle speeds in different units, torque in kN·m, adhesion outside ±:data:`MAX_ADHESION`),
-and a sidecar that is unreadable, not a JSON object, or has a key of the wrong type or value.
+strictly increasing, implausible magnitudes (speeds above :data:`~.validate.MAX_SPEED` — km/h
+instead of m/s —, wheel and vehicle speeds in different units, torque in kN·m, adhesion outside
+±:data:`~.validate.MAX_ADHESION`), and a sidecar that is unreadable, not a JSON object, or has a
+key of the wrong type or value.
 
 Sign conventions: negative vehicle and wheel speeds are **allowed** (running in reverse; creepage is
 ``w / max(|v|, floor)`` and both models are odd in creep), as are zero speeds (standstill) and
@@ -41,13 +42,11 @@ from .formats import is_binary, read_columns
 from .readers import _fast_parse, _parse_rows, _read_text
 from .sidecar import _load_sidecar
 from .units import ColumnSpec, parse_column_map, to_si
-
-# Re-exported: other code reads the validation constants from here.
 from .validate import (
     KNOWN_COLUMNS,
-    MAX_ADHESION,  # noqa: F401
     MAX_SPEED,
     RAW_COLUMNS,
+    _check_finite,
     _check_layout,
     _check_values,
     _convert_column,
@@ -126,19 +125,6 @@ def _column_map(columns, sidecar: dict, sidecar_name: str, header, name: str, ax
     return specs
 
 
-def _check_finite(cols, name, shown):
-    """Binary formats: the first NaN or inf (a Parquet null is NaN) of a validated column."""
-    for col, values in cols.items():
-        bad = np.flatnonzero(~np.isfinite(values))
-        if bad.size:
-            i = int(bad[0])
-            raise _fail(
-                name,
-                f"column {shown.get(col, col)!r}, row {i + 1}: {values[i]} is not a "
-                f"finite number (NaN, a missing value, and inf are not allowed)",
-            )
-
-
 def load_recording(path, *, columns=(), axle=None, max_speed: float = MAX_SPEED) -> Recording:
     """Load and validate a recording (CSV, or by suffix Parquet ``.parquet``/``.pq`` and MATLAB
     ``.mat`` v5/v7.3, :mod:`jadhesion.data.formats`) and its optional sidecar
@@ -199,8 +185,10 @@ def load_recording(path, *, columns=(), axle=None, max_speed: float = MAX_SPEED)
         else:
             spec = specs.get(col)
             columns[col] = values if spec is None else values * to_si(spec, vehicle.wheel_radius_m)
-    if lines is None:
-        _check_finite({c: columns[c] for c in required if c in columns}, name, shown)
+    if lines is None:  # a CSV's cells were checked as they were converted
+        for c in required:
+            if c in columns:
+                _check_finite(columns[c], shown.get(c, c), name)
     if ignored:
         notes += (
             f"{name}: non-numeric column{'s' if len(ignored) > 1 else ''} "

@@ -36,8 +36,8 @@ class Scenario:
     standard deviation ``wander`` [-]; one slip excursion peaks at ``max_creep`` (cos² pulse of
     half-width ``excursion_width_s`` [s]) when the speed ramp passes ``max_slip / max_creep``, and
     ``minor_excursions`` more reach ``minor_peak`` × ``max_creep``. The load holds the speed on a
-    ramp ``v_mean (1 + speed_ramp (t/T − 1/2))``. White sensor noise: ``torque_noise`` [N·m],
-    ``speed_noise`` [m/s] on the wheel and vehicle speeds.
+    ramp ``v_mean (1 + speed_ramp (t/T − 1/2))``. ``torque_noise`` [N·m]: the torque channel's white
+    noise (the speed channels' noise is the sensor model's, :mod:`.sensors`).
     """
 
     name: str
@@ -58,7 +58,6 @@ class Scenario:
     minor_peak: float
     speed_ramp: float
     torque_noise: float
-    speed_noise: float
 
     @property
     def mean_speed(self) -> float:
@@ -75,6 +74,12 @@ class Scenario:
         return dataclasses.replace(self, **changes)
 
 
+#: Profile settings shared by all three tests: ramp-in over the first 4 % of the recording, speed
+#: ramp ±20 % about the mean.
+_SHARED = dict(ramp_fraction=0.04, speed_ramp=0.4)
+#: The dry and wet tests' wander and excursions: a slow main excursion and two minor ones.
+_DRY_WET = dict(wander=0.25, excursion_width_s=0.6, minor_excursions=2, minor_peak=0.3)
+
 SCENARIOS = {
     s.name: s
     for s in (
@@ -90,14 +95,9 @@ SCENARIOS = {
             0.0108,
             creep_base=0.0052,
             creep_start=0.0022,
-            ramp_fraction=0.04,
-            wander=0.25,
-            excursion_width_s=0.6,
-            minor_excursions=2,
-            minor_peak=0.3,
-            speed_ramp=0.4,
             torque_noise=1700.0,
-            speed_noise=5e-5,
+            **_SHARED,
+            **_DRY_WET,
         ),
         Scenario(
             "wet",
@@ -111,14 +111,9 @@ SCENARIOS = {
             0.0119,
             creep_base=0.0024,
             creep_start=0.0012,
-            ramp_fraction=0.04,
-            wander=0.25,
-            excursion_width_s=0.6,
-            minor_excursions=2,
-            minor_peak=0.3,
-            speed_ramp=0.4,
             torque_noise=1850.0,
-            speed_noise=5e-5,
+            **_SHARED,
+            **_DRY_WET,
         ),
         Scenario(
             "sand",
@@ -132,14 +127,12 @@ SCENARIOS = {
             0.0167,
             creep_base=0.0062,
             creep_start=0.0008,
-            ramp_fraction=0.04,
+            torque_noise=2600.0,
             wander=0.15,
             excursion_width_s=0.12,
             minor_excursions=0,
             minor_peak=0.1,
-            speed_ramp=0.4,
-            torque_noise=2600.0,
-            speed_noise=5e-5,
+            **_SHARED,
         ),
     )
 }

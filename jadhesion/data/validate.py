@@ -79,15 +79,29 @@ def _convert_column(cells: np.ndarray, col: str, lines, name: str, strict: bool)
                 raise _fail(name, f"{where}: {_show(cell)} is not a number") from None
         raise  # pragma: no cover  (numpy and float() disagree)
     if strict:
-        bad = np.flatnonzero(~np.isfinite(values))
-        if bad.size:
-            i = int(bad[0])
-            raise _fail(
-                name,
-                f"column {col!r}, row {i + 1} (line {lines[i]}): {_show(cells[i].strip())}"
-                f" is not a finite number (NaN and inf are not allowed)",
-            )
+        _check_finite(values, col, name, lines, cells)
     return values
+
+
+def _check_finite(values, col: str, name: str, lines=None, cells=None):
+    """Raise at the first NaN or inf of column ``col`` (the user's name for it). A CSV's error shows
+    the cell's text and its line (``lines``, ``cells``); a binary format's (no lines; a Parquet null
+    is NaN) shows the value."""
+    bad = np.flatnonzero(~np.isfinite(values))
+    if not bad.size:
+        return
+    i = int(bad[0])
+    if lines is None:
+        raise _fail(
+            name,
+            f"column {col!r}, row {i + 1}: {values[i]} is not a "
+            f"finite number (NaN, a missing value, and inf are not allowed)",
+        )
+    raise _fail(
+        name,
+        f"column {col!r}, row {i + 1} (line {lines[i]}): {_show(cells[i].strip())}"
+        f" is not a finite number (NaN and inf are not allowed)",
+    )
 
 
 def _check_values(cols, vehicle: Vehicle, lines, name: str, max_speed: float, shown: dict):

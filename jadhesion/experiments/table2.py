@@ -46,7 +46,8 @@ import numpy as np
 
 from ..data.dataset import to_dataset
 from ..data.scenarios import get_scenario
-from ..data.simulator import simulate_many, stack_datasets
+from ..data.simulated_datasets import stack_datasets
+from ..data.simulator import simulate_many
 from ..identify.driver import run as run_population
 from ..identify.methods import NAMES
 from ..identify.polach_fit import ALGORITHMS, fit_polach, polach_mae

@@ -29,7 +29,7 @@ import numpy as np
 from jax.experimental.multihost_utils import sync_global_devices
 
 from ..data.scenarios import SCENARIOS
-from ..data.simulator import simulate_batch
+from ..data.simulated_datasets import simulate_batch
 from ..errors import InputError
 from ..models.polach import PARAM_NAMES
 from ..status import status_labels
