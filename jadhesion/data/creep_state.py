@@ -37,7 +37,8 @@ sensors' noises are independent, so the 2-vector update is two scalar updates (n
 determinant); ``F = I + Δt N`` is applied by moving rows of ``P``; the backward pass is the
 modified Bryson–Frazier form of the RTS smoother (adjoints ``λ``, ``Λ``; no inverse of the
 predicted covariance). Same likelihoods, means and covariances as the dense filter and RTS smoother
-to rounding (``tests/test_creep_state.py``), 4–5× faster (``benchmarks/bench_smoother.py``).
+to rounding (``tests/test_creep_state.py``), in about a quarter of the CPU time
+(``benchmarks/bench_smoother.py``).
 """
 
 from __future__ import annotations
