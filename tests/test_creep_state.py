@@ -6,6 +6,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from jadhesion.data import creep_state
 from jadhesion.data.creep_state import difference_sd, smooth_creep, smooth_recording
 from jadhesion.data.dataset import to_dataset
 from jadhesion.data.sensors import SensorModel
@@ -71,6 +72,52 @@ def test_any_spacing_standstill_and_vmap():
     sigs = [_signals(300, jax.random.PRNGKey(k)) for k in (4, 5)]
     batch = jax.vmap(lambda *a: _smooth(a))(*(jnp.stack(x) for x in zip(*sigs, strict=True)))
     np.testing.assert_allclose(batch.creep[1], _smooth(sigs[1]).creep, rtol=1e-9, atol=1e-12)
+
+
+def _textbook(y, t, r, q):
+    """Dense Kalman filter (2-vector update, LAPACK solves) and Rauch–Tung–Striebel smoother in
+    NumPy: log-likelihood, smoothed means (n, 4) and covariances (n, 4, 4)."""
+    H, R = np.array([[1.0, 0, 1, 0], [1, 0, 0, 0]]), np.diag(r)
+    x, p = np.array([y[0, 1], 0, y[0, 0] - y[0, 1], 0]), np.diag([r[1], 1, r[0] + r[1], 1])
+    xs, ps, xps, pps, fs, ll = [], [], [], [], [], 0.0
+    for k, dt in enumerate(np.diff(t, prepend=t[0])):
+        f1, b = np.array([[1, dt], [0, 1]]), np.array([[dt**3 / 3, dt**2 / 2], [dt**2 / 2, dt]])
+        F = np.kron(np.eye(2), f1)
+        x, p = F @ x, F @ p @ F.T + np.kron(np.diag(q), b)
+        xps.append(x), pps.append(p), fs.append(F)
+        s, nu = H @ p @ H.T + R, y[k] - H @ x
+        ll -= 0.5 * (np.linalg.slogdet(2 * np.pi * s)[1] + nu @ np.linalg.solve(s, nu))
+        gain = np.linalg.solve(s, H @ p).T
+        x, p = x + gain @ nu, p - gain @ H @ p
+        p = 0.5 * (p + p.T)  # unsymmetrised, the dense update drifts at large q
+        xs.append(x), ps.append(p)
+    for k in range(len(t) - 2, -1, -1):
+        g = np.linalg.solve(pps[k + 1], fs[k + 1] @ ps[k]).T
+        xs[k] = xs[k] + g @ (xs[k + 1] - xps[k + 1])
+        ps[k] = ps[k] + g @ (ps[k + 1] - pps[k + 1]) @ g.T
+    return ll, np.array(xs), np.array(ps)
+
+
+def test_elementwise_filter_and_backward_pass_equal_the_textbook_ones():
+    """The fast filter (scalar updates, no dots) and the inverse-free backward pass give the dense
+    filter's likelihood and the RTS smoother's means and covariances, on jittered time stamps and
+    over the whole q grid's range (so the grid's maximum is the same)."""
+    t, yw, yv, _ = (np.asarray(a) for a in _signals(200, jax.random.PRNGKey(6), jitter=True))
+    y, r = np.stack([yw, yv], axis=1), np.array([1.2e-6, 0.8e-6])
+
+    @jax.jit
+    def fast(q):
+        stored, ll = creep_state._filter(jnp.asarray(y), jnp.diff(t), jnp.asarray(r), q)
+        return ll, creep_state._smooth(stored, jnp.diff(t))
+
+    for q in ((1e-8, 1e-1), (1e-3, 1e-6), (10.0, 1e3)):
+        ll, xs, ps = _textbook(y, t, r, np.array(q))
+        ll_fast, (means, (var_v, var_w, cov)) = fast(jnp.asarray(q))
+        assert float(ll_fast) == pytest.approx(ll, rel=1e-10, abs=1e-6), q
+        scale = np.abs(xs).max(axis=0)  # per state: v, a, w, ẇ differ by orders of magnitude
+        np.testing.assert_allclose(np.asarray(means) / scale, xs / scale, rtol=1e-8, atol=1e-10)
+        for got, want in ((var_v, ps[:, 0, 0]), (var_w, ps[:, 2, 2]), (cov, ps[:, 0, 2])):
+            np.testing.assert_allclose(got, want, rtol=1e-6, atol=1e-9 * np.abs(want).max())
 
 
 def test_to_dataset_smoothed_default_and_raw_option():

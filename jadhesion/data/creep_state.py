@@ -21,8 +21,8 @@ smooth signal is nearly zero while white noise gives ``Var(Δ³e) = 20 σ²``, s
 ``σ = 1.4826 · MAD(Δ³y) / √20`` (robust to slip excursions). ``q_v``, ``q_w``: maximum of the
 Kalman filter's exact Gaussian log-likelihood (prediction-error decomposition) over a log grid
 (:data:`Q_GRID`, decade steps; first ``q_w`` at the smallest ``q_v`` — a heavy vehicle — then
-``q_v`` at that ``q_w``), each grid in one vmapped scan (2 × 13 filter passes: the cost of the
-smoother). Noise correlated over longer than a few samples (coloured sensor noise) is not
+``q_v`` at that ``q_w``), each grid in one vmapped scan (2 × 13 filter passes: most of the
+smoother's cost). Noise correlated over longer than a few samples (coloured sensor noise) is not
 separable from motion in one recording; it is partly tracked as signal, and the reported standard
 deviations then understate the error (by 10–30 % at the simulator's realistic sensors).
 
@@ -31,6 +31,14 @@ deviations then understate the error (by 10–30 % at the simulator's realistic 
 deviations from the smoother's covariance (``Var s = (Var w − 2 s Cov(w, v) + s² Var v) /
 max(|v|, floor)²``), and the observer's adhesion from the smoothed wheel acceleration without
 filter lag: ``μ̂ = (T − J (a + ẇ)/r) / (m g r)``. Everything is ``lax.scan``: linear in length.
+
+**Cost.** A step is a few fused elementwise kernels, not a chain of small matrix products: the two
+sensors' noises are independent, so the 2-vector update is two scalar updates (no inverse, no
+determinant); ``F = I + Δt N`` is applied by moving rows of ``P``; the backward pass is the
+modified Bryson–Frazier form of the RTS smoother (adjoints ``λ``, ``Λ``; no inverse of the
+predicted covariance). Same likelihoods, means and covariances as the dense filter and RTS smoother
+to rounding (``tests/test_creep_state.py``), in about a quarter of the CPU time
+(``benchmarks/bench_smoother.py``).
 """
 
 from __future__ import annotations
@@ -48,7 +56,9 @@ from .vehicle import GRAVITY
 Q_GRID = np.arange(-8.0, 4.01, 1.0)
 #: Smallest measurement sd [m/s] (a noise-free or coarsely quantised channel).
 MIN_MEASUREMENT_SD = 1e-6
-_H = np.array([[1.0, 0.0, 1.0, 0.0], [1.0, 0.0, 0.0, 0.0]])
+#: The sensors as the states they sum (rows of ``H``), in the order they are applied: vehicle speed
+#: ``v``, wheel speed ``v + w`` (independent noises: one 2-vector update is these two scalar ones).
+_SENSORS = ((0,), (0, 2))
 
 
 class CreepEstimate(NamedTuple):
@@ -73,13 +83,32 @@ def difference_sd(y):
     return 1.4826 * jnp.median(jnp.abs(d3 - jnp.median(d3))) / jnp.sqrt(20.0)
 
 
-def _transition(dt, q_v, q_w):
-    z = jnp.zeros((2, 2), dt.dtype)
-    f = jnp.array([[1.0, 0.0], [0.0, 1.0]], dt.dtype) + jnp.array([[0.0, 1.0], [0.0, 0.0]]) * dt
-    base = jnp.array([[dt**3 / 3, dt**2 / 2], [dt**2 / 2, dt]])
-    F = jnp.block([[f, z], [z, f]])
-    Q = jnp.block([[q_v * base, z], [z, q_w * base]])
-    return F, Q
+def _predict(x, p, dt, q):
+    """``(F x, F P Fᵀ + Q)`` over a step ``dt`` [s], ``q = (q_v, q_w)``; ``F = I + dt N`` with
+    ``N x = (a, 0, ẇ, 0)`` applied by moving rows (no gathers, no dots), exactly symmetric."""
+    z = jnp.zeros_like(p[0])
+    n_p = jnp.stack([p[1], z, p[3], z])  # N P
+    p = p + dt * (n_p + n_p.T) + dt**2 * jnp.stack([n_p[:, 1], z, n_p[:, 3], z], axis=1)
+    base = jnp.stack([jnp.stack([dt**3 / 3, dt**2 / 2]), jnp.stack([dt**2 / 2, dt])])
+    zb = jnp.zeros_like(base)
+    p = p + jnp.block([[q[0] * base, zb], [zb, q[1] * base]])
+    return x + dt * jnp.stack([x[1], z[0], x[3], z[0]]), p
+
+
+def _mv(a, b):
+    """``a @ b`` for a (4, 4) and a (4,) written as a sum of columns (fuses into the step)."""
+    return sum(a[:, j] * b[j] for j in range(4))
+
+
+def _update(x, p, idx, obs, r):
+    """One scalar measurement ``obs = Σ_{i ∈ idx} x_i + e``, ``Var e = r``: updated mean and
+    covariance, the log-likelihood of ``obs`` and what the backward pass needs (gain ``k``, ``ν/s``,
+    ``1/s``). Sums over the sensor's states instead of products with ``h``: no reductions."""
+    ph = sum(p[:, i] for i in idx)
+    s = sum(ph[i] for i in idx) + r
+    nu = obs - sum(x[i] for i in idx)
+    ll = -0.5 * (jnp.log(2.0 * jnp.pi * s) + nu * nu / s)
+    return x + ph * (nu / s), p - ph[:, None] * ph[None, :] / s, ll, (ph / s, nu / s, 1.0 / s)
 
 
 def _initial(y, r):
@@ -89,57 +118,66 @@ def _initial(y, r):
 
 
 def _filter(y, dts, r, q, keep=True):
-    """Kalman filter: filtered means/covariances (n, 4)/(n, 4, 4), predicted ones for steps 1..n−1,
-    and the log-likelihood of ``y`` (n, 2) = (wheel speed, vehicle speed); with ``keep=False`` the
-    log-likelihood only (nothing stored per step: the noise grid's passes)."""
-    H = jnp.asarray(_H, y.dtype)
-    R = jnp.diag(r)
-
-    def update(x, p, obs):
-        s = H @ p @ H.T + R
-        innov = obs - H @ x
-        # 2 × 2 innovation covariance inverted in closed form (the same numbers to rounding as a
-        # LAPACK solve and slogdet, at half the cost of a filter step)
-        det = s[0, 0] * s[1, 1] - s[0, 1] * s[1, 0]
-        s_inv = jnp.stack([jnp.stack([s[1, 1], -s[0, 1]]), jnp.stack([-s[1, 0], s[0, 0]])]) / det
-        k = (s_inv @ (H @ p)).T
-        ll = -0.5 * (jnp.log(det) + innov @ s_inv @ innov + 2.0 * jnp.log(2.0 * jnp.pi))
-        p = p - k @ H @ p
-        return x + k @ innov, 0.5 * (p + p.T), ll
-
-    x0, p0 = _initial(y, r)
-    x0, p0, ll0 = update(x0, p0, y[0])
+    """Kalman filter over ``y`` (n, 2) = (wheel speed, vehicle speed) with steps ``dts`` (n − 1,):
+    its exact log-likelihood (prediction-error decomposition) and, with ``keep``, per sample the
+    predicted mean (n, 4) and covariance (n, 4, 4) and each update's ``(k, ν/s, 1/s)`` (stacked
+    vehicle, wheel) for :func:`_smooth`. Sample 0 is a zero step from the prior :func:`_initial`."""
+    obs_r = (r[1], r[0])
 
     def step(carry, inputs):
         x, p, ll = carry
         obs, dt = inputs
-        F, Q = _transition(dt, q[0], q[1])
-        xp, pp = F @ x, F @ p @ F.T + Q
-        x, p, l1 = update(xp, pp, obs)
-        return (x, p, ll + l1), ((x, p, xp, pp) if keep else None)
+        x, p = _predict(x, p, dt, q)
+        xp, pp, parts = x, p, []
+        for idx, o, rr in zip(_SENSORS, (obs[1], obs[0]), obs_r, strict=True):
+            x, p, l1, part = _update(x, p, idx, o, rr)
+            ll, parts = ll + l1, parts + [part]
+        stored = (xp, pp, *(jnp.stack(a) for a in zip(*parts, strict=True))) if keep else None
+        return (x, p, ll), stored
 
-    (_, _, ll), stored = jax.lax.scan(step, (x0, p0, ll0), (y[1:], dts))
-    if not keep:
-        return ll
-    xs, ps, xps, pps = stored
-    return (jnp.concatenate([x0[None], xs]), jnp.concatenate([p0[None], ps]), xps, pps, ll)
+    x0, p0 = _initial(y, r)
+    dts = jnp.concatenate([jnp.zeros(1, dts.dtype), dts])
+    (_, _, ll), stored = jax.lax.scan(step, (x0, p0, jnp.zeros((), y.dtype)), (y, dts))
+    return (stored, ll) if keep else ll
 
 
-def _smooth(xs, ps, xps, pps, dts, q):
-    """Rauch–Tung–Striebel backward pass: smoothed means (n, 4) and covariances (n, 4, 4)."""
+def _smooth(stored, dts):
+    """Backward pass (modified Bryson–Frazier: no matrix inverse): from the adjoint ``λ``, ``Λ`` of
+    the predicted state, ``x̂ = x⁻ − P⁻ λ`` and ``P̂ = P⁻ − P⁻ Λ P⁻``. Returns the smoothed means
+    (n, 4) and ``(Var v, Var w, Cov(v, w))`` (n,) each."""
 
     def step(carry, inputs):
-        xs_next, ps_next = carry
-        x, p, xp, pp, dt = inputs
-        F, _ = _transition(dt, q[0], q[1])
-        g = jnp.linalg.solve(pp, F @ p).T
-        x_s = x + g @ (xs_next - xp)
-        p_s = p + g @ (ps_next - pp) @ g.T
-        p_s = 0.5 * (p_s + p_s.T)
-        return (x_s, p_s), (x_s, p_s)
+        lam, big = carry
+        (xp, pp, k, nu_s, inv_s), dt = inputs
+        for j in (1, 0):  # the updates in reverse; Λ ← h hᵀ/s + Cᵀ Λ C, λ ← −h ν/s + Cᵀ λ, C = I − k hᵀ
+            h = jnp.asarray(np.isin(np.arange(4), _SENSORS[j]), big.dtype)
+            m = _mv(big, k[j])
+            hm = h[:, None] * m[None, :]
+            big = (
+                big
+                - (hm + hm.T)
+                + (sum(k[j, i] * m[i] for i in range(4)) + inv_s[j]) * (h[:, None] * h[None, :])
+            )
+            lam = lam - h * (sum(k[j, i] * lam[i] for i in range(4)) + nu_s[j])
+        x = xp - _mv(pp, lam)
+        m0, m2 = _mv(big, pp[:, 0]), _mv(big, pp[:, 2])
+        var = (
+            pp[0, 0] - sum(pp[i, 0] * m0[i] for i in range(4)),
+            pp[2, 2] - sum(pp[i, 2] * m2[i] for i in range(4)),
+            pp[0, 2] - sum(pp[i, 0] * m2[i] for i in range(4)),
+        )
+        # to the step before: λ ← Fᵀ λ, Λ ← Fᵀ Λ F over dt (Nᵀ moves rows down)
+        z = jnp.zeros_like(big[0])
+        n_big = jnp.stack([z, big[0], z, big[2]])
+        big = big + dt * (n_big + n_big.T) + dt**2 * jnp.stack([z, n_big[:, 0], z, n_big[:, 2]], axis=1)
+        lam = lam + dt * jnp.stack([z[0], lam[0], z[0], lam[2]])
+        return (lam, big), (x, jnp.stack(var))
 
-    _, (xb, pb) = jax.lax.scan(step, (xs[-1], ps[-1]), (xs[:-1], ps[:-1], xps, pps, dts), reverse=True)
-    return jnp.concatenate([xb, xs[-1:]]), jnp.concatenate([pb, ps[-1:]])
+    xp = stored[0]
+    zero = (jnp.zeros_like(xp[0]), jnp.zeros_like(stored[1][0]))
+    dts = jnp.concatenate([jnp.zeros(1, dts.dtype), dts])
+    _, (xs, var) = jax.lax.scan(step, zero, (stored, dts), reverse=True)
+    return xs, var.T
 
 
 def _log_likelihood(y, dts, r, q):
@@ -178,10 +216,9 @@ def smooth_creep(time, wheel_speed, vehicle_speed, torque, inertia, wheel_radius
     r, q = estimate_noise(time, wheel_speed, vehicle_speed)
     dts = jnp.diff(time)
     y = jnp.stack([wheel_speed, vehicle_speed], axis=1)
-    xs, ps, xps, pps, _ = _filter(y, dts, r, q)
-    xm, pm = _smooth(xs, ps, xps, pps, dts, q)
+    stored, _ = _filter(y, dts, r, q)
+    xm, (var_v, var_w, cov) = _smooth(stored, dts)
     v, a, w, wd = xm.T
-    var_v, var_w, cov = pm[:, 0, 0], pm[:, 2, 2], pm[:, 0, 2]
     speed = jnp.maximum(jnp.abs(v), SPEED_FLOOR)
     s = w / speed
     var_s = jnp.maximum(var_w - 2.0 * s * cov + s * s * var_v, 0.0) / speed**2
