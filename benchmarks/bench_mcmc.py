@@ -50,9 +50,9 @@ from jadhesion.identify.laplace import initial_spread, lm_optimum  # noqa: E402
 from jadhesion.identify.likelihood import (  # noqa: E402
     LOG_SCALE_BOUNDS,
     ensemble_log_prob,
-    recording_observer_terms,
 )
 from jadhesion.identify.mcmc import initial_ball  # noqa: E402
+from jadhesion.identify.observer_view import recording_observer_terms  # noqa: E402
 from validation.calibration import (  # noqa: E402
     QUANTITIES,
     binomial_band,

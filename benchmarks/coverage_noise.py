@@ -39,7 +39,7 @@ from jadhesion.data.dataset import to_dataset  # noqa: E402
 from jadhesion.data.scenarios import SCENARIOS  # noqa: E402
 from jadhesion.data.sensors import REALISTIC  # noqa: E402
 from jadhesion.data.simulator import simulate_many  # noqa: E402
-from jadhesion.identify.likelihood import recording_observer_terms  # noqa: E402
+from jadhesion.identify.observer_view import recording_observer_terms  # noqa: E402
 from jadhesion.identify.polach_fit import fit_polach  # noqa: E402
 from validation.calibration import QUANTITIES, binomial_band, coverage_study  # noqa: E402
 

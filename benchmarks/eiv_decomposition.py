@@ -42,7 +42,8 @@ from jadhesion.data.scenarios import SCENARIOS  # noqa: E402
 from jadhesion.data.simulator import simulate_many  # noqa: E402
 from jadhesion.data.vehicle import GRAVITY  # noqa: E402
 from jadhesion.identify.global_lm import global_lm  # noqa: E402
-from jadhesion.identify.likelihood import curve_moments, lowpass, recording_observer_terms  # noqa: E402
+from jadhesion.identify.likelihood import curve_moments  # noqa: E402
+from jadhesion.identify.observer_view import lowpass, recording_observer_terms  # noqa: E402
 from jadhesion.identify.polach_fit import LM_POP, LM_STARTS  # noqa: E402
 from jadhesion.models.polach import PARAM_NAMES  # noqa: E402
 

@@ -17,11 +17,10 @@ from jadhesion.identify.likelihood import (
     batch_log_posterior,
     log_likelihood,
     log_posterior,
-    lowpass,
-    observer_terms,
     prediction,
 )
 from jadhesion.identify.mcmc import PosteriorResult, sample_posterior
+from jadhesion.identify.observer_view import lowpass, observer_terms
 from jadhesion.identify.polach_fit import polach_mae
 from validation.calibration import LEVELS, QUANTITIES, binomial_band, coverage_study, synthetic_dataset
 
@@ -134,7 +133,7 @@ def test_observer_prediction_is_exact_on_a_noise_free_recording():
     plain curve leaves the lag (large in the sand test's fast slip excursion)."""
     from jadhesion.data.simulated_datasets import result_dataset
     from jadhesion.data.simulator import simulate
-    from jadhesion.identify.likelihood import recording_observer_terms
+    from jadhesion.identify.observer_view import recording_observer_terms
 
     sim = simulate("sand", 1, n_samples=400, noise=False)
     data, obs = result_dataset(sim), recording_observer_terms(sim)

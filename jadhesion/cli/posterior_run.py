@@ -10,8 +10,8 @@ import numpy as np
 
 from ..identify.ensemble import ChainTooShortWarning
 from ..identify.laplace import colour_check, initial_spread, lm_optimum
-from ..identify.likelihood import recording_observer_terms
 from ..identify.mcmc import sample_posterior
+from ..identify.observer_view import recording_observer_terms
 from ..identify.polach_fit import require_samples
 from ..models.polach import PARAM_NAMES
 from ..plots.posterior import corner_plot, predictive_plot

@@ -18,9 +18,9 @@ from ..data.dataset import PolachDataset
 from ..data.scenarios import get_scenario
 from ..identify.ensemble import MIN_TAU_MULTIPLE, ChainTooShortWarning
 from ..identify.laplace import initial_spread, observer_residual
-from ..identify.likelihood import ObserverTerms, recording_observer_terms
 from ..identify.lm import box_lm
 from ..identify.mcmc import sample_posterior
+from ..identify.observer_view import ObserverTerms, recording_observer_terms
 from ..identify.polach_fit import polach_mae
 from ..models.polach import BOUNDS, PARAM_NAMES
 from ..status import Status

@@ -18,8 +18,9 @@ import numpy as np
 from ..data.dataset import PolachDataset
 from ..models.polach import BOUNDS
 from .box_lm import box_lm
-from .likelihood import ObserverTerms, prediction
+from .likelihood import prediction
 from .lm_result import best_of
+from .observer_view import ObserverTerms
 from .polach_fit import polach_residual
 from .uncertainty import colour_factor, covariance
 

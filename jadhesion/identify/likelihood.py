@@ -36,8 +36,8 @@ autoregressive two):
   (``LP`` the observer's first-order low-pass ``1/(1 + s T0)``): in transients the observed curve
   lags the true one and the unfiltered torque leaks through. The prediction is therefore
   ``LP[mu_adh(s, w; theta)] + (T − LP[T])/(m g r)`` with the recorded torque ``T`` and the same exact
-  first-order-hold discretisation as :mod:`jadhesion.data.observer` (:class:`ObserverTerms`, built
-  by :func:`observer_terms` from a recording's ``time`` and ``traction_torque``); what is left is
+  first-order-hold discretisation as :mod:`jadhesion.data.observer` (:mod:`.observer_view`:
+  :class:`ObserverTerms` from a recording's ``time`` and ``traction_torque``); what is left is
   the low-passed (coloured) sensor noise, modelled as AR(1). For the ``"filtered_torque"`` variant
   the torque term is zero. Creepage-only datasets cannot use it (no time, no torque).
 
@@ -67,17 +67,16 @@ from __future__ import annotations
 
 import math
 from functools import partial
-from typing import NamedTuple, Optional
+from typing import Optional
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
 from ..data.dataset import PolachDataset
-from ..data.observer import foh_coefficients, lowpass_foh
-from ..data.vehicle import GRAVITY
 from ..models.kinematics import SPEED_FLOOR
 from ..models.polach import polach_adhesion
+from .observer_view import ObserverTerms, lowpass
 
 LIKELIHOODS = ("gauss", "laplace", "ar1", "observer")
 #: Likelihoods with an AR(1) noise coefficient ``rho`` (the last sampled coordinate).
@@ -89,81 +88,6 @@ RHO_MAX = 0.99
 GH_NODES = 7
 _GH_Z, _GH_W = np.polynomial.hermite_e.hermegauss(GH_NODES)
 _GH_W = _GH_W / _GH_W.sum()
-
-
-class ObserverTerms(NamedTuple):
-    """What the ``"observer"`` likelihood needs besides the dataset (a pytree, arrays float64):
-    torque_term: ``(T − LP[T]) / (m g r)`` [-], shape (n,) (zeros for ``filtered_torque``).
-    alpha, gain0, gain1: first-order-hold low-pass coefficients per step, shape (n − 1,):
-        ``x_{k+1} = alpha x_k + gain0 u_k + gain1 u_{k+1}``, ``x_0 = u_0``.
-    """
-
-    torque_term: jax.Array
-    alpha: jax.Array
-    gain0: jax.Array
-    gain1: jax.Array
-
-
-def observer_terms(
-    time,
-    torque,
-    axle_load_kg: float,
-    wheel_radius_m: float,
-    t0: float,
-    variant: str = "paper",
-    gravity: float = GRAVITY,
-) -> ObserverTerms:
-    """:class:`ObserverTerms` of a recording: ``time`` [s] (n,), recorded ``torque`` [N·m] (n,),
-    the observer's axle load [kg], nominal radius [m] and time constant ``T0`` [s]."""
-    time, torque = jnp.asarray(time, jnp.float64), jnp.asarray(torque, jnp.float64)
-    if time.ndim != 1 or time.shape != torque.shape or time.shape[0] < 3:
-        raise ValueError(
-            f"time and torque must be 1-D of equal length >= 3, got {time.shape}, {torque.shape}"
-        )
-    if variant == "paper":
-        term = (torque - lowpass_foh(time, torque, t0)) / (axle_load_kg * gravity * wheel_radius_m)
-    elif variant == "filtered_torque":
-        term = jnp.zeros_like(torque)
-    else:
-        raise ValueError(f"unknown observer variant {variant!r}")
-    alpha, one_minus_alpha, beta = foh_coefficients(jnp.diff(time), t0)
-    return ObserverTerms(term, alpha, one_minus_alpha - beta, beta)
-
-
-def recording_observer_terms(recording, variant: str = "paper") -> ObserverTerms:
-    """:func:`observer_terms` of a :class:`jadhesion.data.recording.Recording` or a simulation
-    result (anything with ``columns`` and ``vehicle``; the vehicle's constants); ``ValueError``
-    when it has no ``time`` or ``traction_torque`` column."""
-    cols = recording.columns
-    missing = [c for c in ("time", "traction_torque") if c not in cols]
-    if missing:
-        raise ValueError(
-            f"the observer likelihood needs the column(s) {', '.join(missing)} "
-            f"(a raw recording, not a creepage-only dataset)"
-        )
-    v = recording.vehicle
-    return observer_terms(
-        cols["time"],
-        cols["traction_torque"],
-        v.axle_load_kg,
-        v.wheel_radius_m,
-        v.observer_time_constant_s,
-        variant,
-    )
-
-
-def lowpass(u, obs: ObserverTerms):
-    """The observer's low-pass of a sampled signal ``u`` (n,), exact for first-order hold; a
-    parallel (associative) scan of the linear recurrence, so it vectorises over walkers."""
-    a = jnp.concatenate([jnp.zeros(1, u.dtype), obs.alpha])
-    b = jnp.concatenate([u[:1], obs.gain0 * u[:-1] + obs.gain1 * u[1:]])
-
-    def compose(first, second):
-        a1, b1 = first
-        a2, b2 = second
-        return a1 * a2, a2 * b1 + b2
-
-    return jax.lax.associative_scan(compose, (a, b))[1]
 
 
 def noise_names(likelihood: str, fixed_scale: bool = False) -> tuple:

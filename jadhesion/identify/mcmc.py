@@ -34,12 +34,12 @@ from .likelihood import (
     AUTOREGRESSIVE,
     LOG_SCALE_BOUNDS,
     RHO_MAX,
-    ObserverTerms,
     ensemble_log_prob,
     log_posterior,
     noise_names,
     prediction,
 )
+from .observer_view import ObserverTerms
 
 QUANTILES = (0.05, 0.5, 0.95)
 
