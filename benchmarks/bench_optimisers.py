@@ -24,7 +24,7 @@ import jadhesion  # noqa: E402
 from jadhesion.data.dataset import PolachDataset  # noqa: E402
 from jadhesion.identify import ITLBO, fit_polach, fit_polach_batch, lm_solve, polach_mae, run  # noqa: E402
 from jadhesion.identify.lm import box_lm, box_lm_queue  # noqa: E402
-from jadhesion.identify.polach_fit import polach_residual  # noqa: E402
+from jadhesion.identify.polach_residuals import polach_residual  # noqa: E402
 from jadhesion.status import Status  # noqa: E402
 
 THETA = np.array([0.4288, 1.0, 0.3555, 0.3575, 0.1316])

@@ -5,9 +5,9 @@
 
 For each recording the dataset is ``to_dataset(recording)`` (smoothed creep with ``slip_sd``) and
 ``fit --method lm`` runs twice: with the plain residual ``mu_adh(s, w) − mu_hat``
-(:func:`jadhesion.identify.polach_fit.polach_residual`, the fit before this change) and with the
+(:func:`jadhesion.identify.polach_residuals.polach_residual`, the fit before this change) and with the
 errors-in-variables residual ``E[mu_adh] − mu_hat`` over ``w ~ N(slip, slip_sd²)``
-(:func:`jadhesion.identify.polach_fit.polach_eiv_residual`, now LM's default). Sets:
+(:func:`jadhesion.identify.polach_residuals.polach_eiv_residual`, now LM's default). Sets:
 
 * ``ours/<scenario>/<sensors>``: our simulator, the three paper scenarios, ``--per`` seeds each,
   ``--points`` samples, realistic sensors (and clean ones, where the correction must vanish);
@@ -42,7 +42,7 @@ from jadhesion.data.dataset import to_dataset  # noqa: E402
 from jadhesion.data.recording import load_recording  # noqa: E402
 from jadhesion.data.scenarios import SCENARIOS  # noqa: E402
 from jadhesion.data.simulator import simulate_many  # noqa: E402
-from jadhesion.identify import polach_fit  # noqa: E402
+from jadhesion.identify import polach_fit, polach_residuals  # noqa: E402
 from validation.foreign_generator import generate, write  # noqa: E402
 
 
@@ -52,15 +52,15 @@ def _inflated(factor):
 
     def residual(theta, data):
         if data.slip_sd is None:
-            return polach_fit.polach_residual(theta, data)
-        return polach_fit.polach_eiv_residual(theta, data._replace(slip_sd=factor * data.slip_sd))
+            return polach_residuals.polach_residual(theta, data)
+        return polach_residuals.polach_eiv_residual(theta, data._replace(slip_sd=factor * data.slip_sd))
 
     return residual
 
 
 RESIDUALS = {
-    "plain": polach_fit.polach_residual,
-    "eiv": polach_fit.polach_eiv_residual,
+    "plain": polach_residuals.polach_residual,
+    "eiv": polach_residuals.polach_eiv_residual,
     "eiv_sd2": _inflated(2.0),
 }
 NAMES = ("kA", "kS", "mu0", "A", "B")

@@ -8,7 +8,8 @@ import numpy as np
 from jadhesion.data.dataset import PolachDataset
 from jadhesion.data.scenarios import SCENARIOS
 from jadhesion.data.vehicle import LOCO_22E
-from jadhesion.identify.polach_fit import fit_polach, polach_eiv_residual, polach_residual
+from jadhesion.identify.polach_fit import fit_polach
+from jadhesion.identify.polach_residuals import polach_eiv_residual, polach_residual
 from jadhesion.models.polach import polach_adhesion
 
 TRUTH = jnp.asarray(SCENARIOS["dry"].params)

@@ -21,7 +21,7 @@ from jadhesion.identify.likelihood import (
 )
 from jadhesion.identify.mcmc import PosteriorResult, sample_posterior
 from jadhesion.identify.observer_view import lowpass, observer_terms
-from jadhesion.identify.polach_fit import polach_mae
+from jadhesion.identify.polach_residuals import polach_mae
 from validation.calibration import LEVELS, QUANTITIES, binomial_band, coverage_study, synthetic_dataset
 
 THETA = np.array([0.5, 0.3, 0.35, 0.4, 0.6])

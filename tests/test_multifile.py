@@ -26,7 +26,8 @@ from jadhesion.identify.batch_fit import (
     valid_samples,
 )
 from jadhesion.identify.box_lm import box_lm
-from jadhesion.identify.polach_fit import LM_RESIDUAL, SEED_SAMPLES, fit_polach, polach_mae, subsample
+from jadhesion.identify.polach_fit import LM_RESIDUAL, SEED_SAMPLES, fit_polach, subsample
+from jadhesion.identify.polach_residuals import polach_mae
 
 THETA = np.array([0.43, 0.6, 0.36, 0.36, 0.13])
 SMALL = {"pop_size": 8, "max_iter": 25}  # population budgets: equality, not accuracy, is tested

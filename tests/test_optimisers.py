@@ -25,7 +25,7 @@ from jadhesion.identify import (
     run_until,
 )
 from jadhesion.identify.lm import box_lm, box_lm_queue
-from jadhesion.identify.polach_fit import polach_residual
+from jadhesion.identify.polach_residuals import polach_residual
 from jadhesion.identify.tlbo import remedial_size
 from jadhesion.models.polach import atan_ratio, polach_adhesion
 from jadhesion.status import Status, status_of

@@ -21,7 +21,7 @@ from ..identify.laplace import initial_spread, observer_residual
 from ..identify.lm import box_lm
 from ..identify.mcmc import sample_posterior
 from ..identify.observer_view import ObserverTerms, recording_observer_terms
-from ..identify.polach_fit import polach_mae
+from ..identify.polach_residuals import polach_mae
 from ..models.polach import BOUNDS, PARAM_NAMES
 from ..status import Status
 

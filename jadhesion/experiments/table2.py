@@ -50,7 +50,8 @@ from ..data.simulated_datasets import stack_datasets
 from ..data.simulator import simulate_many
 from ..identify.driver import run as run_population
 from ..identify.methods import NAMES
-from ..identify.polach_fit import ALGORITHMS, fit_polach, polach_mae
+from ..identify.polach_fit import ALGORITHMS, fit_polach
+from ..identify.polach_residuals import polach_mae
 from ..models.polach import PARAM_NAMES
 from ..plots.convergence import convergence_figure
 from ..status import Status, status_labels

@@ -5,7 +5,8 @@ from .curve_fit import CurveFitResult, covariance, curve_fit
 from .driver import History, RunResult, iteration_key, run, run_until
 from .lm import LMResult, global_lm, lm_solve, multistart
 from .methods import METHODS, NAMES, POPULATION, Method
-from .polach_fit import PolachFit, fit_polach, fit_polach_batch, polach_mae, polach_residual
+from .polach_fit import PolachFit, fit_polach, fit_polach_batch
+from .polach_residuals import polach_mae, polach_residual
 from .population import Algorithm, StepInfo
 from .pso import PSO, PSOParams, PSOState
 from .tlbo import ITLBO, TLBO, TLBOParams, TLBOState

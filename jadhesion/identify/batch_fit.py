@@ -4,7 +4,7 @@ A dataset of ``n`` samples is padded to its *bucket* length (:func:`bucket_lengt
 ``n ≤ 128``, the next power of two up to :data:`FINE_BUCKETS_FROM` samples, then the next
 eighth of an octave) by repeating its last sample, with a ``weight`` mask
 (1 for its samples, 0 for the padding; :class:`jadhesion.data.dataset.PolachDataset`). The Polach
-objective honours the mask (:func:`jadhesion.identify.polach_fit.polach_residual` multiplies the
+objective honours the mask (:func:`jadhesion.identify.polach_residuals.polach_residual` multiplies the
 residual by it, the MAE divides by the number of valid samples, the LM's seeding subsample strides
 over the valid samples only), so a padded fit solves the same problem as the unpadded one and
 every dataset of a bucket reuses the bucket's compiled program (and, in the command line, its kept

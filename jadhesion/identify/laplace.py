@@ -21,7 +21,7 @@ from .box_lm import box_lm
 from .likelihood import prediction
 from .lm_result import best_of
 from .observer_view import ObserverTerms
-from .polach_fit import polach_residual
+from .polach_residuals import polach_residual
 from .uncertainty import colour_factor, covariance
 
 #: Multi-start points of :func:`lm_optimum` (rows of [kA, kS, mu0, A, B]).

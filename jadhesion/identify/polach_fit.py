@@ -2,9 +2,9 @@
 
 Population methods minimise the paper's fitness (eq 15), the mean absolute error
 ``MAE = (1/N) Σ |mu_adh(theta; s_i, w_i) − mu_hat_i|`` over the box ``[0, 1]⁵``; LM minimises the
-sum of squares over the same box — of :func:`polach_eiv_residual`, the expected curve over the
-smoothed slip's uncertainty when the dataset has ``slip_sd`` (errors in variables), else of
-:func:`polach_residual` — (projected LM, :func:`.lm.box_lm`), seeded by a random search on
+sum of squares over the same box — of the errors-in-variables residual (:mod:`.polach_residuals`:
+the expected curve over the smoothed slip's uncertainty when the dataset has ``slip_sd``, else the
+plain one) — (projected LM, :func:`.lm.box_lm`), seeded by a random search on
 a subsample ("global LM", :data:`LM_POP`), and reports the MAE as well. Datasets are pytrees:
 :func:`fit_polach_batch` vmaps over a leading axis of stacked datasets and keys, compiled once per
 shape.
@@ -21,12 +21,11 @@ import numpy as np
 
 from ..data.dataset import PolachDataset
 from ..errors import InputError
-from ..models.polach import polach_adhesion
 from .driver import STALL_FTOL, run_until
-from .likelihood import curve_moments
 from .lm import best_of, box_lm_queue, global_lm, seed_starts
 from .methods import NAMES as METHODS
 from .methods import POPULATION as ALGORITHMS
+from .polach_residuals import dataset_mae, mean_abs, polach_eiv_residual, polach_mae, polach_residual
 
 #: Global LM for Polach: ``LM_POP`` uniform random points scored on a subsample of at most
 #: :data:`SEED_SAMPLES` rows seed ``LM_STARTS`` projected-LM runs (:func:`.lm.box_lm`, ``ftol =
@@ -53,51 +52,6 @@ class PolachFit(NamedTuple):
     evaluations: jax.Array
     reached: jax.Array
     status: jax.Array
-
-
-def _masked(r, data: PolachDataset):
-    """``r`` times ``data.weight`` when the dataset has one (padding: 0), so padded samples add
-    nothing to any sum."""
-    return r if data.weight is None else r * data.weight
-
-
-def polach_residual(theta, data: PolachDataset):
-    """``mu_adh(theta) − mu_hat`` per sample, shape (n,), masked by the padding weight."""
-    return _masked(polach_adhesion(theta, data.creep, data.slip, data.k_eps) - data.adhesion, data)
-
-
-def polach_eiv_residual(theta, data: PolachDataset):
-    """LM's residual: ``E[mu_adh(theta; w)] − mu_hat`` per sample, shape (n,), the expectation over
-    the smoothed slip's posterior ``w ~ N(slip, slip_sd²)`` (errors in variables, regression
-    calibration: :func:`.likelihood.curve_moments`, 7-node Gauss–Hermite, 7× the plain cost).
-    Differencing noisy speeds scatters the slip around the truth, and fitting ``mu_adh`` at the
-    scattered slips flattens the identified initial slope; the expected curve is flatter than the
-    true one by the same smearing, so fitting it returns the steep one. Equal to
-    :func:`polach_residual` without ``slip_sd`` (raw creep, creepage files) and to within
-    ``O(slip_sd²)`` on clean sensors."""
-    if data.slip_sd is None:
-        return polach_residual(theta, data)
-    return _masked(curve_moments(theta, data)[0] - data.adhesion, data)
-
-
-def mean_abs(r):
-    """Mean of ``|r|`` over the last axis, written as ``|r| · (1/n)``: a matrix–vector product once
-    a population is vmapped. XLA:CPU's fused abs-and-reduce runs a 50 × 1000 population evaluation
-    ~30 % slower (an improved-TLBO iteration: 0.90 → 0.65 ms on 2 cores)."""
-    return jnp.abs(r) @ jnp.full(r.shape[-1], 1.0 / r.shape[-1], r.dtype)
-
-
-def dataset_mae(r, data: PolachDataset):
-    """:func:`mean_abs` of residuals ``r`` of ``data``; with a ``weight`` (mask) the mean over its
-    valid samples, ``|r| · (w / Σw)``."""
-    if data.weight is None:
-        return mean_abs(r)
-    return jnp.abs(r) @ (data.weight / jnp.sum(data.weight))
-
-
-def polach_mae(theta, data: PolachDataset):
-    """The paper's fitness (eq 15): mean absolute error of the adhesion coefficient."""
-    return dataset_mae(polach_residual(theta, data), data)
 
 
 def _box(dtype):
