@@ -30,11 +30,8 @@ from . import features, fitting, null, select, sensitivity
 from .explain import explain
 from .signals import from_columns
 
-#: Extra round-1 starts for the wheel-radius error, whose fit from δ = 0 can end in a degenerate
-#: minimum (a large δ with a flattened creep slope): δ0 = ±3 %; the best full-data fit is kept.
-RADIUS_STARTS = (-0.03, 0.03)
 N_CANDIDATES = fitting.N_CANDIDATES
-assert N_CANDIDATES >= 1 + len(ext.NAMES) + len(RADIUS_STARTS)
+assert N_CANDIDATES >= 1 + len(ext.NAMES) + sum(len(e.extra_starts) for e in ext.EFFECTS)
 #: The extended model's (target, prediction), compiled once per recording length.
 _predict = jax.jit(ext.predict)
 
@@ -52,16 +49,27 @@ def _row(params, active, sig, tau_th: float) -> dict:
     return out
 
 
+def _extra_rows(sets) -> list:
+    """``(set index, parameter column, start)`` of every extra start (the registry's
+    ``extra_starts``) of a set's last effect, i.e. where that effect is the set's only one or its
+    addition."""
+    out = []
+    for i, s in enumerate(sets):
+        spec = ext.REGISTRY[s[-1]] if s else None
+        if spec is not None and spec.extra_starts:
+            col = 5 + ext.EXTRA_NAMES.index(spec.magnitude_param)
+            out += [(i, col, d) for d in spec.extra_starts]
+    return out
+
+
 def _round_rows(p0, sets) -> tuple:
     """Rows ``(starts, idx, actives)`` of one round: the effect sets (the first is the reference)
-    from ``p0``, plus the wheel-radius error from :data:`RADIUS_STARTS` where it is a set's only
-    effect or its addition; padded to :data:`N_CANDIDATES` rows and :data:`fitting.WIDTH`
-    indices, so every round runs one compiled program."""
-    radius = [i for i, s in enumerate(sets) if s and s[-1] == "wheel_radius_error"]
-    rows = list(sets) + [sets[i] for i in radius for _ in RADIUS_STARTS]
+    from ``p0``, plus their extra starts (:func:`_extra_rows`); padded to :data:`N_CANDIDATES` rows
+    and :data:`fitting.WIDTH` indices, so every round runs one compiled program."""
+    extra = _extra_rows(sets)
+    rows = list(sets) + [sets[i] for i, _, _ in extra]
     starts = np.tile(np.asarray(p0, float), (N_CANDIDATES, 1))
-    col = 5 + ext.EXTRA_NAMES.index("delta_r")
-    for k, d in enumerate(d for _ in radius for d in RADIUS_STARTS):
+    for k, (_, col, d) in enumerate(extra):
         starts[len(sets) + k, col] = d
     rows += [sets[0]] * (N_CANDIDATES - len(rows))
     actives = np.stack([np.asarray(ext.active_mask(s)) for s in rows])
@@ -70,12 +78,15 @@ def _round_rows(p0, sets) -> tuple:
 
 
 def _merger(sets):
-    """``merge(table) -> table``: each radius row takes its best-SSE start, rows cut to the sets."""
-    radius = [i for i, s in enumerate(sets) if s and s[-1] == "wheel_radius_error"]
+    """``merge(table) -> table``: each set with extra starts takes its best-SSE converged start,
+    rows cut to the sets."""
+    extra = _extra_rows(sets)
+    groups = {i: [i] for i, _, _ in extra}
+    for k, (i, _, _) in enumerate(extra):
+        groups[i].append(len(sets) + k)
 
     def merge(table):
-        for i in radius:
-            alts = [i] + [len(sets) + k for k in range(len(RADIUS_STARTS))]
+        for i, alts in groups.items():
             ok = table["status"][alts] == int(Status.CONVERGED)
             sse = np.where(ok, table["sse"][alts], np.inf) if ok.any() else table["sse"][alts]
             best = alts[int(np.argmin(sse))]
@@ -102,8 +113,8 @@ def _status(table: dict, i: int) -> str:
 
 
 def _n_extra(names) -> int:
-    """Extra parameters of an effect set for BIC (thermal softening's grid-picked lag counts)."""
-    return sum(len(e.params) + (e.name == "thermal_softening") for e in ext.EFFECTS if e.name in names)
+    """Extra parameters of an effect set for BIC (grid-picked ones, e.g. a thermal lag, count)."""
+    return sum(len(e.params) + e.grid_params for e in ext.EFFECTS if e.name in names)
 
 
 def _generic(sig, residual, mu_pred) -> dict:

@@ -47,7 +47,10 @@ class EffectSpec(NamedTuple):
     the run that separates the two; each pair is written once, in the record of the effect that
     comes first in the registry), ``sentence`` and ``terms`` (the explanation: a :meth:`str.format`
     template over the fitted parameters, the vehicle's ``wheel_radius_m``, ``axle_load_kg`` and
-    ``gravity``, and the derived ``terms``), ``detection`` (:class:`Detection`).
+    ``gravity``, and the derived ``terms``), ``detection`` (:class:`Detection`), ``extra_starts``
+    (further starts of the magnitude parameter where its fit from the neutral value can end in a
+    wrong local minimum; the best converged fit is kept), ``grid_params`` (parameters picked on a
+    grid before the fit, e.g. a time constant: counted in BIC beside the fitted ones).
     """
 
     name: str
@@ -66,6 +69,8 @@ class EffectSpec(NamedTuple):
     sentence: str
     detection: Detection
     terms: Callable[[Mapping], dict] = _no_terms
+    extra_starts: tuple = ()
+    grid_params: int = 0
 
     @property
     def params(self) -> tuple:

@@ -66,6 +66,7 @@ EFFECTS = {
             unit="-",
             summary="true radius = nominal · (1 + m)",
             extension=(Param("delta_r", -0.2, 0.2, 0.0, "-"),),
+            extra_starts=(-0.03, 0.03),  # from δ = 0 a fit can end at a large δ with a flat slope
             typical=(0.002, 0.05),
             signed=True,
             signal="speed",
@@ -178,6 +179,7 @@ EFFECTS = {
             unit="-",
             summary="mu0 / (1 + m · P_th / P_ref)",
             extension=(Param("softening", -0.5, 10.0, 0.0, "-"),),
+            grid_params=1,  # the thermal lag τ_th, picked on a grid
             typical=(0.05, 3.0),
             signed=False,
             signal="heat",
