@@ -200,8 +200,8 @@ def test_warm_fit_process_loads_kept_programs_only(tmp_path):
     """A second ``jadhesion fit`` process on a recording (observer, smoother, LM fit, trust block)
     gives the same JSON, keeps nothing new (every program was kept by the first) and imports
     neither optimistix/equinox (LM of the Polach fit is the projected LM of identify/box_lm) nor
-    matplotlib (no --plot) nor tqdm (no progress bar). The start-up time itself is a benchmark:
-    benchmarks/bench_startup.py."""
+    matplotlib (no --plot) nor tqdm (no progress bar) nor pandas (the CSV reader takes pyarrow's
+    buffers). The start-up time itself is a benchmark: benchmarks/bench_startup.py."""
     recording = _raw_recording(tmp_path, n=300)
     cache = tmp_path / "xla"
     env = {
@@ -212,7 +212,7 @@ def test_warm_fit_process_loads_kept_programs_only(tmp_path):
     probe = (
         "import sys, json; from jadhesion.cli import main;"
         "code = main(['fit', sys.argv[1], '--method', 'lm', '--json']);"
-        "heavy = [m for m in ('optimistix', 'equinox', 'matplotlib', 'tqdm') if m in sys.modules];"
+        "heavy = [m for m in ('optimistix', 'equinox', 'matplotlib', 'tqdm', 'pandas') if m in sys.modules];"
         "sys.stderr.write('HEAVY=' + json.dumps(heavy) + '\\n'); sys.exit(code)"
     )
 
