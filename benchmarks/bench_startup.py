@@ -11,9 +11,18 @@ Four kinds of process, run interleaved (one of each per round, so a busy machine
   eagerly, trace and lower the fit);
 * ``warm_exported``: a second run with the kept exported program (the fast path).
 
+Each process is timed in wall seconds and in CPU seconds (user + system, all its threads, from
+``getrusage``): on a shared machine the wall time follows the other processes' load, the CPU time
+much less. Each round also runs one ``breakdown`` process (not among the timed ones): a warm fit
+that stamps wall and CPU time after ``import jax``, after importing the command, around reading
+the recording and around each kept program (:func:`jadhesion.cli.fit_program._kept`: load,
+lowering, cache look-up, execution), with ``scipy.linalg`` imported first as a phase of its own
+(JAX's CPU LAPACK kernels take their BLAS/LAPACK from it: the first exported program would
+otherwise import it) and the interpreter's exit measured from outside.
+
 The recording is simulated once (2 000 samples, ``jadhesion simulate``). Results go to
-``benchmarks/results/bench_startup.json`` with the git commit and the settings. Run as
-``python -m benchmarks.bench_startup [--repeats 7] [--method lm]``.
+``benchmarks/results/bench_startup.json`` with the git commit, the settings and the load average
+before and after. Run as ``python -m benchmarks.bench_startup [--repeats 7] [--method lm]``.
 """
 
 from __future__ import annotations
@@ -22,6 +31,7 @@ import argparse
 import json
 import os
 import platform
+import resource
 import shutil
 import statistics
 import subprocess
@@ -34,10 +44,71 @@ ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "benchmarks" / "results" / "bench_startup.json"
 
 
-def _timed(argv, env) -> float:
-    start = time.perf_counter()
+def _children_cpu() -> float:
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def _timed(argv, env) -> tuple[float, float]:
+    """Wall and CPU seconds of one process."""
+    cpu, start = _children_cpu(), time.perf_counter()
     subprocess.run(argv, env=env, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, timeout=900)
-    return time.perf_counter() - start
+    return time.perf_counter() - start, _children_cpu() - cpu
+
+
+#: The breakdown process: ``python -c PROBE REC METHOD``; prints one JSON line: its phases, each
+#: ``[wall, cpu]`` seconds, and the script's own span (the rest is the interpreter's start and exit).
+PROBE = """
+import json, sys, time
+t = lambda: (time.perf_counter(), time.process_time())
+marks = [("start", t())]
+import jax
+marks.append(("import jax", t()))
+import io, contextlib
+from jadhesion.cli import main
+from jadhesion.cli import fit_program, fit_run
+marks.append(("import the command", t()))
+import scipy.linalg
+marks.append(("scipy.linalg (CPU LAPACK kernels)", t()))
+def stamp(label, fn):
+    def wrapped(*a, **k):
+        marks.append(("other", t()))
+        out = jax.block_until_ready(fn(*a, **k))
+        marks.append((label(*a), t()))
+        return out
+    return wrapped
+fit_program._kept = stamp(lambda name, *a: "program " + name, fit_program._kept)
+fit_run.load_from_args = stamp(lambda *a: "read the recording", fit_run.load_from_args)
+with contextlib.redirect_stdout(io.StringIO()):
+    main(["fit", sys.argv[1], "--method", sys.argv[2], "--json"])
+marks.append(("other", t()))
+phases = {}
+for (label, (w, c)), (_, (w0, c0)) in zip(marks[1:], marks[:-1]):
+    phases.setdefault(label, [0.0, 0.0])
+    phases[label][0] += w - w0
+    phases[label][1] += c - c0
+(w0, c0), (w1, c1) = marks[0][1], marks[-1][1]
+print(json.dumps({"phases": phases, "script": [w1 - w0, c1 - c0]}))
+"""
+
+
+def _breakdown(rec: Path, method: str, env) -> dict:
+    """Phases of one warm fit process (wall and CPU seconds), its exit measured from outside."""
+    cpu, start = _children_cpu(), time.perf_counter()
+    out = subprocess.run(
+        [sys.executable, "-c", PROBE, str(rec), method],
+        env=env,
+        check=True,
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
+    wall, cpu = time.perf_counter() - start, _children_cpu() - cpu
+    doc = json.loads(out.stdout.strip().splitlines()[-1])
+    phases = doc["phases"]
+    # Interpreter start before the script's first line and exit after its last, lumped together.
+    phases["interpreter start + exit"] = [wall - doc["script"][0], cpu - doc["script"][1]]
+    return phases
 
 
 def _commit() -> str:
@@ -81,17 +152,39 @@ def main(argv=None) -> int:
     _timed(fit, warm)  # fill: compiled executables + kept programs
     _timed(fit, traced)  # fill: the library path's compiled executables
 
-    times = {k: [] for k in ("import_jax", "cold", "warm_traced", "warm_exported")}
+    kinds = ("import_jax", "cold", "warm_traced", "warm_exported")
+    times = {k: [] for k in kinds}
+    cpu = {k: [] for k in kinds}
+    breakdowns = []
+    load_before = os.getloadavg()
     for r in range(args.repeats):
         cold = work / f"cold{r}"
-        times["import_jax"].append(_timed([sys.executable, "-c", "import jax"], env))
-        times["cold"].append(_timed(fit, {**env, "JADHESION_CACHE": str(cold)}))
-        times["warm_traced"].append(_timed(fit, traced))
-        times["warm_exported"].append(_timed(fit, warm))
+        runs = {
+            "import_jax": ([sys.executable, "-c", "import jax"], env),
+            "cold": (fit, {**env, "JADHESION_CACHE": str(cold)}),
+            "warm_traced": (fit, traced),
+            "warm_exported": (fit, warm),
+        }
+        for k, (argv, e) in runs.items():
+            wall, seconds = _timed(argv, e)
+            times[k].append(wall)
+            cpu[k].append(seconds)
+        breakdowns.append(_breakdown(rec, args.method, warm))
         shutil.rmtree(cold)
-        print(f"round {r + 1}: " + ", ".join(f"{k} {v[-1]:.2f} s" for k, v in times.items()), flush=True)
+        print(
+            f"round {r + 1}: " + ", ".join(f"{k} {times[k][-1]:.2f} s ({cpu[k][-1]:.2f} cpu)" for k in kinds),
+            flush=True,
+        )
+
+    def paired(series):
+        # Each round's own ratio (a busy machine slows a round's processes alike), then the median.
+        return {
+            k: statistics.median(t / b for t, b in zip(v, series["import_jax"], strict=True))
+            for k, v in series.items()
+        }
 
     medians = {k: statistics.median(v) for k, v in times.items()}
+    cpu_medians = {k: statistics.median(v) for k, v in cpu.items()}
     base = medians["import_jax"]
     doc = {
         "commit": _commit(),
@@ -103,15 +196,20 @@ def main(argv=None) -> int:
             "python": sys.version.split()[0],
             "machine": platform.platform(),
             "cpus": os.cpu_count(),
+            "load_average_before": load_before,
             "load_average": os.getloadavg(),
         },
         "seconds": times,
         "median_s": medians,
         "ratio_to_import_jax": {k: v / base for k, v in medians.items()},
-        # Each round's own ratio (a busy machine slows a round's processes alike), then the median.
-        "paired_ratio_median": {
-            k: statistics.median(t / b for t, b in zip(v, times["import_jax"], strict=True))
-            for k, v in times.items()
+        "paired_ratio_median": paired(times),
+        "cpu_seconds": cpu,
+        "cpu_median_s": cpu_medians,
+        "cpu_paired_ratio_median": paired(cpu),
+        # Median over rounds of each phase of a warm process: [wall, cpu] seconds.
+        "warm_breakdown_median_s": {
+            label: [statistics.median(b[label][i] for b in breakdowns) for i in (0, 1)]
+            for label in breakdowns[0]
         },
     }
     args.out.parent.mkdir(parents=True, exist_ok=True)
@@ -119,8 +217,11 @@ def main(argv=None) -> int:
     for k, v in medians.items():
         print(
             f"{k:>14}: median {v:6.2f} s  ({v / base:4.1f}x import jax; paired "
-            f"{doc['paired_ratio_median'][k]:4.2f}x)"
+            f"{doc['paired_ratio_median'][k]:4.2f}x; cpu {cpu_medians[k]:5.2f} s, paired "
+            f"{doc['cpu_paired_ratio_median'][k]:4.2f}x)"
         )
+    for label, (wall, seconds) in doc["warm_breakdown_median_s"].items():
+        print(f"  warm phase {label:>36}: {wall:5.3f} s wall, {seconds:5.3f} s cpu")
     shutil.rmtree(work, ignore_errors=True)
     return 0
 

@@ -16,6 +16,14 @@ header names another key is ignored and rebuilt, never an error.
 
 Arguments may be any pytree of arrays (they are flattened before export); the result must be a
 tree ``jax.export`` serialises natively (dicts, tuples, lists, ``None``, arrays).
+
+Compiled executables are kept by JAX's persistent cache, not here: a call of a kept program still
+lowers a small wrapper around the deserialised StableHLO (about 0.03 s for the fit's program, plus
+JAX's one-time CPU LAPACK set-up, which imports ``scipy.linalg``) before the cache hands over the
+executable. Keeping the executables themselves (``jax.experimental.serialize_executable``) would
+skip that lowering, but with jax/jaxlib 0.10.2 on CPU a fit program deserialised in a new process
+crashed it (segmentation fault) or failed at its first call (``NOT_FOUND: Function
+slice_subtract_fusion.2 not found``); a toy function round-tripped. Checked 2026-11, not used.
 """
 
 from __future__ import annotations

@@ -71,6 +71,14 @@ def test_exported_fit_with_target_equals_library(programs):
     _assert_same(fit_program.fit_polach(data, "tlbo", key, pop_size=8, max_iter=20, target=0.05), ref)
 
 
+def test_seed_key_is_jax_random_key():
+    """The key the fit command builds without running JAX is ``jax.random.key(seed)``."""
+    for seed in (0, 1, 7, 2**31 - 1, 2**31, 2**32 - 1, 2**32, 2**32 + 5, 123456789012, 2**63 - 1):
+        got, ref = fit_program.seed_key(seed), jax.random.key(seed)
+        assert jax.random.key_impl(got) == jax.random.key_impl(ref)
+        np.testing.assert_array_equal(jax.random.key_data(got), jax.random.key_data(ref), err_msg=str(seed))
+
+
 def _double(x, y):
     return {"sum": 2.0 * x + y}
 
@@ -192,7 +200,8 @@ def test_warm_fit_process_loads_kept_programs_only(tmp_path):
     """A second ``jadhesion fit`` process on a recording (observer, smoother, LM fit, trust block)
     gives the same JSON, keeps nothing new (every program was kept by the first) and imports
     neither optimistix/equinox (LM of the Polach fit is the projected LM of identify/box_lm) nor
-    matplotlib (no --plot). The start-up time itself is a benchmark: benchmarks/bench_startup.py."""
+    matplotlib (no --plot) nor tqdm (no progress bar) nor pandas (the CSV reader takes pyarrow's
+    buffers). The start-up time itself is a benchmark: benchmarks/bench_startup.py."""
     recording = _raw_recording(tmp_path, n=300)
     cache = tmp_path / "xla"
     env = {
@@ -203,7 +212,7 @@ def test_warm_fit_process_loads_kept_programs_only(tmp_path):
     probe = (
         "import sys, json; from jadhesion.cli import main;"
         "code = main(['fit', sys.argv[1], '--method', 'lm', '--json']);"
-        "heavy = [m for m in ('optimistix', 'equinox', 'matplotlib') if m in sys.modules];"
+        "heavy = [m for m in ('optimistix', 'equinox', 'matplotlib', 'tqdm', 'pandas') if m in sys.modules];"
         "sys.stderr.write('HEAVY=' + json.dumps(heavy) + '\\n'); sys.exit(code)"
     )
 

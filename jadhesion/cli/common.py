@@ -1,7 +1,7 @@
 """Shared pieces of the command line: user errors, JSON output, progress bars on stderr.
 
 JAX-free (argparse definitions import it, and ``--help`` must not start JAX): it imports only the
-standard library, tqdm and jadhesion's foundations.
+standard library and jadhesion's foundations (tqdm when a progress bar is made).
 """
 
 from __future__ import annotations
@@ -9,8 +9,6 @@ from __future__ import annotations
 import json
 import math
 import sys
-
-from tqdm import tqdm
 
 from ..errors import InputError as UserError  # noqa: F401  (re-exported for command modules)
 from ..report.text import table  # noqa: F401  (re-exported for command modules)
@@ -53,6 +51,10 @@ class Progress:
     """
 
     def __init__(self, total=None, label: str = "", unit: str = "it", enabled: bool = True):
+        # Imported here, not at the top: tqdm costs every command process about 0.03 s (measured,
+        # benchmarks/bench_startup.py) and only long commands draw a bar.
+        from tqdm import tqdm
+
         self.done = 0
         self.bar = tqdm(
             total=total,

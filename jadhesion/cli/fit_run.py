@@ -14,7 +14,6 @@ import csv
 import io
 from pathlib import Path
 
-import jax
 import numpy as np
 
 from ..data.formats import MAT_SUFFIXES, PARQUET_SUFFIXES
@@ -26,7 +25,7 @@ from ..identify.trust import fit_report
 from ..models.polach import PARAM_NAMES
 from ..status import status_of
 from .common import UserError, emit_json, require_at_least, table
-from .fit_program import fit_polach, to_dataset, trust_numbers
+from .fit_program import fit_polach, seed_key, to_dataset, trust_numbers
 from .loading import load_dataset, load_from_args
 
 
@@ -137,7 +136,7 @@ def _fit_all(args, datasets) -> list[dict]:
     fitted = fit_datasets(
         datasets,
         args.method,
-        jax.random.key(args.seed),
+        seed_key(args.seed),
         pop_size=args.pop_size,
         max_iter=args.max_iter,
         fit=fit_kiencke if args.model == "kiencke" else fit_polach,
