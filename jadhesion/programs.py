@@ -31,7 +31,6 @@ from __future__ import annotations
 import hashlib
 import importlib.metadata
 import json
-import os
 from pathlib import Path
 from typing import Any, Callable, Optional
 
@@ -39,6 +38,8 @@ import jax
 import jaxlib
 import numpy as np
 from jax import export
+
+from .atomic import atomic_write
 
 #: Version of the file layout; bump it when the header or the key changes meaning.
 FORMAT = 1
@@ -81,16 +82,6 @@ def _environment() -> dict:
         "x64": bool(jax.config.jax_enable_x64),
         "platform": export.default_export_platform(),
     }
-
-
-def _atomic_write(path: Path, data: bytes) -> None:
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        tmp.write_bytes(data)
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
 
 
 class Program:
@@ -186,7 +177,7 @@ class ProgramCache:
         header = json.dumps({"key": key, "sha256": hashlib.sha256(blob).hexdigest()}, sort_keys=True)
         try:
             self.directory.mkdir(parents=True, exist_ok=True)
-            _atomic_write(self.path(key), header.encode() + b"\n" + blob)
+            atomic_write(self.path(key), lambda tmp: tmp.write_bytes(header.encode() + b"\n" + blob))
         except OSError as exc:  # a read-only cache never stops a computation
             self.last_miss = f"not kept ({exc})"
         return Program(exported, tree)
@@ -221,7 +212,9 @@ class ProgramCache:
         value = compute()
         try:
             self.directory.mkdir(parents=True, exist_ok=True)
-            _atomic_write(path, json.dumps({"key": full, "value": value}).encode())
+            atomic_write(
+                path, lambda tmp: tmp.write_bytes(json.dumps({"key": full, "value": value}).encode())
+            )
         except OSError:
             pass
         return value

@@ -16,8 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..atomic import atomic_write
 from ..data.formats import MAT_SUFFIXES, PARQUET_SUFFIXES
-from ..data.recording import atomic_write
 from ..identify.batch_fit import fit_datasets
 from ..identify.kiencke_fit import fit_document, fit_kiencke
 from ..identify.polach_fit import MIN_SAMPLES, RECOMMENDED_SAMPLES, require_samples

@@ -32,12 +32,12 @@ negative torque (braking). Only magnitudes are checked for plausibility.
 import dataclasses
 import io
 import json
-import os
 from pathlib import Path
 from typing import Optional
 
 import numpy as np
 
+from ..atomic import atomic_write
 from .formats import is_binary, read_columns
 from .readers import _fast_parse, _parse_rows, _read_text
 from .sidecar import _load_sidecar
@@ -218,17 +218,6 @@ def vehicle_sidecar(vehicle: Vehicle) -> dict:
             continue
         out[key] = [float(x) for x in value] if key == "contact_semi_axes_m" else value
     return out
-
-
-def atomic_write(path: Path, write) -> None:
-    """Call ``write(tmp)`` on a temporary file beside ``path``, then rename it over ``path`` (the
-    project's one atomic writer: a reader never sees a half-written file)."""
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        write(tmp)
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
 
 
 def save_recording(

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..data.recording import atomic_write
+from ..atomic import atomic_write
 from ..errors import InputError
 from ..models.polach import PARAM_NAMES
 
