@@ -78,9 +78,10 @@ def run(args) -> int:
     theta0 = lm_optimum(data, obs=obs)
     # the check it prints: the residuals' colour; auto tempers the Gaussian by 1/κ, a requested
     # likelihood runs as asked (ar1/observer model the colour themselves)
+    auto = args.likelihood == "auto"
     tempering = colour_check(data, theta0, likelihood, obs)
-    tempering["weight"] = 1.0 / tempering["kappa"] if args.likelihood == "auto" else 1.0
-    if args.likelihood == "auto":
+    tempering["weight"] = 1.0 / tempering["kappa"] if auto else 1.0
+    if auto:
         note = (
             f"auto: Gaussian tempered by 1/κ, κ = {tempering['kappa']:.1f} (residuals at the LM "
             f"optimum: lag-1 autocorrelation {tempering['residual_rho']:.2f}, "

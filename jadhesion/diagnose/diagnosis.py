@@ -23,6 +23,7 @@ import numpy as np
 from ..data.observer import lowpass_foh
 from ..data.vehicle import Vehicle
 from ..errors import InputError
+from ..models.effects import EFFECTS as REGISTRY
 from ..models.polach import PARAM_NAMES
 from ..status import Status
 from . import extensions as ext
@@ -55,7 +56,7 @@ def _extra_rows(sets) -> list:
     addition."""
     out = []
     for i, s in enumerate(sets):
-        spec = ext.REGISTRY[s[-1]] if s else None
+        spec = REGISTRY[s[-1]] if s else None
         if spec is not None and spec.extra_starts:
             col = 5 + ext.EXTRA_NAMES.index(spec.magnitude_param)
             out += [(i, col, d) for d in spec.extra_starts]

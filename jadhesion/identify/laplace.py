@@ -22,7 +22,7 @@ from .likelihood import prediction
 from .lm_result import best_of
 from .observer_view import ObserverTerms
 from .polach_residuals import polach_residual
-from .uncertainty import colour_factor, covariance
+from .uncertainty import colour_factor, covariance, lag1_autocorrelation
 
 #: Multi-start points of :func:`lm_optimum` (rows of [kA, kS, mu0, A, B]).
 STARTS = np.array(
@@ -86,13 +86,13 @@ def colour_check(data: PolachDataset, theta, likelihood: str = "gauss", obs: Obs
     (:func:`.uncertainty.colour_factor`, ≥ 1), ``"effective_samples"`` (n/κ), ``"samples"`` (n),
     ``"residual_rho"`` (lag-1 autocorrelation), ``"lags"`` (bandwidth)``}``. A Gaussian
     likelihood tempered by 1/κ counts n/κ independent samples instead of n correlated ones."""
-    r = np.asarray(data.adhesion) - np.asarray(prediction(jnp.asarray(theta), data, likelihood, obs))
-    kappa, lags = colour_factor(jnp.asarray(r))
+    r = jnp.asarray(data.adhesion) - prediction(jnp.asarray(theta), data, likelihood, obs)
+    kappa, lags = colour_factor(r)
     n = r.shape[0]
     return {
         "kappa": float(kappa),
         "effective_samples": n / float(kappa),
         "samples": n,
-        "residual_rho": float(np.sum(r[1:] * r[:-1]) / max(float(np.sum(r * r)), 1e-300)),
+        "residual_rho": float(lag1_autocorrelation(r)),
         "lags": int(lags),
     }

@@ -35,12 +35,15 @@ RCOND = 1e-9
 Z95 = 1.959963984540054
 
 
+def lag1_autocorrelation(r):
+    """``Σ r_t r_{t−1} / Σ r_t²`` of residuals ``r`` (n,) in time order (0 when all are 0)."""
+    return jnp.sum(r[1:] * r[:-1]) / jnp.maximum(jnp.sum(r * r), jnp.finfo(r.dtype).tiny)
+
+
 def bandwidth(r):
     """Newey–West lag truncation ``L`` from the residuals (Andrews' AR(1) plug-in, see above)."""
     n = r.shape[0]
-    rho = jnp.clip(
-        jnp.sum(r[1:] * r[:-1]) / jnp.maximum(jnp.sum(r * r), jnp.finfo(r.dtype).tiny), -0.97, 0.97
-    )
+    rho = jnp.clip(lag1_autocorrelation(r), -0.97, 0.97)
     alpha = 4 * rho**2 / ((1 - rho) ** 2 * (1 + rho) ** 2)
     return jnp.minimum(jnp.ceil(1.1447 * (alpha * n) ** (1.0 / 3.0)), n - 1)
 
