@@ -4,8 +4,9 @@ about it; the simulator, the diagnosis (extensions, features, selection, sensiti
 report), the blind benchmarks and ``tests/test_effects.py`` read it.
 
 Every effect has one magnitude; 0 is exactly "no effect", so the simulator carries all of them as
-one vector (:func:`magnitudes`) and compiles once for any mix. The factors below are pure functions
-of that magnitude (jit/vmap/grad-able).
+one vector (:func:`magnitudes`) and compiles once for any mix (twice: only runs with load transfer
+compile its axle-load loop). The factors below are pure functions of that magnitude
+(jit/vmap/grad-able).
 """
 
 from __future__ import annotations
