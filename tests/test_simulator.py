@@ -8,12 +8,18 @@ import json
 import subprocess
 import sys
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jadhesion.data.scenarios import SCENARIOS, envelope, paper_envelope
+from jadhesion.data import traction_plant as tp
+from jadhesion.data.scenarios import SCENARIOS, envelope, get_scenario, paper_envelope
+from jadhesion.data.sensors import sensor_model
 from jadhesion.data.simulated_datasets import simulate_batch, simulate_dataset
-from jadhesion.data.simulator import simulate, simulate_many
+from jadhesion.data.simulator import _constants, simulate, simulate_many
+from jadhesion.data.traction_profile import random_profile
+from jadhesion.data.vehicle import GRAVITY, LOCO_22E
 from jadhesion.errors import InputError
 from jadhesion.models.effects import EFFECTS, magnitudes
 
@@ -116,6 +122,37 @@ def test_thermal_softening_and_load_transfer_lower_observed_adhesion():
     for name in ("thermal_softening", "load_transfer"):
         base, eff = _base_and(name, EFFECTS[name].default)
         assert eff.columns["adhesion"].mean() < base.columns["adhesion"].mean() - 0.005, name
+
+
+@pytest.mark.parametrize("braking", [False, True])
+def test_load_transfer_follows_the_pitch_moment(braking):
+    """The leading axle's load solves the registry's law at the top of the typical range (the
+    fixed point converged): N1 = N (1 − m (F_d + (h_g/h_c)(n mu(N1) N − F_d))/(M g)), and it
+    unloads in traction and loads in braking, where the test load pushes."""
+    m = EFFECTS["load_transfer"].typical[1]
+    scenario = get_scenario("wet")
+    c = _constants(
+        scenario,
+        LOCO_22E,
+        magnitudes([("load_transfer", m)]),
+        200,
+        sensor_model("clean", scenario.torque_noise, 1.0),
+        braking=braking,
+    )
+    ref = tp.reference(jnp.asarray(2.0), c, random_profile(jax.random.PRNGKey(0), c))
+    v = ref["v_ref"]
+    y = jnp.stack([v * (1.0 + 2.0 * ref["s_ref"]) / c["radius"], v, 0.0, 0.0])
+    n1 = float(tp.leading_axle_load(y, ref, c))
+    _, _, mu, n1_contact, _ = tp.contact(y, ref, c, True)
+    weight = LOCO_22E.locomotive_mass_kg * GRAVITY
+    drawbar = float(tp.test_load(v, ref)) / weight
+    inertial = LOCO_22E.n_axles * float(mu) * LOCO_22E.axle_weight_n / weight - drawbar
+    law = LOCO_22E.axle_weight_n * (
+        1.0 - m * (drawbar + LOCO_22E.cog_height_m / LOCO_22E.coupler_height_m * inertial)
+    )
+    assert n1 == float(n1_contact)
+    assert abs(n1 - law) <= 1e-3 * abs(LOCO_22E.axle_weight_n - n1)
+    assert (n1 < 0.8 * LOCO_22E.axle_weight_n) if not braking else (n1 > 1.2 * LOCO_22E.axle_weight_n)
 
 
 def test_effect_and_scenario_input_errors():

@@ -81,6 +81,7 @@ def _constants(
         weight=vehicle.axle_weight_n,
         mass=vehicle.locomotive_mass_kg,
         n_axles=float(vehicle.n_axles),
+        height_ratio=vehicle.cog_height_m / vehicle.coupler_height_m,
         t0=vehicle.observer_time_constant_s,
         sensors=sensors,
         mags=mags,
@@ -90,14 +91,15 @@ def _constants(
     return jax.tree_util.tree_map(jnp.asarray, c)
 
 
-def _simulate_core(key, c, n_samples: int, substeps: int = SUBSTEPS):
-    """Pure simulation: key and constants → recorded columns and latent signals (jnp arrays)."""
+def _simulate_core(key, c, n_samples: int, substeps: int = SUBSTEPS, pitch: bool = False):
+    """Pure simulation: key and constants → recorded columns and latent signals (jnp arrays);
+    ``pitch``: load transfer on (:func:`.traction_plant.contact`)."""
     k_prof, k_noise = jax.random.split(key)
-    time, ys, ref = integrate(c, random_profile(k_prof, c), n_samples, substeps)
+    time, ys, ref = integrate(c, random_profile(k_prof, c), n_samples, substeps, pitch)
 
     def latent(y, r):
         torque, _ = controller(y, r, c)
-        slip, s, mu, _, _ = contact(y, r, torque, c)
+        slip, s, mu, _, _ = contact(y, r, c, pitch)
         return torque, slip, s, mu
 
     torque, slip, s, mu = jax.vmap(latent)(ys, ref)
@@ -127,8 +129,11 @@ def _simulate_core(key, c, n_samples: int, substeps: int = SUBSTEPS):
     return columns, dict(creepage=s, slip_velocity=slip, adhesion=mu, torque=torque)
 
 
-#: One compiled program per (n_samples, substeps): a batch of seeds; single runs are batches of one.
-_simulate_jit = jax.jit(jax.vmap(_simulate_core, in_axes=(0, None, None, None)), static_argnums=(2, 3))
+#: One compiled program per (n_samples, substeps, load transfer on): a batch of seeds; single runs
+#: are batches of one.
+_simulate_jit = jax.jit(
+    jax.vmap(_simulate_core, in_axes=(0, None, None, None, None)), static_argnums=(2, 3, 4)
+)
 
 
 def simulate_arrays(
@@ -154,7 +159,8 @@ def simulate_arrays(
     mags = fx.magnitudes(effects)
     c = _constants(scenario, vehicle, mags, n, model, period, braking)
     keys = jax.vmap(jax.random.PRNGKey)(jnp.asarray(seeds))
-    columns, latent = _simulate_jit(keys, c, n, substeps_for(period))
+    pitch = bool(mags[fx.INDEX["load_transfer"]] != 0.0)
+    columns, latent = _simulate_jit(keys, c, n, substeps_for(period), pitch)
     return scenario, mags, c, columns, latent, model
 
 
@@ -176,6 +182,12 @@ def _truth(scenario, seed, mags, vehicle, duration, model, period=SAMPLE_PERIOD,
     if "thermal_softening" in active:
         active["thermal_softening"].update(
             time_constant_s=fx.THERMAL_TIME_CONSTANT, power_scale_w=fx.THERMAL_POWER_SCALE
+        )
+    if "load_transfer" in active:
+        active["load_transfer"].update(
+            coupler_height_m=vehicle.coupler_height_m,
+            cog_height_m=vehicle.cog_height_m,
+            body_pitch_transfer=vehicle.body_pitch_transfer,
         )
     return {
         "scenario": scenario.name,

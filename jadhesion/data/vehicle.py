@@ -12,6 +12,12 @@ Not published, chosen here (documented defaults, all overridable through a recor
 * wheel profile transverse radius ∞ (conical tread, new profile).
 * ``observer_time_constant_s = 0.05``: T0 of the adhesion observer's derivative filter.
 * steel: E = 2.1e11 Pa, ν = 0.28, G = E / (2 (1 + ν)) ≈ 8.2e10 Pa.
+* geometry of load transfer (the ``load_transfer`` effect, :func:`..models.effects.load_factor`):
+  ``coupler_height_m = 0.9`` (drawbar pull above rail; knuckle couplers sit at 0.85–0.9 m),
+  ``cog_height_m = 1.5`` (centre of gravity of a loaded Co-Co body above rail; 1.4–1.8 m is usual),
+  ``bogie_centres_m = 11.0`` (bogie-pivot spacing of a ~20 m Co-Co). A stiff body over its bogies
+  shifts ``2 h_c / L_b`` ≈ 0.16 of a leading-bogie axle's static load per unit of drawbar pull
+  ``F_d/(M g)`` (:attr:`Vehicle.body_pitch_transfer`); the bogies' own pitch adds to it.
 
 With these, Hertz gives a ≈ 8.4 mm (rolling) × b ≈ 5.2 mm, Kalker c11 ≈ 4.84 and the Polach
 gradient constant k_eps ≈ 130 (``eps = k_eps · s / mu``).
@@ -50,6 +56,9 @@ class Vehicle:
     gear_ratio: float = 6.0588
     n_axles: int = 6
     starting_tractive_effort_n: float = 480e3
+    coupler_height_m: float = 0.9
+    cog_height_m: float = 1.5
+    bogie_centres_m: float = 11.0
 
     @property
     def axle_weight_n(self) -> float:
@@ -67,6 +76,13 @@ class Vehicle:
         if self.shear_modulus_pa is not None:
             return self.shear_modulus_pa
         return self.young_modulus_pa / (2.0 * (1.0 + self.poisson_ratio))
+
+    @property
+    def body_pitch_transfer(self) -> float:
+        """Leading-axle load shifted per unit drawbar pull by a stiff body's pitch [-]: the moment
+        ``F_d h_c`` over the bogie centres ``L_b``, shared by the leading bogie's ``n/2`` axles of
+        static load ``M g/n`` each: ``2 h_c / L_b`` (``load_transfer``'s magnitude before bogie pitch)."""
+        return 2.0 * self.coupler_height_m / self.bogie_centres_m
 
     def contact(self) -> Contact:
         """Contact semi-axes [m]: the sidecar override, else Hertz."""

@@ -4,8 +4,9 @@ about it; the simulator, the diagnosis (extensions, features, selection, sensiti
 report), the blind benchmarks and ``tests/test_effects.py`` read it.
 
 Every effect has one magnitude; 0 is exactly "no effect", so the simulator carries all of them as
-one vector (:func:`magnitudes`) and compiles once for any mix. The factors below are pure functions
-of that magnitude (jit/vmap/grad-able).
+one vector (:func:`magnitudes`) and compiles once for any mix (twice: only runs with load transfer
+compile its axle-load loop). The factors below are pure functions of that magnitude
+(jit/vmap/grad-able).
 """
 
 from __future__ import annotations
@@ -194,14 +195,17 @@ EFFECTS = {
         ),
         EffectSpec(
             name="load_transfer",
-            factor="the measured (leading) axle unloads with tractive effort: N1 = N max(1 − m F_t/(M g), "
-            "0.1), F_t = n T / r (M a without a trailing load); Hertz: k_eps ∝ N1^(−1/3) (load_factor); "
-            "bogie pitch gives m ≈ 0.3–1",
+            factor="the measured (leading) axle unloads with the locomotive's pitch moment about the rail: "
+            "N1 = N max(1 − m (F_d + (h_g/h_c)(M a + F_res))/(M g), 0.1), drawbar pull F_d at coupler "
+            "height h_c, inertial force M a and running resistance F_res at the centre of gravity h_g "
+            "(load_factor); m is the fraction of static load shifted per unit of steady drawbar pull "
+            "(a = 0), a stiff body over its bogies gives 2 h_c/L_b ≈ 0.16 (Vehicle.body_pitch_transfer), "
+            "bogie pitch raises it to m ≈ 0.3–1; Hertz: k_eps ∝ N1^(−1/3)",
             default=0.5,
             low=-2.0,
             high=2.0,
             unit="-",
-            summary="N1 = N (1 − m · F_t / (M g))",
+            summary="N1 = N (1 − m (F_d + h_g/h_c · (M a + F_res)) / (M g))",
             extension=(Param("load_m", -0.3, 3.0, 0.0, "-"), Param("load_accel", -3.0, 3.0, 0.0, "-")),
             typical=(0.1, 1.5),
             signed=False,
@@ -292,9 +296,14 @@ def thermal_factor(mag, heat):
     return 1.0 / (1.0 + mag * jnp.maximum(heat, 0.0) / THERMAL_POWER_SCALE)
 
 
-def load_factor(mag, traction_ratio):
-    """Leading-axle load multiplier of ``load_transfer``: ``1 − m F_t/(M g)`` (floored at 0.1)."""
-    return jnp.maximum(1.0 - mag * traction_ratio, 0.1)
+def load_factor(mag, drawbar_ratio, inertial_ratio, height_ratio):
+    """Leading-axle load multiplier of ``load_transfer``, ``N1/N = 1 − m (F_d + (h_g/h_c)(M a +
+    F_res))/(M g)`` (floored at 0.1): the pitch moment about the rail, ``F_d h_c + (M a + F_res) h_g``,
+    over ``h_c M g``. ``drawbar_ratio`` = ``F_d/(M g)`` [-] (pull on the coupler, negative when the
+    load pushes), ``inertial_ratio`` = ``(M a + F_res)/(M g)`` [-], ``height_ratio`` = ``h_g/h_c`` [-].
+    With tractive effort ``F_t = F_d + M a + F_res`` this is ``1 − m F_t/(M g) − m (h_g/h_c − 1)(a/g +
+    F_res/(M g))``: the extension's two terms (:mod:`jadhesion.diagnose.extensions`)."""
+    return jnp.maximum(1.0 - mag * (drawbar_ratio + height_ratio * inertial_ratio), 0.1)
 
 
 def delayed(time, signal, delay):
