@@ -114,7 +114,8 @@ def main(argv=None) -> None:
                     f"  {mode:15s} mu0 bias {r['bias']['mu0']:+.4f} sd {r['sd']['mu0']:.4f}"
                     f"  kS bias {r['bias']['kS']:+.3f}  slope within 25 % {r['slope_within25']:.0%}"
                 )
-    Path(a.save).write_text(json.dumps({"commit": _commit(), "settings": settings, "results": results}, indent=1))
+    doc = {"commit": _commit(), "settings": settings, "results": results}
+    Path(a.save).write_text(json.dumps(doc, indent=1))
 
 
 if __name__ == "__main__":
