@@ -76,12 +76,12 @@ def main(argv=None) -> int:
 def leave(code: int):
     """Flush stdout and stderr, then end the process at once with ``code`` (``os._exit``).
 
-    Every output file is complete by then (written atomically: :mod:`jadhesion.atomic`; the
-    compilation cache and the kept programs are written when they are made), so the interpreter's
-    shutdown has nothing left to save: it only tears down JAX's backend and the modules, about
-    0.18 s of a warm ``fit`` process (``benchmarks/bench_startup.py``), a third of a bare
-    ``import jax``. Only the console entry points call this, never :func:`main` (tests call
-    :func:`main` in their own process)."""
+    Every output file is written and closed by then (commands write synchronously, most through
+    :mod:`jadhesion.atomic`, and start no thread or process; the compilation cache and the kept
+    programs are written when they are made), so the interpreter's shutdown has nothing to save:
+    it only tears down JAX's backend and the modules, 0.18–0.26 s of a warm ``fit`` process (A/B
+    and ``benchmarks/bench_startup.py``), a third of a bare ``import jax``. Only the console entry
+    points call this, never :func:`main` (tests call :func:`main` in their own process)."""
     sys.stdout.flush()
     sys.stderr.flush()
     os._exit(code)
