@@ -16,9 +16,10 @@ Each process is timed in wall seconds and in CPU seconds (user + system, all its
 much less. Each round also runs one ``breakdown`` process (not among the timed ones): a warm fit
 that stamps wall and CPU time after ``import jax``, after importing the command, around reading
 the recording and around each kept program (:func:`jadhesion.cli.fit_program._kept`: load,
-lowering, cache look-up, execution), with ``scipy.linalg`` imported first as a phase of its own
-(JAX's CPU LAPACK kernels take their BLAS/LAPACK from it: the first exported program would
-otherwise import it) and the interpreter's exit measured from outside.
+lowering, cache look-up, execution); it leaves as the ``jadhesion`` program does
+(:func:`jadhesion.cli.leave`), and the interpreter's start and exit are measured from outside. It
+also records whether ``scipy`` was imported (JAX's CPU LAPACK set-up imports it; the kept fit
+programs hold no LAPACK call, so a warm fit should not).
 
 The recording is simulated once (2 000 samples, ``jadhesion simulate``). Results go to
 ``benchmarks/results/bench_startup.json`` with the git commit, the settings and the load average
@@ -65,11 +66,9 @@ marks = [("start", t())]
 import jax
 marks.append(("import jax", t()))
 import io, contextlib
-from jadhesion.cli import main
+from jadhesion.cli import leave, main
 from jadhesion.cli import fit_program, fit_run
 marks.append(("import the command", t()))
-import scipy.linalg
-marks.append(("scipy.linalg (CPU LAPACK kernels)", t()))
 def stamp(label, fn):
     def wrapped(*a, **k):
         marks.append(("other", t()))
@@ -88,7 +87,8 @@ for (label, (w, c)), (_, (w0, c0)) in zip(marks[1:], marks[:-1]):
     phases[label][0] += w - w0
     phases[label][1] += c - c0
 (w0, c0), (w1, c1) = marks[0][1], marks[-1][1]
-print(json.dumps({"phases": phases, "script": [w1 - w0, c1 - c0]}))
+print(json.dumps({"phases": phases, "script": [w1 - w0, c1 - c0], "scipy": "scipy" in sys.modules}))
+leave(0)
 """
 
 
@@ -108,7 +108,7 @@ def _breakdown(rec: Path, method: str, env) -> dict:
     phases = doc["phases"]
     # Interpreter start before the script's first line and exit after its last, lumped together.
     phases["interpreter start + exit"] = [wall - doc["script"][0], cpu - doc["script"][1]]
-    return phases
+    return phases, doc["scipy"]
 
 
 def _commit() -> str:
@@ -155,7 +155,7 @@ def main(argv=None) -> int:
     kinds = ("import_jax", "cold", "warm_traced", "warm_exported")
     times = {k: [] for k in kinds}
     cpu = {k: [] for k in kinds}
-    breakdowns = []
+    breakdowns, scipy_rounds = [], []
     load_before = os.getloadavg()
     for r in range(args.repeats):
         cold = work / f"cold{r}"
@@ -169,7 +169,9 @@ def main(argv=None) -> int:
             wall, seconds = _timed(argv, e)
             times[k].append(wall)
             cpu[k].append(seconds)
-        breakdowns.append(_breakdown(rec, args.method, warm))
+        phases, scipy_imported = _breakdown(rec, args.method, warm)
+        breakdowns.append(phases)
+        scipy_rounds.append(scipy_imported)
         shutil.rmtree(cold)
         print(
             f"round {r + 1}: " + ", ".join(f"{k} {times[k][-1]:.2f} s ({cpu[k][-1]:.2f} cpu)" for k in kinds),
@@ -206,6 +208,8 @@ def main(argv=None) -> int:
         "cpu_seconds": cpu,
         "cpu_median_s": cpu_medians,
         "cpu_paired_ratio_median": paired(cpu),
+        # Whether the warm breakdown process had imported scipy, per round.
+        "warm_imported_scipy": scipy_rounds,
         # Median over rounds of each phase of a warm process: [wall, cpu] seconds.
         "warm_breakdown_median_s": {
             label: [statistics.median(b[label][i] for b in breakdowns) for i in (0, 1)]

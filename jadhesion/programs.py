@@ -18,16 +18,22 @@ Arguments may be any pytree of arrays (they are flattened before export); the re
 tree ``jax.export`` serialises natively (dicts, tuples, lists, ``None``, arrays).
 
 Compiled executables are kept by JAX's persistent cache, not here: a call of a kept program still
-lowers a small wrapper around the deserialised StableHLO (about 0.03 s for the fit's program, plus
-JAX's one-time CPU LAPACK set-up, which imports ``scipy.linalg``) before the cache hands over the
-executable. Keeping the executables themselves (``jax.experimental.serialize_executable``) would
-skip that lowering, but with jax/jaxlib 0.10.2 on CPU a fit program deserialised in a new process
-crashed it (segmentation fault) or failed at its first call (``NOT_FOUND: Function
+lowers a small wrapper around the deserialised StableHLO (about 0.03 s for the fit's program)
+before the cache hands over the executable. That lowering (``jax.export``'s ``call_exported``
+rule) sets up JAX's CPU LAPACK kernels for every program, whether it calls LAPACK or not, and the
+set-up imports ``scipy.linalg`` (0.12–0.2 s). A program whose StableHLO names no LAPACK routine
+needs no kernels, so :class:`Program` skips that step for it (:func:`_lapack_setup_skipped`); the
+fit's programs do their linear algebra in :mod:`jadhesion.identify.small_linalg` for this reason.
+
+Keeping the executables themselves (``jax.experimental.serialize_executable``) would skip that
+lowering, but with jax/jaxlib 0.10.2 on CPU a fit program deserialised in a new process crashed
+it (segmentation fault) or failed at its first call (``NOT_FOUND: Function
 slice_subtract_fusion.2 not found``); a toy function round-tripped. Checked 2026-11, not used.
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import importlib.metadata
 import json
@@ -38,6 +44,7 @@ import jax
 import jaxlib
 import numpy as np
 from jax import export
+from jax._src.export import _export
 
 from .atomic import atomic_write
 
@@ -84,6 +91,24 @@ def _environment() -> dict:
     }
 
 
+@contextlib.contextmanager
+def _lapack_setup_skipped(exported: export.Exported):
+    """While lowering a call of ``exported``, skip JAX's CPU LAPACK set-up (and so the import of
+    ``scipy.linalg``) if its StableHLO names no LAPACK routine (custom-call targets ``lapack_*``;
+    any mention keeps the set-up). JAX calls the set-up from a private function,
+    ``jax._src.export._export._ensure_backends_initialized``; without that name (another JAX) the
+    call is left as it is."""
+    setup = getattr(_export, "_ensure_backends_initialized", None)
+    if setup is None or b"lapack" in exported.mlir_module_serialized:
+        yield
+        return
+    _export._ensure_backends_initialized = lambda platforms: None
+    try:
+        yield
+    finally:
+        _export._ensure_backends_initialized = setup
+
+
 class Program:
     """A deserialised program: call it with arguments of the tree structure, shapes and dtypes it
     was exported for; returns its result tree (JAX arrays)."""
@@ -95,7 +120,8 @@ class Program:
         leaves, tree = jax.tree.flatten(args)
         if tree != self.in_tree:
             raise TypeError(f"program {self.exported.fun_name}: arguments {tree}, expected {self.in_tree}")
-        return self.exported.call(*leaves)
+        with _lapack_setup_skipped(self.exported):
+            return self.exported.call(*leaves)
 
 
 class ProgramCache:

@@ -2,6 +2,7 @@
 results equal the library's bit for bit; damaged or stale files are rebuilt; keys follow shapes
 and code."""
 
+import ast
 import hashlib
 import json
 import os
@@ -196,12 +197,44 @@ def test_dataset_and_trust_programs_equal_library_bit_for_bit(programs, tmp_path
         assert float(lags) == float(ref_lags)
 
 
+_LAPACK_PROBE = """
+import sys, jax, numpy as np
+jax.config.update("jax_enable_x64", True)
+import jax.numpy as jnp
+from jadhesion.programs import ProgramCache
+cache, a, b = ProgramCache(sys.argv[1]), np.array([[0.0, 2.0], [4.0, 1.0]]), np.array([2.0, 9.0])
+plain = cache.get_or_export("plain", lambda: lambda a, b: a @ b, (a, b))
+lapack = cache.get_or_export("lapack", lambda: jnp.linalg.solve, (a, b))
+out = [np.asarray(plain(a, b)).tolist(), "scipy" in sys.modules]
+out += [np.asarray(lapack(a, b)).tolist(), "scipy" in sys.modules]
+print(out)
+"""
+
+
+def test_lapack_set_up_only_for_programs_that_call_lapack(tmp_path):
+    """A kept program without a LAPACK call runs in a new process without JAX's LAPACK set-up
+    (which imports scipy.linalg); one with a LAPACK call still gets it and gives the right
+    answer."""
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+
+    def run():
+        argv = [sys.executable, "-c", _LAPACK_PROBE, str(tmp_path)]
+        return subprocess.run(argv, env=env, capture_output=True, text=True, timeout=300, check=True).stdout
+
+    run()  # exports and keeps both
+    plain, scipy_after_plain, solved, scipy_after_lapack = ast.literal_eval(run().strip())
+    assert plain == [18.0, 17.0] and not scipy_after_plain
+    np.testing.assert_allclose(solved, [2.0, 1.0], rtol=1e-15)
+    assert scipy_after_lapack
+
+
 def test_warm_fit_process_loads_kept_programs_only(tmp_path):
     """A second ``jadhesion fit`` process on a recording (observer, smoother, LM fit, trust block)
     gives the same JSON, keeps nothing new (every program was kept by the first) and imports
     neither optimistix/equinox (LM of the Polach fit is the projected LM of identify/box_lm) nor
     matplotlib (no --plot) nor tqdm (no progress bar) nor pandas (the CSV reader takes pyarrow's
-    buffers). The start-up time itself is a benchmark: benchmarks/bench_startup.py."""
+    buffers) nor scipy (no LAPACK call in the kept programs: identify/small_linalg). The start-up
+    time itself is a benchmark: benchmarks/bench_startup.py."""
     recording = _raw_recording(tmp_path, n=300)
     cache = tmp_path / "xla"
     env = {
@@ -212,7 +245,8 @@ def test_warm_fit_process_loads_kept_programs_only(tmp_path):
     probe = (
         "import sys, json; from jadhesion.cli import main;"
         "code = main(['fit', sys.argv[1], '--method', 'lm', '--json']);"
-        "heavy = [m for m in ('optimistix', 'equinox', 'matplotlib', 'tqdm', 'pandas') if m in sys.modules];"
+        "heavy = [m for m in ('optimistix', 'equinox', 'matplotlib', 'tqdm', 'pandas', 'scipy')"
+        " if m in sys.modules];"
         "sys.stderr.write('HEAVY=' + json.dumps(heavy) + '\\n'); sys.exit(code)"
     )
 

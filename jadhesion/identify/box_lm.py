@@ -32,6 +32,7 @@ import jax.numpy as jnp
 from ..status import Status
 from .lm_optx import safe_residual
 from .lm_result import LMResult, status_code
+from .small_linalg import solve
 
 #: Inward probe (box-scaled) of variables on a face with a vanishing Jacobian column.
 PROBE = 0.01
@@ -151,7 +152,7 @@ def _box_lm_stepper(residual, bounds, options, block_rows=None):
         dmax = jnp.maximum(st.dmax, jnp.diag(h))
         damp = jnp.maximum(dmax, 1e-12 * jnp.max(dmax) + jnp.finfo(u.dtype).tiny)
         a = h * free[:, None] * free[None, :] + jnp.diag(jnp.where(active, 1.0, st.lam * damp))
-        u_new = jnp.where(fresh, u, jnp.clip(u + jnp.linalg.solve(a, -g * free), 0.0, 1.0))
+        u_new = jnp.where(fresh, u, jnp.clip(u + solve(a, -g * free), 0.0, 1.0))
         s = u_new - u
         c_new, g_new, h_new, rmax_new = linearise(u_new, args)
         predicted = -(g @ s) - 0.5 * (s @ (h @ s))
@@ -200,7 +201,7 @@ def _box_lm_stepper(residual, bounds, options, block_rows=None):
         a_gn = h * free_g[:, None] * free_g[None, :] + jnp.diag(
             jnp.where(free_g > 0, 1e-12 * jnp.max(jnp.diag(h)) + jnp.finfo(u.dtype).tiny, 1.0)
         )
-        gn_gain = 0.5 * (g * free_g) @ jnp.linalg.solve(a_gn, g * free_g)
+        gn_gain = 0.5 * (g * free_g) @ solve(a_gn, g * free_g)
         converged = stopped & (stationary | (gn_gain <= GN_GAIN * c))
         done = stopped | (lam > 1e16)
         steps = st.steps + jnp.where(fresh, 0, 1)

@@ -28,6 +28,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .small_linalg import svd_tall
+
 #: Relative singular value of the equilibrated Jacobian below which a direction counts as
 #: undetermined (its variance would exceed the best-determined one's by 10¹⁸).
 RCOND = 1e-9
@@ -69,7 +71,7 @@ def covariance(jac, r, fixed=None, hac=True):
     jac = jnp.where(fixed[None], 0.0, jac)
     scale = jnp.sqrt(jnp.sum(jac * jac, axis=0))
     scale = jnp.where(scale > 0, scale, 1.0)
-    _, sv, vt = jnp.linalg.svd(jac / scale[None], full_matrices=False)
+    sv, vt = svd_tall(jac / scale[None])
     keep = sv > RCOND * sv[0]
     inv2 = jnp.where(keep, 1.0 / jnp.where(keep, sv, 1.0) ** 2, 0.0)
     pinv = ((vt.T * inv2[None]) @ vt) / scale[:, None] / scale[None, :]  # (JᵀJ)⁺
