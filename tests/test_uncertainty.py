@@ -12,7 +12,7 @@ from scipy.signal import lfilter
 from jadhesion.data.dataset import to_dataset
 from jadhesion.data.scenarios import get_scenario
 from jadhesion.data.simulator import simulate_many
-from jadhesion.identify.polach_fit import LM_RESIDUAL, fit_polach_batch
+from jadhesion.identify.polach_fit import LM_RESIDUAL, fit_polach_batch, scaled
 from jadhesion.identify.trust import fit_report
 from jadhesion.identify.uncertainty import Z95, bandwidth, colour_factor, covariance
 from jadhesion.models.polach import PARAM_NAMES
@@ -110,8 +110,9 @@ def test_a_parameter_on_a_bound_stays_free_for_the_others():
     on_bound = (theta <= 1e-6) | (theta >= 1 - 1e-6)
     assert on_bound.any(), theta
     report = fit_report(data, fit)
-    jac = jax.jacfwd(LM_RESIDUAL)(fit.params, data)
-    r = LM_RESIDUAL(fit.params, data)
+    fitted = scaled(data, fit)  # the residual LM minimised: the fit's noise scale
+    jac = jax.jacfwd(LM_RESIDUAL)(fit.params, fitted)
+    r = LM_RESIDUAL(fit.params, fitted)
     free = np.sqrt(np.diag(np.asarray(covariance(jac, r)[0])))
     for i, name in enumerate(PARAM_NAMES):
         u = report["uncertainty"][name]

@@ -20,7 +20,7 @@ from ..atomic import atomic_write
 from ..data.formats import MAT_SUFFIXES, PARQUET_SUFFIXES
 from ..identify.batch_fit import fit_datasets
 from ..identify.kiencke_fit import fit_document, fit_kiencke
-from ..identify.polach_fit import MIN_SAMPLES, RECOMMENDED_SAMPLES, require_samples
+from ..identify.polach_fit import MIN_SAMPLES, RECOMMENDED_SAMPLES, require_samples, scaled
 from ..identify.trust import fit_report
 from ..models.polach import PARAM_NAMES
 from ..status import status_of
@@ -126,7 +126,9 @@ def _polach_doc(args, dataset, fit, seconds) -> dict:
         "seconds": seconds,
         "status": status.label,
         "converged": status.converged,
-        **fit_report(dataset, fit, numbers=trust_numbers(fit.params, dataset)),
+        # LM's robust sd of mu_hat about the curve (its standardised residual's scale); None else
+        "noise_scale": None if fit.residual_scale is None else float(fit.residual_scale),
+        **fit_report(dataset, fit, numbers=trust_numbers(fit.params, scaled(dataset, fit))),
     }
 
 

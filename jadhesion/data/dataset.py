@@ -49,6 +49,10 @@ class PolachDataset(NamedTuple):
             counts; results bit-identical to a dataset without the field). Set by
             :func:`jadhesion.identify.batch_fit.pad_dataset` to fit datasets of different lengths
             with one compiled program.
+        residual_scale: robust sd [-] of ``mu_hat`` about the curve, shape (), or None. Set by
+            LM's first stage (:func:`jadhesion.identify.polach_fit.fit_polach`); with it LM's
+            residual is standardised and robust
+            (:func:`jadhesion.identify.polach_residuals.polach_lm_residual`).
     """
 
     creep: jax.Array
@@ -59,6 +63,7 @@ class PolachDataset(NamedTuple):
     slip_sd: Optional[jax.Array] = None
     creep_sd: Optional[jax.Array] = None
     weight: Optional[jax.Array] = None
+    residual_scale: Optional[jax.Array] = None
 
 
 CREEP_OPTIONS = ("smoothed", "raw")

@@ -2,10 +2,12 @@
 
 Population methods minimise the paper's fitness (eq 15), the mean absolute error
 ``MAE = (1/N) Σ |mu_adh(theta; s_i, w_i) − mu_hat_i|`` over the box ``[0, 1]⁵``; LM minimises the
-sum of squares over the same box — of the errors-in-variables residual (:mod:`.polach_residuals`:
-the expected curve over the smoothed slip's uncertainty when the dataset has ``slip_sd``, else the
-plain one) — (projected LM, :func:`.lm.box_lm`), seeded by a random search on
-a subsample ("global LM", :data:`LM_POP`), and reports the MAE as well. Datasets are pytrees:
+sum of squares over the same box (projected LM, :func:`.lm.box_lm`, seeded by a random search on a
+subsample: "global LM", :data:`LM_POP`) in two stages: first of the errors-in-variables residual
+(:mod:`.polach_residuals`: the expected curve over the smoothed slip's uncertainty when the dataset
+has ``slip_sd``, else the plain one), whose robust spread gives the noise scale σ of ``mu_hat``; then,
+with σ, of the standardised robust residual :func:`.polach_residuals.polach_lm_residual` (effective
+variance σ² + Var[mu_adh], pseudo-Huber). It reports the MAE as well. Datasets are pytrees:
 :func:`fit_polach_batch` vmaps over a leading axis of stacked datasets and keys, compiled once per
 shape.
 """
@@ -25,7 +27,16 @@ from .driver import STALL_FTOL, run_until
 from .lm import best_of, box_lm_queue, global_lm, seed_starts
 from .methods import NAMES as METHODS
 from .methods import POPULATION as ALGORITHMS
-from .polach_residuals import dataset_mae, mean_abs, polach_eiv_residual, polach_mae, polach_residual
+from .polach_residuals import (
+    MIN_SCALE,
+    dataset_mae,
+    mean_abs,
+    polach_eiv_residual,
+    polach_lm_residual,
+    polach_mae,
+    polach_residual,
+    residual_scale,
+)
 
 #: Global LM for Polach: ``LM_POP`` uniform random points scored on a subsample of at most
 #: :data:`SEED_SAMPLES` rows seed ``LM_STARTS`` projected-LM runs (:func:`.lm.box_lm`, ``ftol =
@@ -43,7 +54,9 @@ class PolachFit(NamedTuple):
     """A fit: ``params`` (5,) ``[kA, kS, mu0, A, B]``; ``mae`` (eq 15) and ``sse`` at them;
     ``iterations`` (optimiser iterations; LM: steps), ``evaluations`` (objective evaluations, the
     LM's seeding search included); ``reached`` (MAE ≤ target; false without a target);
-    ``status`` (int32 :class:`jadhesion.status.Status` code: why the solver stopped)."""
+    ``status`` (int32 :class:`jadhesion.status.Status` code: why the solver stopped);
+    ``residual_scale``: LM's noise scale σ of ``mu_hat`` (the trust block's residual needs it:
+    :func:`scaled`), None for the population methods."""
 
     params: jax.Array
     mae: jax.Array
@@ -52,6 +65,14 @@ class PolachFit(NamedTuple):
     evaluations: jax.Array
     reached: jax.Array
     status: jax.Array
+    residual_scale: Optional[jax.Array] = None
+
+
+def scaled(data: PolachDataset, fit) -> PolachDataset:
+    """``data`` with the noise scale LM's fit used (unchanged for a population method's fit): the
+    dataset on which :data:`LM_RESIDUAL` is the residual that fit minimised."""
+    scale = getattr(fit, "residual_scale", None)
+    return data if scale is None else data._replace(residual_scale=scale)
 
 
 def _box(dtype):
@@ -59,7 +80,7 @@ def _box(dtype):
 
 
 #: The residual LM minimises (population methods keep the paper's MAE of :func:`polach_residual`).
-LM_RESIDUAL = polach_eiv_residual
+LM_RESIDUAL = polach_lm_residual
 #: Samples (at most) used by the global-LM seeding search and multi-start (strided subsample).
 SEED_SAMPLES = 128
 #: Work-queue lanes of a batched global LM: the subsample runs are small, so more of them step
@@ -83,23 +104,48 @@ def subsample(data: PolachDataset, n_max: int = SEED_SAMPLES) -> PolachDataset:
     return data._replace(**{k: getattr(data, k)[idx] for k in fields if getattr(data, k) is not None})
 
 
+def _global_lm(data, key):
+    seed_data = subsample(data)
+    return global_lm(
+        LM_RESIDUAL,
+        _box(data.adhesion.dtype),
+        key,
+        data,
+        n_starts=LM_STARTS,
+        pop_size=LM_POP,
+        search_iter=LM_SEARCH_ITER,
+        search_args=None if seed_data is data else seed_data,
+        max_steps=LM_MAX_STEPS,
+        block_rows=LM_BLOCK_ROWS,
+    )
+
+
+def _keep_first_if_noise_free(first, second, scale):
+    """The second stage's result, or the first's where the noise scale is at
+    :data:`.polach_residuals.MIN_SCALE` (noise-free data: the second stage would fit rounding);
+    works on one result or a stack of them; ``steps`` stay the second stage's (it ran)."""
+    free = scale <= MIN_SCALE
+
+    def pick(a, b):
+        return jnp.where(jnp.reshape(free, free.shape + (1,) * (a.ndim - free.ndim)), a, b)
+
+    return jax.tree.map(pick, first, second)._replace(steps=second.steps)
+
+
 def _fit(method, pop_size, max_iter, use_target, data, key, target):
     bounds = _box(data.adhesion.dtype)
+    scale = None
     if method == "lm":
-        seed_data = subsample(data)
-        out, n_pop = global_lm(
-            LM_RESIDUAL,
-            bounds,
-            key,
-            data,
-            n_starts=LM_STARTS,
-            pop_size=LM_POP,
-            search_iter=LM_SEARCH_ITER,
-            search_args=None if seed_data is data else seed_data,
-            max_steps=LM_MAX_STEPS,
-            block_rows=LM_BLOCK_ROWS,
-        )
-        theta, iterations, evaluations = out.params, out.steps, n_pop + out.steps
+        if data.residual_scale is None:  # first stage: the noise scale
+            first, n_pop = _global_lm(data, key)
+            scale = residual_scale(polach_eiv_residual(first.params, data), data)
+            out, n_second = _global_lm(data._replace(residual_scale=scale), key)
+            out = _keep_first_if_noise_free(first, out, scale)
+            iterations, evaluations = first.steps + out.steps, n_pop + n_second + first.steps + out.steps
+        else:
+            out, n_pop = _global_lm(data, key)
+            scale, iterations, evaluations = data.residual_scale, out.steps, n_pop + out.steps
+        theta = out.params
     else:
         out = run_until(
             ALGORITHMS[method],
@@ -116,7 +162,7 @@ def _fit(method, pop_size, max_iter, use_target, data, key, target):
     r = polach_residual(theta, data)
     mae = dataset_mae(r, data)
     reached = (mae <= target) if use_target else jnp.zeros((), bool)
-    return PolachFit(theta, mae, jnp.sum(r * r), iterations, evaluations, reached, out.status)
+    return PolachFit(theta, mae, jnp.sum(r * r), iterations, evaluations, reached, out.status, scale)
 
 
 _STATIC = ("method", "pop_size", "max_iter", "use_target")
@@ -131,11 +177,39 @@ def _fit_many(method, pop_size, max_iter, use_target, data, keys, target):
 
 
 def _global_lm_many(data, keys, target, use_target):
-    """Global LM on a stack of N datasets as two work queues (:func:`.lm.box_lm_queue`): the
-    seeding searches are vmapped, then all N × ``LM_STARTS`` subsample LM runs share one queue and
-    the N full-data polishes another, so the batch costs the total of its LM steps rather than the
-    slowest run's steps times the batch (a vmapped while loop's price). Results equal
-    :func:`fit_polach`'s per dataset."""
+    """Global LM on a stack of N datasets, both stages (module docstring), each as two work queues
+    (:func:`_queued_lm`). Results equal :func:`fit_polach`'s per dataset."""
+    if data.residual_scale is None:
+        first, n_pop = _queued_lm(data, keys)
+        scales = jax.vmap(lambda p, d: residual_scale(polach_eiv_residual(p, d), d))(first.params, data)
+        data = data._replace(residual_scale=scales)
+        polish, n_second = _queued_lm(data, keys)
+        polish = _keep_first_if_noise_free(first, polish, scales)
+        n_pop, steps = n_pop + n_second + first.steps, first.steps + polish.steps
+    else:
+        polish, n_pop = _queued_lm(data, keys)
+        steps = polish.steps
+    r = jax.vmap(polach_residual)(polish.params, data)
+    mae = mean_abs(r) if data.weight is None else jax.vmap(dataset_mae)(r, data)
+    reached = (mae <= target) if use_target else jnp.zeros(mae.shape, bool)
+    return PolachFit(
+        polish.params,
+        mae,
+        jnp.sum(r * r, axis=-1),
+        steps,
+        n_pop + polish.steps,
+        reached,
+        polish.status,
+        data.residual_scale,
+    )
+
+
+def _queued_lm(data, keys):
+    """One global-LM stage on a stack of datasets as two work queues (:func:`.lm.box_lm_queue`):
+    the seeding searches are vmapped, then all N × ``LM_STARTS`` subsample LM runs share one queue
+    and the N full-data polishes another, so the batch costs the total of its LM steps rather than
+    the slowest run's steps times the batch (a vmapped while loop's price). Returns the polishes'
+    :class:`.lm.LMResult` and the seeding evaluations per dataset."""
     bounds = _box(data.adhesion.dtype)
     seed_data = jax.vmap(subsample)(data)
     starts, n_pop = jax.vmap(
@@ -157,13 +231,7 @@ def _global_lm_many(data, keys, target, use_target):
     polish = box_lm_queue(
         LM_RESIDUAL, seeded.params, data, bounds, max_steps=LM_MAX_STEPS, block_rows=LM_BLOCK_ROWS
     )
-    r = jax.vmap(polach_residual)(polish.params, data)
-    mae = mean_abs(r) if data.weight is None else jax.vmap(dataset_mae)(r, data)
-    steps = seeded.steps + polish.steps
-    reached = (mae <= target) if use_target else jnp.zeros(mae.shape, bool)
-    return PolachFit(
-        polish.params, mae, jnp.sum(r * r, axis=-1), steps, n_pop + steps, reached, polish.status
-    )
+    return polish._replace(steps=seeded.steps + polish.steps), n_pop
 
 
 #: Fewest samples a Polach fit accepts: twice the five parameters (fewer cannot identify the

@@ -4,9 +4,10 @@
 returns the JSON-ready block of ``jadhesion fit``: ``uncertainty`` {param: {``stderr``, ``ci95``}},
 ``correlation`` (5 × 5, order kA, kS, mu0, A, B), ``warnings`` [{``code``, ``params``,
 ``message``}] and ``hac_lags``. Standard errors are the HAC sandwich of :mod:`.uncertainty` (the
-observer colours the noise) of LM's residual :data:`.polach_fit.LM_RESIDUAL` (the expected curve
-over the smoothed slip's uncertainty, the plain one without it); ``ci95 = θ ± 1.96·stderr``
-clipped to the box [0, 1].
+observer colours the noise) of LM's residual :data:`.polach_fit.LM_RESIDUAL` on the dataset with
+the fit's noise scale (:func:`.polach_fit.scaled`: for an LM fit the standardised robust residual
+it minimised, an M-estimator's sandwich; for a population method's fit the errors-in-variables
+residual); ``ci95 = θ ± 1.96·stderr`` clipped to the box [0, 1].
 
 Warning codes:
 
@@ -32,7 +33,7 @@ import numpy as np
 
 from ..models.polach import PARAM_NAMES
 from ..status import status_of
-from .polach_fit import LM_RESIDUAL, RECOMMENDED_SAMPLES
+from .polach_fit import LM_RESIDUAL, RECOMMENDED_SAMPLES, scaled
 from .uncertainty import Z95, correlation, covariance
 
 #: Distance from a face of the unit box at which a parameter counts as on its bound.
@@ -65,7 +66,7 @@ def fit_report(data, fit, numbers=None) -> dict:
     :func:`trust_numbers` of it when already computed (the command line's kept program)."""
     theta = np.asarray(fit.params, float)
     fixed = held_fixed(theta)
-    cov, lags = trust_numbers(fit.params, data) if numbers is None else numbers
+    cov, lags = trust_numbers(fit.params, scaled(data, fit)) if numbers is None else numbers
     cov = np.asarray(cov)
     sd = np.sqrt(np.diag(cov))
     uncertainty, warnings = {}, []
