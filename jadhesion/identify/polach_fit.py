@@ -120,31 +120,47 @@ def _global_lm(data, key):
     )
 
 
-def _keep_first_if_noise_free(first, second, scale):
-    """The second stage's result, or the first's where the noise scale is at
-    :data:`.polach_residuals.MIN_SCALE` (noise-free data: the second stage would fit rounding);
-    works on one result or a stack of them; ``steps`` stay the second stage's (it ran)."""
+#: Noise scale of LM's first stage: far above any residual of ``mu_hat``, so its standardised
+#: robust residual is the errors-in-variables least squares to within a few per cent (only the
+#: spread of its residuals is used: the second stage's scale).
+FIRST_STAGE_SCALE = 1.0
+
+
+def _two_stages(run, data, key):
+    """LM's two stages (module docstring) as one ``lax.scan`` over the noise scale, so a program
+    holds one copy of the global LM (the fit program's size is start-up time). ``run(data, key)``
+    is one global-LM stage, ``(LMResult, seeding evaluations)``, on one dataset or a stack.
+    Returns the second stage's result (the first's where the scale is at
+    :data:`.polach_residuals.MIN_SCALE`: noise-free data, where a standardised stage would fit
+    rounding; its steps stay counted), its scale, and the steps and evaluations of both."""
+
+    def scale_of(params, d):
+        return residual_scale(polach_eiv_residual(params, d), d)
+
+    def stage(scale, _):
+        out, n_pop = run(data._replace(residual_scale=scale), key)
+        new = jax.vmap(scale_of)(out.params, data) if data.adhesion.ndim > 1 else scale_of(out.params, data)
+        return new, (out, n_pop, scale)
+
+    init = jnp.full(data.adhesion.shape[:-1], FIRST_STAGE_SCALE, data.adhesion.dtype)
+    _, (outs, n_pops, scales) = jax.lax.scan(stage, init, None, length=2)
+    first, second = (jax.tree.map(lambda a, i=i: a[i], outs) for i in (0, 1))
+    scale = scales[1]
     free = scale <= MIN_SCALE
 
     def pick(a, b):
         return jnp.where(jnp.reshape(free, free.shape + (1,) * (a.ndim - free.ndim)), a, b)
 
-    return jax.tree.map(pick, first, second)._replace(steps=second.steps)
+    out = jax.tree.map(pick, first, second)
+    steps = first.steps + second.steps
+    return out, scale, steps, n_pops[0] + n_pops[1] + steps
 
 
 def _fit(method, pop_size, max_iter, use_target, data, key, target):
     bounds = _box(data.adhesion.dtype)
     scale = None
     if method == "lm":
-        if data.residual_scale is None:  # first stage: the noise scale
-            first, n_pop = _global_lm(data, key)
-            scale = residual_scale(polach_eiv_residual(first.params, data), data)
-            out, n_second = _global_lm(data._replace(residual_scale=scale), key)
-            out = _keep_first_if_noise_free(first, out, scale)
-            iterations, evaluations = first.steps + out.steps, n_pop + n_second + first.steps + out.steps
-        else:
-            out, n_pop = _global_lm(data, key)
-            scale, iterations, evaluations = data.residual_scale, out.steps, n_pop + out.steps
+        out, scale, iterations, evaluations = _two_stages(_global_lm, data, key)
         theta = out.params
     else:
         out = run_until(
@@ -179,16 +195,7 @@ def _fit_many(method, pop_size, max_iter, use_target, data, keys, target):
 def _global_lm_many(data, keys, target, use_target):
     """Global LM on a stack of N datasets, both stages (module docstring), each as two work queues
     (:func:`_queued_lm`). Results equal :func:`fit_polach`'s per dataset."""
-    if data.residual_scale is None:
-        first, n_pop = _queued_lm(data, keys)
-        scales = jax.vmap(lambda p, d: residual_scale(polach_eiv_residual(p, d), d))(first.params, data)
-        data = data._replace(residual_scale=scales)
-        polish, n_second = _queued_lm(data, keys)
-        polish = _keep_first_if_noise_free(first, polish, scales)
-        n_pop, steps = n_pop + n_second + first.steps, first.steps + polish.steps
-    else:
-        polish, n_pop = _queued_lm(data, keys)
-        steps = polish.steps
+    polish, scale, steps, evaluations = _two_stages(_queued_lm, data, keys)
     r = jax.vmap(polach_residual)(polish.params, data)
     mae = mean_abs(r) if data.weight is None else jax.vmap(dataset_mae)(r, data)
     reached = (mae <= target) if use_target else jnp.zeros(mae.shape, bool)
@@ -197,10 +204,10 @@ def _global_lm_many(data, keys, target, use_target):
         mae,
         jnp.sum(r * r, axis=-1),
         steps,
-        n_pop + polish.steps,
+        evaluations,
         reached,
         polish.status,
-        data.residual_scale,
+        scale,
     )
 
 
