@@ -42,13 +42,15 @@ def global_lm(
     max_steps=100,
     options=DEFAULT_OPTIONS,
     block_rows=None,
+    polish=True,
 ):
     """ "Global LM": :func:`seed_starts` (a search on ``‖r‖²``) seeds ``n_starts`` :func:`box_lm`
     runs from its best members; the lowest-SSE answer is returned.
 
     With ``search_args`` (e.g. a subsample of the data) the search *and* the multi-start LM use
     it, and only the best of them is polished by one :func:`box_lm` on ``args``: the expensive
-    full-data Jacobians are then paid once, not ``n_starts`` times. ``block_rows``: see
+    full-data Jacobians are then paid once, not ``n_starts`` times; ``polish`` (a bool, may be
+    traced) false skips that polish and returns the subsample's best. ``block_rows``: see
     :func:`box_lm` (row-wise residuals only). Returns ``(LMResult,
     population evaluations)``; ``steps`` sums every LM run's steps."""
     sub = args if search_args is None else search_args
@@ -60,6 +62,10 @@ def global_lm(
     )
     out = best_of(jax.vmap(solve, in_axes=(0, None))(starts, sub))
     if search_args is not None:
-        polish = solve(out.params, args)
-        out = polish._replace(steps=polish.steps + out.steps)
+
+        def polished():
+            final = solve(out.params, args)
+            return final._replace(steps=final.steps + out.steps)
+
+        out = polished() if polish is True else jax.lax.cond(polish, polished, lambda: out)
     return out, n_evals

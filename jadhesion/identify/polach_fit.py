@@ -104,7 +104,7 @@ def subsample(data: PolachDataset, n_max: int = SEED_SAMPLES) -> PolachDataset:
     return data._replace(**{k: getattr(data, k)[idx] for k in fields if getattr(data, k) is not None})
 
 
-def _global_lm(data, key):
+def _global_lm(data, key, polish=True):
     seed_data = subsample(data)
     return global_lm(
         LM_RESIDUAL,
@@ -117,6 +117,7 @@ def _global_lm(data, key):
         search_args=None if seed_data is data else seed_data,
         max_steps=LM_MAX_STEPS,
         block_rows=LM_BLOCK_ROWS,
+        polish=polish,
     )
 
 
@@ -128,8 +129,10 @@ FIRST_STAGE_SCALE = 1.0
 
 def _two_stages(run, data, key):
     """LM's two stages (module docstring) as one ``lax.scan`` over the noise scale, so a program
-    holds one copy of the global LM (the fit program's size is start-up time). ``run(data, key)``
-    is one global-LM stage, ``(LMResult, seeding evaluations)``, on one dataset or a stack.
+    holds one copy of the global LM (the fit program's size is start-up time). ``run(data, key,
+    polish)`` is one global-LM stage, ``(LMResult, seeding evaluations)``, on one dataset or a
+    stack; the first stage skips the full-data polish (its scale is the spread over all rows of the
+    residuals at the subsample's optimum: an hour's recording pays the full-data steps once).
     Returns the second stage's result (the first's where the scale is at
     :data:`.polach_residuals.MIN_SCALE`: noise-free data, where a standardised stage would fit
     rounding; its steps stay counted), its scale, and the steps and evaluations of both."""
@@ -137,13 +140,13 @@ def _two_stages(run, data, key):
     def scale_of(params, d):
         return residual_scale(polach_eiv_residual(params, d), d)
 
-    def stage(scale, _):
-        out, n_pop = run(data._replace(residual_scale=scale), key)
+    def stage(scale, index):
+        out, n_pop = run(data._replace(residual_scale=scale), key, index == 1)
         new = jax.vmap(scale_of)(out.params, data) if data.adhesion.ndim > 1 else scale_of(out.params, data)
         return new, (out, n_pop, scale)
 
     init = jnp.full(data.adhesion.shape[:-1], FIRST_STAGE_SCALE, data.adhesion.dtype)
-    _, (outs, n_pops, scales) = jax.lax.scan(stage, init, None, length=2)
+    _, (outs, n_pops, scales) = jax.lax.scan(stage, init, jnp.arange(2))
     first, second = (jax.tree.map(lambda a, i=i: a[i], outs) for i in (0, 1))
     scale = scales[1]
     free = scale <= MIN_SCALE
@@ -211,12 +214,13 @@ def _global_lm_many(data, keys, target, use_target):
     )
 
 
-def _queued_lm(data, keys):
+def _queued_lm(data, keys, polish=True):
     """One global-LM stage on a stack of datasets as two work queues (:func:`.lm.box_lm_queue`):
     the seeding searches are vmapped, then all N × ``LM_STARTS`` subsample LM runs share one queue
     and the N full-data polishes another, so the batch costs the total of its LM steps rather than
     the slowest run's steps times the batch (a vmapped while loop's price). Returns the polishes'
-    :class:`.lm.LMResult` and the seeding evaluations per dataset."""
+    :class:`.lm.LMResult` (without ``polish``: the subsample's best) and the seeding evaluations
+    per dataset."""
     bounds = _box(data.adhesion.dtype)
     seed_data = jax.vmap(subsample)(data)
     starts, n_pop = jax.vmap(
@@ -235,10 +239,14 @@ def _queued_lm(data, keys):
         lanes=SEED_LANES,
     )
     seeded = jax.vmap(best_of)(jax.tree.map(lambda a: a.reshape((n, LM_STARTS) + a.shape[1:]), seeded))
-    polish = box_lm_queue(
-        LM_RESIDUAL, seeded.params, data, bounds, max_steps=LM_MAX_STEPS, block_rows=LM_BLOCK_ROWS
-    )
-    return polish._replace(steps=seeded.steps + polish.steps), n_pop
+
+    def polished():
+        final = box_lm_queue(
+            LM_RESIDUAL, seeded.params, data, bounds, max_steps=LM_MAX_STEPS, block_rows=LM_BLOCK_ROWS
+        )
+        return final._replace(steps=seeded.steps + final.steps)
+
+    return jax.lax.cond(polish, polished, lambda: seeded), n_pop
 
 
 #: Fewest samples a Polach fit accepts: twice the five parameters (fewer cannot identify the
