@@ -45,7 +45,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import subprocess
 import time
 from pathlib import Path
 from typing import NamedTuple
@@ -57,6 +56,7 @@ from scipy import stats
 
 jax.config.update("jax_enable_x64", True)
 
+from benchmarks.provenance import commit  # noqa: E402
 from jadhesion.data.creep_state import difference_sd, smooth_creep  # noqa: E402
 from jadhesion.data.dataset import PolachDataset, to_dataset  # noqa: E402
 from jadhesion.data.observer import observer_core  # noqa: E402
@@ -250,7 +250,7 @@ def main(argv=None):
         rows.append(boot)
         print(i, {q: round(boot["bias"][q], 3) for q in ("kS", "mu0")}, boot["hit90"], flush=True)
     doc = {
-        "commit": subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True).stdout.strip(),
+        "commit": commit(),
         "settings": {**vars(args), "sensors": "realistic", "level": 0.9},
         "coverage90": {q: float(np.mean([r["hit90"][q] for r in rows])) for q in QUANTITIES},
         "true_error": {

@@ -29,7 +29,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import subprocess
 import tempfile
 import time
 from pathlib import Path
@@ -44,6 +43,7 @@ import numpy as np  # noqa: E402
 
 jax.config.update("jax_enable_x64", True)
 
+from benchmarks.provenance import commit  # noqa: E402
 from jadhesion.data.dataset import to_dataset  # noqa: E402
 from jadhesion.data.recording import load_recording  # noqa: E402
 from jadhesion.data.scenarios import SCENARIOS  # noqa: E402
@@ -64,11 +64,6 @@ RESULTS = Path(__file__).parent / "results"
 FOREIGN_SD = {"clean": CLEAN.speed_sd(), "mild": 1.15e-3, "realistic": 2.8e-3}
 
 
-def _commit() -> str:
-    out = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True)
-    return out.stdout.strip()
-
-
 def _recordings_ours(name, level, per, points):
     seeds = list(range(100, 100 + per))
     if level == "clean":
@@ -76,12 +71,13 @@ def _recordings_ours(name, level, per, points):
     return simulate_many(name, seeds, n_samples=points, sensor_noise=float(level))
 
 
-def _recordings_foreign(preset, per, tmp, rate, duration):
-    out = []
+def foreign_starts(preset, per, tmp, rate=None, duration=30.0):
+    """``(recording, ForeignRecording)`` of seeds ``0 … per − 1`` of the independent generator
+    (no effects, walking-pace starts, sensor ``preset``, ``rate`` [Hz] or its random choice,
+    ``duration`` [s]): written to CSV in ``tmp`` and read back as the CLI reads a user's file."""
     for seed in range(per):
-        rec = generate(seed, effect="none", sensor=preset, profile="start", rate_hz=rate, duration_s=duration)
-        out.append((load_recording(write(rec, Path(tmp) / f"{preset}_{seed}.csv")), rec.truth["params"]))
-    return out
+        fr = generate(seed, effect="none", sensor=preset, profile="start", rate_hz=rate, duration_s=duration)
+        yield load_recording(write(fr, Path(tmp) / f"{preset}_{seed}.csv")), fr
 
 
 def _fits(datasets):
@@ -213,7 +209,7 @@ def main(argv=None):
     if args.replot:
         figure(json.loads(Path(args.save).read_text())["summary"], args.figure)
         return
-    doc = {"commit": _commit(), "settings": vars(args), "results": {}, "summary": {}}
+    doc = {"commit": commit(), "settings": vars(args), "results": {}, "summary": {}}
     start = time.perf_counter()
 
     def record(key, recordings, truths, noise_sd):
@@ -232,8 +228,8 @@ def main(argv=None):
             record(f"ours/{name}/{level}", recs, [SCENARIOS[name].params] * args.per, sd)
     with tempfile.TemporaryDirectory() as tmp:
         for preset in filter(None, args.foreign_sensors.split(",")):
-            pairs = _recordings_foreign(preset, args.per, tmp, args.foreign_rate, args.foreign_duration)
-            truths = [[t[k] for k in PARAM_NAMES] for _, t in pairs]
+            pairs = list(foreign_starts(preset, args.per, tmp, args.foreign_rate, args.foreign_duration))
+            truths = [[fr.truth["params"][k] for k in PARAM_NAMES] for _, fr in pairs]
             record(f"foreign/start/{preset}", [r for r, _ in pairs], truths, FOREIGN_SD[preset])
     figure(doc["summary"], args.figure)
 

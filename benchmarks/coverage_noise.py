@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import subprocess
 import sys
 import time
 
@@ -35,6 +34,7 @@ import numpy as np  # noqa: E402
 
 jax.config.update("jax_enable_x64", True)
 
+from benchmarks.provenance import commit  # noqa: E402
 from jadhesion.data.dataset import to_dataset  # noqa: E402
 from jadhesion.data.scenarios import SCENARIOS  # noqa: E402
 from jadhesion.data.sensors import REALISTIC  # noqa: E402
@@ -45,11 +45,6 @@ from validation.calibration import QUANTITIES, binomial_band, coverage_study  # 
 
 CREEPS = ("raw", "smoothed")
 COVERED = ("kS", "mu0", "mu_max", "creep_opt")
-
-
-def _commit() -> str:
-    out = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True)
-    return out.stdout.strip()
 
 
 def _simulate(name, level, seeds, points):
@@ -165,7 +160,7 @@ def main(argv=None):
             figure(json.load(fh)["summary"], levels, args.figure)
         return
     doc = {
-        "commit": _commit(),
+        "commit": commit(),
         "settings": vars(args),
         "realistic_sensors": REALISTIC.as_dict(),
         "band99_90": binomial_band(args.per * len(SCENARIOS), 0.9),

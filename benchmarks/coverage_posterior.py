@@ -22,7 +22,6 @@ import contextlib
 import io
 import json
 import os
-import subprocess
 import tempfile
 import time
 from pathlib import Path
@@ -31,6 +30,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from benchmarks.provenance import commit
 from jadhesion.cli import main as cli
 from jadhesion.data.recording import load_recording
 from jadhesion.models.polach import PARAM_NAMES, adhesion_peak
@@ -104,8 +104,8 @@ def main(argv=None):
     p.add_argument("--save", default=str(Path(__file__).parent / "results" / "coverage_posterior.json"))
     args = p.parse_args(argv)
     jax.config.update("jax_enable_x64", True)
-    commit = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True).stdout.strip()
-    doc = {"commit": commit, "settings": vars(args), "rows": []}
+    sha = commit()
+    doc = {"commit": sha, "settings": vars(args), "rows": []}
     start = time.perf_counter()
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp)

@@ -26,7 +26,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import subprocess
 import time
 from pathlib import Path
 
@@ -36,6 +35,7 @@ import numpy as np
 
 jax.config.update("jax_enable_x64", True)
 
+from benchmarks.provenance import commit  # noqa: E402
 from jadhesion.data.dataset import to_dataset  # noqa: E402
 from jadhesion.data.observer import lowpass_foh  # noqa: E402
 from jadhesion.data.scenarios import SCENARIOS  # noqa: E402
@@ -153,8 +153,8 @@ def main(argv=None):
     p.add_argument("--points", type=int, default=1000)
     p.add_argument("--save", default=str(Path(__file__).parent / "results" / "eiv_decomposition.json"))
     args = p.parse_args(argv)
-    commit = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True).stdout.strip()
-    doc = {"commit": commit, "settings": vars(args), "results": {}}
+    sha = commit()
+    doc = {"commit": sha, "settings": vars(args), "results": {}}
     start = time.perf_counter()
     for sensors in args.sensors.split(","):
         for name in args.scenarios.split(","):

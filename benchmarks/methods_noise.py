@@ -23,7 +23,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import subprocess
 import tempfile
 import time
 import warnings
@@ -40,9 +39,9 @@ jax.config.update("jax_enable_x64", True)
 
 from emcee.autocorr import AutocorrError  # noqa: E402
 
-from benchmarks.coverage_fit import FOREIGN_SD  # noqa: E402
+from benchmarks.coverage_fit import FOREIGN_SD, foreign_starts  # noqa: E402
+from benchmarks.provenance import commit  # noqa: E402
 from jadhesion.data.dataset import to_dataset  # noqa: E402
-from jadhesion.data.recording import load_recording  # noqa: E402
 from jadhesion.data.sensors import CLEAN, REALISTIC  # noqa: E402
 from jadhesion.data.simulator import simulate_many  # noqa: E402
 from jadhesion.identify.laplace import colour_check, initial_spread, lm_optimum  # noqa: E402
@@ -50,15 +49,10 @@ from jadhesion.identify.mcmc import sample_posterior  # noqa: E402
 from jadhesion.identify.methods import METHODS  # noqa: E402
 from jadhesion.identify.polach_fit import fit_polach  # noqa: E402
 from jadhesion.models.polach import PARAM_NAMES  # noqa: E402
-from validation.foreign_generator import generate, write  # noqa: E402
 
 RESULTS = Path(__file__).parent / "results"
 SCENARIO_CYCLE = ("dry", "wet", "sand")
 POSTERIOR = "posterior"
-
-
-def _commit() -> str:
-    return subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True).stdout.strip()
 
 
 def _ours(level: str, per: int):
@@ -70,9 +64,7 @@ def _ours(level: str, per: int):
 
 
 def _foreign(preset: str, per: int, tmp: str):
-    for seed in range(per):
-        fr = generate(seed, effect="none", sensor=preset, profile="start", duration_s=30.0)
-        rec = load_recording(write(fr, Path(tmp) / f"{preset}_{seed}.csv"))
+    for rec, fr in foreign_starts(preset, per, tmp):
         yield rec, np.asarray(list(fr.truth["params"].values()))
 
 
@@ -153,7 +145,7 @@ def main(argv=None) -> None:
     p.add_argument("--steps", type=int, default=1500, help="posterior steps (32 walkers)")
     p.add_argument("--save", default=str(RESULTS / "methods_noise.json"))
     a = p.parse_args(argv)
-    commit = _commit()
+    sha = commit()
     settings = {k: getattr(a, k) for k in ("per", "levels", "foreign", "steps")}
     settings["load_average_at_start"] = list(os.getloadavg())
     results = {}
@@ -172,7 +164,7 @@ def main(argv=None) -> None:
             print(f"{name:20s} |μ0 err| / |slope err|: {summary}", flush=True)
     settings["load_average_at_end"] = list(os.getloadavg())
     save = Path(a.save)
-    save.write_text(json.dumps({"commit": commit, "settings": settings, "results": results}, indent=1))
+    save.write_text(json.dumps({"commit": sha, "settings": settings, "results": results}, indent=1))
     figure(results, save.with_suffix(".png"))
 
 

@@ -19,6 +19,7 @@ import sys
 import tempfile
 from pathlib import Path
 
+from benchmarks.provenance import commit
 from validation.foreign_generator import generate, write
 
 FOREIGN = {"seed": 7, "profile": "start", "rate_hz": 50.0, "duration_s": 60.0, "sensor": "realistic"}
@@ -56,14 +57,14 @@ def main(argv=None) -> int:
         _cli("diagnose", tmp / "change.csv", "--report", tmp / "report")
         figures = sorted((tmp / "report").glob("*.png"))
         shutil.copy(figures[0], out / "diagnose.png")
-    commit = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True).stdout.strip()
+    sha = commit()
     settings = {
         "foreign": FOREIGN,
         "simulated": SIMULATED,
         "rail_change": CHANGE,
         "diagnose_figure": figures[0].name,
     }
-    (out / "figures.json").write_text(json.dumps({"commit": commit, "settings": settings}, indent=1) + "\n")
+    (out / "figures.json").write_text(json.dumps({"commit": sha, "settings": settings}, indent=1) + "\n")
     return 0
 
 

@@ -26,7 +26,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import subprocess
 import tempfile
 from pathlib import Path
 
@@ -35,27 +34,21 @@ import numpy as np
 
 jax.config.update("jax_enable_x64", True)
 
+from benchmarks.coverage_fit import foreign_starts  # noqa: E402
+from benchmarks.provenance import commit  # noqa: E402
 from jadhesion.data.dataset import to_dataset  # noqa: E402
-from jadhesion.data.recording import load_recording  # noqa: E402
 from jadhesion.data.simulator import simulate_many  # noqa: E402
 from jadhesion.identify.polach_fit import fit_polach  # noqa: E402
 from jadhesion.models.polach import PARAM_NAMES  # noqa: E402
-from validation.foreign_generator import generate, write  # noqa: E402
 
 RESULTS = Path(__file__).parent / "results"
 MODES = ("stated", "oracle_sd", "no_expectation")
 
 
-def _commit() -> str:
-    return subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True).stdout.strip()
-
-
 def recordings(name: str, per: int, tmp: str):
     """``(recording, true params (5,), true slip (n,))`` of one set."""
     if name == "foreign":
-        for seed in range(per):
-            fr = generate(seed, effect="none", sensor="realistic", profile="start", duration_s=30.0)
-            rec = load_recording(write(fr, Path(tmp) / f"foreign_{seed}.csv"))
+        for rec, fr in foreign_starts("realistic", per, tmp):
             slip = fr.latent["wheel_speed_true"] - fr.latent["vehicle_speed"]
             yield rec, np.asarray(list(fr.truth["params"].values())), np.asarray(slip)
         return
@@ -114,7 +107,7 @@ def main(argv=None) -> None:
                     f"  {mode:15s} mu0 bias {r['bias']['mu0']:+.4f} sd {r['sd']['mu0']:.4f}"
                     f"  kS bias {r['bias']['kS']:+.3f}  slope within 25 % {r['slope_within25']:.0%}"
                 )
-    doc = {"commit": _commit(), "settings": settings, "results": results}
+    doc = {"commit": commit(), "settings": settings, "results": results}
     Path(a.save).write_text(json.dumps(doc, indent=1))
 
 
