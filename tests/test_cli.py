@@ -39,7 +39,7 @@ def jadhesion(env, *args, check=True):
 def recording(env, tmp_path_factory):
     out = tmp_path_factory.mktemp("rec") / "dry.csv"
     # 0.05 × the realistic sensors ≈ the historical clean level (5e-5 m/s): the contract and
-    # accuracy checks below; at realistic noise LM's mu0 is off by ~0.02 (benchmarks/coverage_noise).
+    # accuracy checks below; at realistic noise LM's mu0 is off by ~0.01-0.03 (benchmarks/methods_noise).
     jadhesion(env, "simulate", "--scenario", "dry", "--seed", "3", "--sensor-noise", "0.05", "--out", out)
     return out
 
