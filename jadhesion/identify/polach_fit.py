@@ -140,9 +140,13 @@ def _two_stages(run, data, key):
     def scale_of(params, d):
         return residual_scale(polach_eiv_residual(params, d), d)
 
+    def next_scale(params):
+        return jax.vmap(scale_of)(params, data) if data.adhesion.ndim > 1 else scale_of(params, data)
+
     def stage(scale, index):
         out, n_pop = run(data._replace(residual_scale=scale), key, index == 1)
-        new = jax.vmap(scale_of)(out.params, data) if data.adhesion.ndim > 1 else scale_of(out.params, data)
+        # the second stage's result needs no further scale (a full-data residual and a median)
+        new = jax.lax.cond(index == 0, next_scale, lambda _: scale, out.params)
         return new, (out, n_pop, scale)
 
     init = jnp.full(data.adhesion.shape[:-1], FIRST_STAGE_SCALE, data.adhesion.dtype)
