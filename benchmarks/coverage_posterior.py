@@ -6,13 +6,17 @@ Recordings: our simulator (dry, wet, sand; realistic sensors, ``--per`` seeds ea
 and the independent generator of ``validation/foreign_generator.py`` (``3 × --per`` clean
 recordings: no concealed effect, its own vehicles, profiles, rates and sensor noise). Each is
 written as a CSV + sidecar and run through the command line in this process
-(``jadhesion posterior FILE --json``), once per ``--likelihoods`` entry: ``auto`` (the default:
-the Gaussian tempered by the residuals' colour) and ``observer`` (the observer's lag modelled,
-AR(1) noise). Recorded per generator and likelihood: the share of 90 % intervals holding the truth
-of kA, kS, μ0 and of the derived μ_max, creep_opt (at the recording's median speed, from the true
-parameters; a truth on a face of the prior box is left out of that parameter's share and counted),
-the median interval width, and per recording the truth, the interval and κ. The JSON
-records the git commit, the settings and ``os.getloadavg()``.
+(``jadhesion posterior FILE --json``), once per ``--likelihoods`` entry: a ``--likelihood`` name,
+``:tempered`` appended for ``--temper`` (tempered by the residuals' colour 1/κ as auto does). The
+default ``gauss:tempered,student:tempered`` runs the two likelihoods ``auto`` chooses between (the
+Gaussian, auto before the tail check, and the Student-t), and adds ``auto`` rows: per recording the
+run of the one auto picks (same start, weight and seed: the same chain). Recorded per generator
+and likelihood: the share of 90 % intervals holding the truth of kA, kS, μ0 and of the derived
+μ_max, creep_opt (at the recording's median speed, from the true parameters; a truth on a face of
+the prior box is left out of that parameter's share and counted), the median interval width, the
+median |posterior median − truth|, and per recording the truth, the interval, the median and the
+``tempering`` block (κ, tail check). The JSON records the git commit, the settings and
+``os.getloadavg()``.
 """
 
 from __future__ import annotations
@@ -70,12 +74,27 @@ def _derived_truth(truth: dict, path: Path, speed: float) -> dict:
     return {"mu_max": float(mu_max), "creep_opt": float(creep_opt)}
 
 
-def _run(path: Path, likelihood: str, steps: int, walkers: int) -> dict | None:
+def _run(path: Path, entry: str, steps: int, walkers: int) -> dict | None:
     buf = io.StringIO()
+    likelihood, _, mode = entry.partition(":")
     args = ["posterior", str(path), "--json", "--steps", str(steps), "--walkers", str(walkers)]
+    args += ["--likelihood", likelihood] + (["--temper"] if mode == "tempered" else [])
     with contextlib.redirect_stdout(buf), contextlib.redirect_stderr(io.StringIO()):
-        code = cli([*args, "--likelihood", likelihood])
+        code = cli(args)
     return json.loads(buf.getvalue()) if code == 0 else None
+
+
+def _auto_rows(rows: list) -> list:
+    """``auto``'s rows: per recording, the tempered run of the likelihood its tail check picks."""
+    runs = {(r["generator"], r["case"], r["likelihood"]): r for r in rows}
+    out = []
+    for (gen, case, lik), row in runs.items():
+        other = runs.get((gen, case, "student:tempered"))
+        if lik != "gauss:tempered" or other is None or "tempering" not in row:
+            continue
+        pick = other if row["tempering"]["heavy_tails"] else row
+        out.append({**pick, "likelihood": "auto", "picked": pick["likelihood"]})
+    return out
 
 
 def summarise(rows: list) -> dict:
@@ -85,12 +104,22 @@ def summarise(rows: list) -> dict:
         for lik in sorted({r["likelihood"] for r in rows}):
             sel = [r for r in rows if r["generator"] == gen and r["likelihood"] == lik]
             ok = [r for r in sel if r["hit"] is not None]
+            if not sel:
+                continue
             cell = {"n": len(sel), "failed": len(sel) - len(ok), "coverage90": {}, "median_width90": {}}
+            cell["median_abs_error"] = {}
             cell["on_face"] = {q: sum(r["hit"][q] is None for r in ok) for q in FACE_PARAMS}
             for q in QUANTITIES if ok else ():
                 hits = [r["hit"][q] for r in ok if r["hit"][q] is not None]
                 cell["coverage90"][q] = float(np.mean(hits)) if hits else None
                 cell["median_width90"][q] = float(np.median([r["width"][q] for r in ok]))
+                cell["median_abs_error"][q] = float(
+                    np.median([abs(r["median"][q] - r["truth"][q]) for r in ok])
+                )
+            if lik == "auto":
+                cell["picked"] = {
+                    p: sum(r["picked"] == p for r in sel) for p in sorted({r["picked"] for r in sel})
+                }
             out[f"{gen}/{lik}"] = cell
     return out
 
@@ -100,8 +129,10 @@ def main(argv=None):
     p.add_argument("--per", type=int, default=8, help="recordings per scenario of ours (foreign: 3×)")
     p.add_argument("--steps", type=int, default=2000)
     p.add_argument("--walkers", type=int, default=32)
-    p.add_argument("--likelihoods", default="auto,observer")
-    p.add_argument("--save", default=str(Path(__file__).parent / "results" / "coverage_posterior.json"))
+    p.add_argument("--likelihoods", default="gauss:tempered,student:tempered")
+    p.add_argument(
+        "--save", default=str(Path(__file__).parent / "results" / "coverage_posterior_student.json")
+    )
     args = p.parse_args(argv)
     jax.config.update("jax_enable_x64", True)
     sha = commit()
@@ -123,10 +154,11 @@ def main(argv=None):
                         if not FACE_TOL < truth[k] < 1 - FACE_TOL:
                             row["hit"][k] = None
                     row["width"] = {k: q[k]["q95"] - q[k]["q05"] for k in QUANTITIES}
+                    row["median"] = {k: q[k]["median"] for k in QUANTITIES}
                     row["tempering"] = res["tempering"]
                 doc["rows"].append(row)
                 print(gen, label, lik, row["hit"], flush=True)
-            doc["summary"] = summarise(doc["rows"])
+            doc["summary"] = summarise(doc["rows"] + _auto_rows(doc["rows"]))
             doc["wall_seconds"], doc["loadavg"] = time.perf_counter() - start, os.getloadavg()
             Path(args.save).write_text(json.dumps(doc, indent=1) + "\n")
     print(json.dumps(doc["summary"], indent=1))

@@ -37,11 +37,18 @@ def register(sub) -> None:
     p.add_argument("--steps", type=int, default=5000, help="steps per walker, burn-in included")
     p.add_argument(
         "--likelihood",
-        choices=("auto", "gauss", "laplace", "ar1", "observer"),
+        choices=("auto", "gauss", "student", "laplace", "ar1", "observer"),
         default="auto",
-        help="auto (default): gauss tempered by the residuals' colour (n/κ effective samples); "
-        "gauss: i.i.d. untempered; ar1: AR(1) residuals in time order; observer: the adhesion "
-        "observer's lag modelled, AR(1) noise (needs time and traction_torque, one stretch)",
+        help="auto (default): gauss, or student where the standardised residuals' tails are heavy, "
+        "tempered by the residuals' colour (n/κ effective samples); gauss: i.i.d. untempered; "
+        "student: Student-t (ν = 4) i.i.d. untempered; ar1: AR(1) residuals in time order; "
+        "observer: the adhesion observer's lag modelled, AR(1) noise (needs time and "
+        "traction_torque, one stretch)",
+    )
+    p.add_argument(
+        "--temper",
+        action="store_true",
+        help="temper a requested likelihood by 1/κ as auto does (auto always tempers)",
     )
     p.add_argument(
         "--creep",

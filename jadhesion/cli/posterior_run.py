@@ -6,24 +6,53 @@ import sys
 import warnings
 from pathlib import Path
 
+import jax
 import numpy as np
 
 from ..identify.ensemble import ChainTooShortWarning
 from ..identify.laplace import colour_check, initial_spread, lm_optimum
+from ..identify.likelihood import STUDENT_NU, curve_moments
 from ..identify.mcmc import sample_posterior
 from ..identify.observer_view import recording_observer_terms
-from ..identify.polach_fit import require_samples
+from ..identify.polach_fit import fit_polach, require_samples
+from ..identify.polach_residuals import residual_scale
 from ..models.polach import PARAM_NAMES
 from ..plots.posterior import corner_plot, predictive_plot
 from .common import Progress, UserError, emit_json, table
 from .loading import load_dataset
 
 
+def tail_check(data, theta, kappa: float) -> dict:
+    """The standardised residuals' tails at ``theta``: ``z = (mu_hat − E[mu_adh]) / √(σ² + Var[mu_adh])``
+    (the errors-in-variables standardisation of :mod:`jadhesion.identify.likelihood`, σ = 1.4826 MAD
+    of the residuals), their excess kurtosis and ``"kurtosis_threshold"`` = three standard errors of
+    a Gaussian sample's, ``3 √(24 κ / n)`` (n/κ effective samples). ``"heavy_tails"``: above it."""
+    mean, var = curve_moments(theta, data)
+    r = np.asarray(data.adhesion) - np.asarray(mean)
+    sigma = float(residual_scale(r, data))
+    z = r / np.sqrt(sigma**2 + np.asarray(var))
+    zc = z - z.mean()
+    excess = float(np.mean(zc**4) / max(np.mean(zc**2) ** 2, 1e-300) - 3.0)
+    threshold = 3.0 * float(np.sqrt(24.0 * kappa / z.shape[0]))
+    return {"excess_kurtosis": excess, "kurtosis_threshold": threshold, "heavy_tails": excess > threshold}
+
+
+def _auto_note(likelihood: str, t: dict) -> str:
+    name = "Gaussian" if likelihood == "gauss" else f"Student-t (ν = {STUDENT_NU:g})"
+    why = "heavy tails" if t["heavy_tails"] else "tails near Gaussian"
+    return (
+        f"auto: {name} tempered by 1/κ, κ = {t['kappa']:.1f} (residuals at the LM optimum: lag-1 "
+        f"autocorrelation {t['residual_rho']:.2f}, {t['effective_samples']:.0f} effective of "
+        f"{t['samples']} samples; {why}: standardised excess kurtosis {t['excess_kurtosis']:.1f} "
+        f"{'>' if t['heavy_tails'] else '≤'} {t['kurtosis_threshold']:.1f}, 3 Gaussian standard errors)"
+    )
+
+
 def _choose_likelihood(recording, requested: str):
-    """``(likelihood, ObserverTerms or None, note)`` for the loaded recording; ``auto`` is the
-    Gaussian (tempered in :func:`run`)."""
+    """``(likelihood, ObserverTerms or None, note)`` for the loaded recording; ``auto`` is decided
+    in :func:`run` (after the tail check)."""
     if requested == "auto":
-        return "gauss", None, "auto"
+        return "auto", None, "auto"
     if requested != "observer":
         return requested, None, "requested"
     if not recording.has_raw_signals:
@@ -76,17 +105,18 @@ def run(args) -> int:
         )
     likelihood, obs, note = _choose_likelihood(recording, args.likelihood)
     theta0 = lm_optimum(data, obs=obs)
-    # the check it prints: the residuals' colour; auto tempers the Gaussian by 1/κ, a requested
-    # likelihood runs as asked (ar1/observer model the colour themselves)
+    # the checks it prints, at the least-squares optimum: the residuals' colour and tails; auto
+    # tempers by 1/κ the Gaussian, or the Student-t where the tails are heavy; a requested
+    # likelihood runs as asked, untempered unless --temper (ar1/observer model the colour themselves)
     auto = args.likelihood == "auto"
-    tempering = colour_check(data, theta0, likelihood, obs)
-    tempering["weight"] = 1.0 / tempering["kappa"] if auto else 1.0
+    tempering = colour_check(data, theta0, "gauss" if auto else likelihood, obs)
+    tempering.update(tail_check(data, theta0, tempering["kappa"]))
+    tempering["weight"] = 1.0 / tempering["kappa"] if auto or args.temper else 1.0
     if auto:
-        note = (
-            f"auto: Gaussian tempered by 1/κ, κ = {tempering['kappa']:.1f} (residuals at the LM "
-            f"optimum: lag-1 autocorrelation {tempering['residual_rho']:.2f}, "
-            f"{tempering['effective_samples']:.0f} effective of {tempering['samples']} samples)"
-        )
+        likelihood = "student" if tempering["heavy_tails"] else "gauss"
+        note = _auto_note(likelihood, tempering)
+    if likelihood == "student":  # starts at LM's robust (pseudo-Huber) optimum, near its mode
+        theta0 = fit_polach(data, "lm", jax.random.key(args.seed)).params
     spread = np.asarray(initial_spread(theta0, data, obs=obs)) * np.sqrt(1.0 / tempering["weight"])
     theta0 = np.asarray(theta0)
     progress = Progress(args.steps, "posterior", "steps", enabled=not args.json or sys.stderr.isatty())

@@ -1,4 +1,4 @@
-"""Log-posterior of the Polach parameters for MCMC: priors and four likelihoods.
+"""Log-posterior of the Polach parameters for MCMC: priors and five likelihoods.
 
 The sampled vector is ``phi = [kA, kS, mu0, A, B, log_scale(, rho)]``: the five Polach parameters,
 the log noise scale (left out when it is fixed, ``fixed_log_scale``), and for the autoregressive
@@ -8,7 +8,8 @@ Priors (documented choices):
 
 * Polach parameters: uniform on the box ``[lower, upper]`` — by default the identification box
   ``[0, 1]^5`` of DESIGN §1 (:data:`jadhesion.models.polach.BOUNDS`); outside the box ``-inf``.
-* noise scale (sigma [-] for ``"gauss"``/``"ar1"``/``"observer"``, b [-] for ``"laplace"``):
+* noise scale (sigma [-] for ``"gauss"``/``"student"``/``"ar1"``/``"observer"``, b [-] for
+  ``"laplace"``):
   log-uniform on ``[SCALE_MIN, SCALE_MAX] = [1e-4, 1]``, i.e. ``log_scale`` uniform on
   ``[log 1e-4, 0]``.
 * AR(1) coefficient ``rho``: uniform on ``[-RHO_MAX, RHO_MAX]`` (stationary noise).
@@ -20,6 +21,12 @@ autoregressive two):
   ``mu_adh(s_i, w_i; theta)``.
 * ``"laplace"``: ``log L = −n log(2 b) − Σ |r| / b`` — the Bayesian counterpart of the paper's MAE
   fitness (eq 15): its maximum over b is at b = MAE.
+* ``"student"``: Student-t noise of scale sigma and :data:`STUDENT_NU` degrees of freedom,
+  ``log L = Σ [log Γ((ν+1)/2) − log Γ(ν/2) − ½ log(νπ) − log sigma − ((ν+1)/2) log(1 + r²/(ν sigma²))]``
+  — the heavy-tailed counterpart of ``"gauss"`` (the posterior's analogue of LM's pseudo-Huber
+  second stage, :func:`.polach_residuals.polach_lm_residual`): a residual far out in the tails
+  (slip errors at walking pace, start-up transients) pulls with a force ``∝ 1/r`` instead of ``r``.
+  ν is fixed (:data:`STUDENT_NU`), not sampled: see its comment.
 * ``"ar1"``: the same prediction, residuals an AR(1) process ``r_i = rho r_{i−1} + e_i``,
   ``e_i ~ N(0, sigma²)`` (sigma = the innovation scale), exact (stationary) first-sample term::
 
@@ -78,12 +85,14 @@ from ..models.kinematics import SPEED_FLOOR
 from ..models.polach import polach_adhesion
 from .observer_view import ObserverTerms, lowpass
 
-LIKELIHOODS = ("gauss", "laplace", "ar1", "observer")
+LIKELIHOODS = ("gauss", "laplace", "ar1", "observer", "student")
 #: Likelihoods with an AR(1) noise coefficient ``rho`` (the last sampled coordinate).
 AUTOREGRESSIVE = ("ar1", "observer")
 SCALE_MIN, SCALE_MAX = 1e-4, 1.0
 LOG_SCALE_BOUNDS = (math.log(SCALE_MIN), math.log(SCALE_MAX))
 RHO_MAX = 0.99
+#: Degrees of freedom of ``"student"``. NU_PLACEHOLDER
+STUDENT_NU = 4.0
 #: Gauss–Hermite nodes of the errors-in-variables expectation over the slip.
 GH_NODES = 7
 _GH_Z, _GH_W = np.polynomial.hermite_e.hermegauss(GH_NODES)
@@ -140,6 +149,12 @@ def ar1_log_likelihood(r, log_sigma, rho):
     )
 
 
+def student_log_density(z, nu=STUDENT_NU):
+    """Log-density of the standard Student-t with ``nu`` degrees of freedom at ``z`` (any shape)."""
+    const = math.lgamma(0.5 * (nu + 1.0)) - math.lgamma(0.5 * nu) - 0.5 * math.log(nu * math.pi)
+    return const - 0.5 * (nu + 1.0) * jnp.log1p(z * z / nu)
+
+
 def log_likelihood(
     theta,
     log_scale,
@@ -160,6 +175,8 @@ def log_likelihood(
     if likelihood in AUTOREGRESSIVE:
         return ar1_log_likelihood(r, log_scale, rho) - jnp.sum(log_lam)
     scale = jnp.exp(log_scale)
+    if likelihood == "student":
+        return jnp.sum(student_log_density(r / scale)) - n * log_scale - jnp.sum(log_lam)
     if likelihood == "gauss":
         return (
             -n * log_scale

@@ -114,15 +114,15 @@ def initial_ball(
 
 
 def initial_noise(data: PolachDataset, theta0, likelihood: str, obs: Optional[ObserverTerms] = None) -> tuple:
-    """``(log_scale, rho or None)`` of the residuals at ``theta0``: RMS (``"gauss"``), mean
-    absolute value (``"laplace"``), or lag-1 autocorrelation and innovation RMS (AR(1))."""
+    """``(log_scale, rho or None)`` of the residuals at ``theta0``: RMS (``"gauss"``), mean |r|
+    (``"laplace"``), 1.4826 MAD (``"student"``), or lag-1 autocorrelation and innovation RMS (AR(1))."""
     r = np.asarray(data.adhesion) - np.asarray(prediction(jnp.asarray(theta0), data, likelihood, obs))
     rho = None
     if likelihood in AUTOREGRESSIVE:
-        rho = float(np.sum(r[1:] * r[:-1]) / max(np.sum(r[:-1] ** 2), 1e-300))
-        rho = float(np.clip(rho, -0.95, 0.95))
+        rho = float(np.clip(np.sum(r[1:] * r[:-1]) / max(np.sum(r[:-1] ** 2), 1e-300), -0.95, 0.95))
         r = r[1:] - rho * r[:-1]
-    scale = np.mean(np.abs(r)) if likelihood == "laplace" else np.sqrt(np.mean(r**2))
+    mad = 1.4826 * np.median(np.abs(r - np.median(r)))
+    scale = {"laplace": np.mean(np.abs(r)), "student": mad}.get(likelihood, np.sqrt(np.mean(r**2)))
     return float(np.log(max(scale, 1e-4))), rho
 
 
@@ -151,7 +151,7 @@ def sample_posterior(
         data: the fitting dataset.
         theta0: a point near the mode (e.g. the LM optimum), shape (5,).
         walkers, steps: ensemble size and chain length (burn-in included).
-        likelihood: ``"gauss"`` (scale sigma), ``"laplace"`` (scale b), ``"ar1"`` (AR(1) residuals
+        likelihood: ``"gauss"``, ``"student"`` (scale sigma), ``"laplace"`` (b), ``"ar1"`` (AR(1) residuals
             in time order: innovation scale sigma, coefficient rho) or ``"observer"`` (the
             observer's lag and torque leak modelled, AR(1) noise; needs ``obs``) — see
             :mod:`jadhesion.identify.likelihood`.
