@@ -15,7 +15,8 @@ and likelihood: the share of 90 % intervals holding the truth of kA, kS, μ0 and
 μ_max, creep_opt (at the recording's median speed, from the true parameters; a truth on a face of
 the prior box is left out of that parameter's share and counted), the median interval width, the
 median |posterior median − truth|, and per recording the truth, the interval, the median and the
-``tempering`` block (κ, tail check). The JSON records the git commit, the settings and
+``tempering`` block (κ, tail check); per recording, the maximum-likelihood Student-t ν of the
+residuals at the truth (``tails_at_truth``). The JSON records the git commit, the settings and
 ``os.getloadavg()``.
 """
 
@@ -33,10 +34,14 @@ from pathlib import Path
 import jax
 import jax.numpy as jnp
 import numpy as np
+from scipy import optimize, stats
 
 from benchmarks.provenance import commit
+from jadhesion.cli import build_parser
 from jadhesion.cli import main as cli
+from jadhesion.cli.loading import load_dataset
 from jadhesion.data.recording import load_recording
+from jadhesion.identify.likelihood import curve_moments
 from jadhesion.models.polach import PARAM_NAMES, adhesion_peak
 from validation import foreign_generator
 
@@ -72,6 +77,23 @@ def _derived_truth(truth: dict, path: Path, speed: float) -> dict:
     theta = jnp.asarray([truth[n] for n in PARAM_NAMES])
     mu_max, creep_opt = adhesion_peak(theta, load_recording(path).vehicle.k_eps(), speed)
     return {"mu_max": float(mu_max), "creep_opt": float(creep_opt)}
+
+
+def tails_at_truth(path: Path, truth: dict) -> dict:
+    """The maximum-likelihood ν and scale s of Student-t noise on ``posterior``'s dataset at the true
+    parameters, each residual on its errors-in-variables scale ``√(s² + Var[mu_adh])`` (the data
+    behind the likelihood's fixed ν)."""
+    _, data, _ = load_dataset(build_parser("posterior").parse_args(["posterior", str(path)]), path)
+    mean, var = curve_moments(jnp.asarray([truth[n] for n in PARAM_NAMES]), data)
+    r, var = np.asarray(data.adhesion) - np.asarray(mean), np.asarray(var)
+
+    def nll(p):
+        s = np.sqrt(np.exp(2.0 * p[1]) + var)
+        return -np.sum(stats.t.logpdf(r / s, np.exp(p[0])) - np.log(s))
+
+    start = [np.log(4.0), np.log(1.4826 * np.median(np.abs(r - np.median(r))))]
+    nu, scale = np.exp(optimize.minimize(nll, start, method="Nelder-Mead").x)
+    return {"nu_ml": float(nu), "scale_ml": float(scale)}
 
 
 def _run(path: Path, entry: str, steps: int, walkers: int) -> dict | None:
@@ -136,12 +158,13 @@ def main(argv=None):
     args = p.parse_args(argv)
     jax.config.update("jax_enable_x64", True)
     sha = commit()
-    doc = {"commit": sha, "settings": vars(args), "rows": []}
+    doc = {"commit": sha, "settings": vars(args), "rows": [], "tails_at_truth": []}
     start = time.perf_counter()
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp)
         cases = _ours(out, args.per) + _foreign(out, 3 * args.per)
         for gen, label, path, truth in cases:
+            doc["tails_at_truth"].append({"generator": gen, "case": label, **tails_at_truth(path, truth)})
             for lik in args.likelihoods.split(","):
                 res = _run(path, lik, args.steps, args.walkers)
                 row = {"generator": gen, "case": label, "likelihood": lik, "truth": truth, "hit": None}

@@ -8,13 +8,18 @@ warning when the chain is shorter than 50 τ).
 tempered by 1/κ, κ the residuals' colour factor at the LM optimum
 (:func:`jadhesion.identify.laplace.colour_check`: long-run over plain variance; the observer and
 coloured sensor noise correlate neighbouring residuals, so n samples carry about n/κ samples'
-information). It prints that check (κ, lag-1 autocorrelation, effective samples) in
-``likelihood_note`` and the JSON's ``tempering``. Untempered, an i.i.d. likelihood on such residuals
-gives intervals √κ too narrow; the ``observer`` likelihood (the observer's lag modelled, AR(1)
-noise), the former default, held on our simulator's clean sensors but missed μ0 on most recordings
-of the independent generator (issue 18); it stays available with ``--likelihood observer``, as do
-``gauss`` (untempered), ``ar1`` and ``laplace``. Measured coverage:
-``benchmarks/results/coverage_posterior.json``.
+information) — or, where the residuals' tails are heavy, the Student-t likelihood (ν = 4, the same
+errors-in-variables standardisation) tempered alike, started at LM's robust optimum: heavy means
+the standardised residuals' excess kurtosis at the LM optimum exceeds three standard errors of a
+Gaussian sample's at n/κ samples (:func:`.posterior_run.tail_check`). It prints both checks (κ,
+lag-1 autocorrelation, effective samples; excess kurtosis, threshold) in ``likelihood_note`` and the
+JSON's ``tempering``. Untempered, an i.i.d. likelihood on such residuals gives intervals √κ too
+narrow (``--temper`` tempers a requested likelihood as auto does); the ``observer`` likelihood
+(the observer's lag modelled, AR(1) noise), the former default, held on our simulator's clean
+sensors but missed μ0 on most recordings of the independent generator (issue 18); it stays
+available with ``--likelihood observer``, as do ``gauss`` and ``student`` (untempered), ``ar1``
+and ``laplace``. Measured coverage:
+``benchmarks/results/coverage_posterior.json`` and ``coverage_posterior_student.json``.
 
 ``--creep smoothed`` (the default) estimates creep as a smoothed state when the file has the raw
 signals (:mod:`jadhesion.data.creep_state`) and the likelihood integrates its uncertainty (errors in

@@ -8,6 +8,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..data.dataset import PolachDataset
+from ..identify.likelihood import STUDENT_NU
 from ..identify.mcmc import PosteriorResult, posterior_curves
 
 _LABELS = {
@@ -74,11 +75,8 @@ def predictive_plot(
         scale = draws[:, names.index("sigma" if "sigma" in names else "b")][:, None]
         if "rho" in names:
             scale = scale / np.sqrt(1.0 - draws[:, names.index("rho")][:, None] ** 2)
-        noise = (
-            rng.laplace(size=curves.shape)
-            if result.likelihood == "laplace"
-            else rng.standard_normal(curves.shape)
-        ) * scale
+        draw = {"laplace": rng.laplace, "student": lambda size: rng.standard_t(STUDENT_NU, size)}
+        noise = draw.get(result.likelihood, rng.standard_normal)(size=curves.shape) * scale
     else:
         noise = 0.0
     band = np.quantile(curves, (0.05, 0.5, 0.95), axis=0)
