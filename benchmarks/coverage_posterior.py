@@ -8,9 +8,10 @@ recordings: no concealed effect, its own vehicles, profiles, rates and sensor no
 written as a CSV + sidecar and run through the command line in this process
 (``jadhesion posterior FILE --json``), once per ``--likelihoods`` entry: a ``--likelihood`` name,
 ``:tempered`` appended for ``--temper`` (tempered by the residuals' colour 1/κ as auto does). The
-default ``gauss:tempered,student:tempered`` runs the two likelihoods ``auto`` chooses between (the
-Gaussian, auto before the tail check, and the Student-t), and adds ``auto`` rows: per recording the
-run of the one auto picks (same start, weight and seed: the same chain). Recorded per generator
+default ``gauss:tempered,student:tempered`` runs the tempered Gaussian (what ``auto`` runs) and
+the tempered Student-t, and adds ``tail_pick`` rows: per recording the run of the one the printed
+tail check picks (Student-t where ``tempering.heavy_tails``; a candidate auto rule, measured and not
+adopted: the same chains, so no further runs). Recorded per generator
 and likelihood: the share of 90 % intervals holding the truth of kA, kS, μ0 and of the derived
 μ_max, creep_opt (at the recording's median speed, from the true parameters; a truth on a face of
 the prior box is left out of that parameter's share and counted), the median interval width, the
@@ -106,8 +107,8 @@ def _run(path: Path, entry: str, steps: int, walkers: int) -> dict | None:
     return json.loads(buf.getvalue()) if code == 0 else None
 
 
-def _auto_rows(rows: list) -> list:
-    """``auto``'s rows: per recording, the tempered run of the likelihood its tail check picks."""
+def _tail_pick_rows(rows: list) -> list:
+    """Per recording, the tempered run of the likelihood the tail check picks (module docstring)."""
     runs = {(r["generator"], r["case"], r["likelihood"]): r for r in rows}
     out = []
     for (gen, case, lik), row in runs.items():
@@ -115,7 +116,7 @@ def _auto_rows(rows: list) -> list:
         if lik != "gauss:tempered" or other is None or "tempering" not in row:
             continue
         pick = other if row["tempering"]["heavy_tails"] else row
-        out.append({**pick, "likelihood": "auto", "picked": pick["likelihood"]})
+        out.append({**pick, "likelihood": "tail_pick", "picked": pick["likelihood"]})
     return out
 
 
@@ -138,7 +139,7 @@ def summarise(rows: list) -> dict:
                 cell["median_abs_error"][q] = float(
                     np.median([abs(r["median"][q] - r["truth"][q]) for r in ok])
                 )
-            if lik == "auto":
+            if lik == "tail_pick":
                 cell["picked"] = {
                     p: sum(r["picked"] == p for r in sel) for p in sorted({r["picked"] for r in sel})
                 }
@@ -181,7 +182,7 @@ def main(argv=None):
                     row["tempering"] = res["tempering"]
                 doc["rows"].append(row)
                 print(gen, label, lik, row["hit"], flush=True)
-            doc["summary"] = summarise(doc["rows"] + _auto_rows(doc["rows"]))
+            doc["summary"] = summarise(doc["rows"] + _tail_pick_rows(doc["rows"]))
             doc["wall_seconds"], doc["loadavg"] = time.perf_counter() - start, os.getloadavg()
             Path(args.save).write_text(json.dumps(doc, indent=1) + "\n")
     print(json.dumps(doc["summary"], indent=1))

@@ -1,4 +1,4 @@
-"""The Student-t errors-in-variables likelihood and ``posterior``'s auto choice of it."""
+"""The Student-t errors-in-variables likelihood, ``posterior --likelihood student`` and the tail check."""
 
 import json
 import warnings
@@ -121,16 +121,16 @@ def test_cli_likelihood_choice_and_auto_note(tmp_path, capsys):
     assert "tails near Gaussian" in doc["likelihood_note"] and temp["weight"] == pytest.approx(
         1 / temp["kappa"]
     )
-    doc = _posterior(capsys, spiky)
+    doc = _posterior(capsys, spiky)  # auto stays Gaussian and says the tails are heavy
     temp = doc["tempering"]
-    assert doc["likelihood"] == "student" and doc["likelihood_note"].startswith("auto: Student-t (ν = 4)")
+    assert doc["likelihood"] == "gauss" and "tails heavy: --likelihood student" in doc["likelihood_note"]
     assert temp["heavy_tails"] and temp["excess_kurtosis"] > 10 * temp["kurtosis_threshold"]
-    assert set(doc["params"]) == {"kA", "kS", "mu0", "A", "B", "sigma"}
-    doc = _posterior(capsys, gaussian, "--likelihood", "student", "--plot", str(tmp_path / "fig"))
+    doc = _posterior(capsys, spiky, "--likelihood", "student", "--plot", str(tmp_path / "fig"))
     assert doc["likelihood"] == "student" and doc["likelihood_note"] == "requested"
+    assert set(doc["params"]) == {"kA", "kS", "mu0", "A", "B", "sigma"} and doc["tempering"]["weight"] == 1.0
     assert (tmp_path / "fig" / "posterior_predictive.png").exists()  # t-distributed noise band
-    assert doc["tempering"]["weight"] == 1.0
-    doc = _posterior(capsys, gaussian, "--likelihood", "gauss", "--temper")
+    doc = _posterior(capsys, spiky, "--likelihood", "student", "--temper")
+    assert doc["likelihood_note"].startswith("requested, tempered by 1/κ")
     assert doc["tempering"]["weight"] == pytest.approx(1 / doc["tempering"]["kappa"])
 
 

@@ -89,8 +89,8 @@ SCALE_MIN, SCALE_MAX = 1e-4, 1.0
 LOG_SCALE_BOUNDS = (math.log(SCALE_MIN), math.log(SCALE_MAX))
 RHO_MAX = 0.99
 #: ν of ``"student"``: the maximum-likelihood ν of the standardised residuals at the truth
-#: (``benchmarks/coverage_posterior.py``: ``tails_at_truth``) is 1.3–8.5 (median 3.3) on the independent
-#: generator's recordings, 8–420 on ours; 4 has their tails and a finite variance (ν > 2).
+#: (``benchmarks/results/coverage_posterior_student.json``: ``tails_at_truth``) is 0.8–8.5 (median 3.0) on
+#: the independent generator's 18 recordings, 6.5–∞ (median 24) on ours; 4: their tails, finite variance.
 STUDENT_NU = 4.0
 #: Gauss–Hermite nodes of the errors-in-variables expectation over the slip.
 GH_NODES = 7
