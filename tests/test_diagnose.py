@@ -195,6 +195,10 @@ def test_grid_from_csv_digits():
     x = np.array([float(f"{v:.9g}") for v in np.round((latent + noise) / q) * q])
     assert abs(null.grid_step(x) / q - 1) < 1e-6
     assert null.grid_step(latent + noise) == 0.0
+    # thousands of steps up (a speed of 7 m/s on a 2.2 mm/s grid), written with 10 digits
+    q = 2.2013934e-3
+    x = np.array([float(f"{v:.10g}") for v in np.round((latent + 5.0 + noise) / q) * q])
+    assert abs(null.grid_step(x) / q - 1) < 1e-6
 
 
 def test_excluded_samples_do_not_enter_the_fits(clean):
