@@ -11,11 +11,10 @@ import numpy as np
 
 from ..identify.ensemble import ChainTooShortWarning
 from ..identify.laplace import colour_check, initial_spread, lm_optimum
-from ..identify.likelihood import curve_moments
 from ..identify.mcmc import sample_posterior
 from ..identify.observer_view import recording_observer_terms
 from ..identify.polach_fit import fit_polach, require_samples
-from ..identify.polach_residuals import residual_scale
+from ..identify.polach_residuals import polach_eiv_residual, residual_scale, standardised_residual
 from ..models.polach import PARAM_NAMES
 from ..plots.posterior import corner_plot, predictive_plot
 from .common import Progress, UserError, emit_json, table
@@ -23,14 +22,13 @@ from .loading import load_dataset
 
 
 def tail_check(data, theta, kappa: float) -> dict:
-    """The standardised residuals' tails at ``theta``: ``z = (mu_hat − E[mu_adh]) / √(σ² + Var[mu_adh])``
-    (the errors-in-variables standardisation of :mod:`jadhesion.identify.likelihood`, σ = 1.4826 MAD
-    of the residuals), their excess kurtosis and ``"kurtosis_threshold"`` = three standard errors of
-    a Gaussian sample's, ``3 √(24 κ / n)`` (n/κ effective samples). ``"heavy_tails"``: above it."""
-    mean, var = curve_moments(theta, data)
-    r = np.asarray(data.adhesion) - np.asarray(mean)
-    sigma = float(residual_scale(r, data))
-    z = r / np.sqrt(sigma**2 + np.asarray(var))
+    """The standardised residuals' tails at ``theta``: ``z = (E[mu_adh] − mu_hat) / √(σ² + Var[mu_adh])``
+    (LM's and the likelihoods' errors-in-variables standardisation,
+    :func:`~jadhesion.identify.polach_residuals.standardised_residual`, σ = 1.4826 MAD of the
+    residuals), their excess kurtosis and ``"kurtosis_threshold"`` = three standard errors of a
+    Gaussian sample's, ``3 √(24 κ / n)`` (n/κ effective samples). ``"heavy_tails"``: above it."""
+    sigma = residual_scale(polach_eiv_residual(theta, data), data)
+    z = np.asarray(standardised_residual(theta, data._replace(residual_scale=sigma)))
     zc = z - z.mean()
     excess = float(np.mean(zc**4) / max(np.mean(zc**2) ** 2, 1e-300) - 3.0)
     threshold = 3.0 * float(np.sqrt(24.0 * kappa / z.shape[0]))

@@ -40,6 +40,7 @@ from .likelihood import (
     prediction,
 )
 from .observer_view import ObserverTerms
+from .polach_residuals import residual_scale
 
 QUANTILES = (0.05, 0.5, 0.95)
 
@@ -121,8 +122,12 @@ def initial_noise(data: PolachDataset, theta0, likelihood: str, obs: Optional[Ob
     if likelihood in AUTOREGRESSIVE:
         rho = float(np.clip(np.sum(r[1:] * r[:-1]) / max(np.sum(r[:-1] ** 2), 1e-300), -0.95, 0.95))
         r = r[1:] - rho * r[:-1]
-    mad = 1.4826 * np.median(np.abs(r - np.median(r)))
-    scale = {"laplace": np.mean(np.abs(r)), "student": mad}.get(likelihood, np.sqrt(np.mean(r**2)))
+    if likelihood == "laplace":
+        scale = np.mean(np.abs(r))
+    elif likelihood == "student":
+        scale = float(residual_scale(jnp.asarray(r), data))
+    else:
+        scale = np.sqrt(np.mean(r**2))
     return float(np.log(max(scale, 1e-4))), rho
 
 

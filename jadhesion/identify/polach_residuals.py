@@ -67,9 +67,14 @@ def polach_lm_residual(theta, data: PolachDataset):
     independent generator's starts: residual kurtosis 11–47, most of it below 1 m/s)."""
     if data.residual_scale is None:
         return polach_eiv_residual(theta, data)
+    return _masked(pseudo_huber(standardised_residual(theta, data)), data)
+
+
+def standardised_residual(theta, data: PolachDataset):
+    """``(E[mu_adh] − mu_hat) / √(σ² + Var[mu_adh])`` per sample (n,), unmasked, with the noise scale
+    ``σ = data.residual_scale``: the errors-in-variables residual in units of its effective sd."""
     mean, var = curve_moments(theta, data)
-    z = (mean - data.adhesion) / jnp.sqrt(data.residual_scale**2 + var)
-    return _masked(pseudo_huber(z), data)
+    return (mean - data.adhesion) / jnp.sqrt(data.residual_scale**2 + var)
 
 
 def residual_scale(r, data: PolachDataset):
