@@ -7,12 +7,14 @@ therefore fits the base model, every single effect and every pair, vmapped over 
 cross-validation folds. The model predicts the observed adhesion ``mu_hat`` [-]::
 
     target = mu_hat + τ · d(torque_mu)/dt                   (observer output, torque re-aligned)
-    w, s   = v_w (1 + δ) − v,  w / v                        (true rolling radius r (1 + δ))
+    w, s   = E[v_w (1 + δ) − v], w / v                      (true rolling radius r (1 + δ))
     L      = max(1 − m_L μ_adh(s, w; k_eps) − m_A a/g, 0.1)  (load factor; F_t/(M g) = μ_adh)
     μ0(t)  = μ0 (1 − m_R σ((t − t_c)/W)) (1 − m_V (v − v̄)/v̄) / (1 + m_T P_th/P_ref)
     pred   = (1 + δ) L μ_adh(s, w; kA, kS, μ0(t), A, B; k_eps L^(−1/3)) + β
 
-The parameters, their boxes, neutral values and units, and the typical magnitudes are the effect
+``E[·]`` is the mean of the slip's law given the smoother's slip and its sd, truncated to the sign
+of the force (:func:`jadhesion.identify.slip_law.truncated_mean`; errors in variables). The
+parameters, their boxes, neutral values and units, and the typical magnitudes are the effect
 registry's (:data:`jadhesion.models.effects.EFFECTS`, each record's ``extension``; the first
 parameter estimates the simulator's magnitude, so a recovered parameter compares directly with a
 concealed one). How each enters, and its signature in the residual of the *base* fit:
@@ -63,6 +65,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..data.vehicle import GRAVITY
+from ..identify.slip_law import truncated_mean
 from ..models.effects import EFFECTS as REGISTRY
 from ..models.effects import THERMAL_POWER_SCALE as POWER_REF
 from ..models.kinematics import creepage
@@ -109,7 +112,6 @@ def predict(params, active, sig: Signals):
     target = sig.adhesion + e["delay_s"] * sig.torque_rate
     gain_r = 1.0 + e["delta_r"]
     slip = sig.wheel_speed * gain_r - sig.speed
-    creep = creepage(slip, sig.speed)
     t_change = sig.time[0] + e["u_change"] * sig.duration
     step = jax.nn.sigmoid((sig.time - t_change) / (STEP_WIDTH * sig.duration))
     scale = (
@@ -117,10 +119,13 @@ def predict(params, active, sig: Signals):
         * (1.0 - e["slope"] * (sig.speed - sig.speed_ref) / sig.speed_ref)
         / jnp.maximum(1.0 + e["softening"] * sig.heat / POWER_REF, 0.05)
     )
-    ones = jnp.ones_like(creep)
+    ones = jnp.ones_like(slip)
     thetas = jnp.stack(
         [theta[0] * ones, theta[1] * ones, theta[2] * scale, theta[3] * ones, theta[4] * ones], axis=-1
     )
+    # errors in variables: the curve at the mean of the slip's sign-truncated law (.slip_law)
+    slip = truncated_mean(slip, sig.slip_sd, sig.adhesion)
+    creep = creepage(slip, sig.speed)
     traction = polach_adhesion(thetas, creep, slip, sig.k_eps)  # F_t/(M g), all axles at static load
     load = jnp.maximum(1.0 - e["load_m"] * traction - e["load_accel"] * sig.accel / GRAVITY, 0.1)
     mu = polach_adhesion(thetas, creep, slip, sig.k_eps * load ** (-1.0 / 3.0))

@@ -147,8 +147,9 @@ def grid_step(x) -> float:
 
 
 def latent_speeds(columns: dict, vehicle: Vehicle) -> tuple:
-    """``(v̂, v̂_w)`` [m/s]: the Kalman/RTS smoother's latent vehicle and wheel speeds
-    (:func:`jadhesion.data.creep_state.smooth_creep`), the regressors of every diagnosis fit."""
+    """``(v̂, v̂_w, sd_w)`` [m/s]: the Kalman/RTS smoother's latent vehicle and wheel speeds and the
+    slip's standard deviation (:func:`jadhesion.data.creep_state.smooth_creep`), the regressors
+    of every diagnosis fit."""
     est = smooth_creep(
         *(np.asarray(columns[k], float) for k in ("time", "wheel_speed", "vehicle_speed", "traction_torque")),
         vehicle.wheelset_inertia_kgm2,
@@ -156,7 +157,7 @@ def latent_speeds(columns: dict, vehicle: Vehicle) -> tuple:
         vehicle.axle_load_kg,
     )
     v = np.asarray(est.vehicle_speed)
-    return v, v + np.asarray(est.slip)
+    return v, v + np.asarray(est.slip), np.asarray(est.slip_sd)
 
 
 def local_mean(x, half: int) -> np.ndarray:
@@ -192,18 +193,17 @@ def replicas(columns: dict, vehicle: Vehicle, p_base, n_replicas: int, seed: int
     keep = np.asarray(mask, bool)
     t = raw["time"]
     half = max(1, int(round(SLOW_HALF_WIDTH_S / float(np.median(np.diff(t))))))
-    slow = [local_mean(x, half) for x in latent]
+    slow = [local_mean(x, half) for x in latent[:2]]
     scale = vehicle.axle_load_kg * GRAVITY * vehicle.wheel_radius_m
     none = np.zeros(ext.N_EXTRA, bool)
     measured = from_columns(raw, vehicle, regressors=latent)
     smooth_deriv = np.asarray(from_columns({**raw, "wheel_speed": latent[1]}, vehicle).deriv_mu)
+    exact = measured._replace(slip_sd=np.zeros_like(latent[2]))  # the replica's truth: no slip error
     model = noise_model(raw["traction_torque"])
 
     def path_mu(gamma):
-        v, vw = (xs + gamma * (x - xs) for xs, x in zip(slow, latent, strict=True))
-        return np.asarray(
-            ext.predict(np.asarray(p_base), none, measured._replace(speed=v, wheel_speed=vw))[1]
-        )
+        v, vw = (xs + gamma * (x - xs) for xs, x in zip(slow, latent[:2], strict=True))
+        return np.asarray(ext.predict(np.asarray(p_base), none, exact._replace(speed=v, wheel_speed=vw))[1])
 
     mu_fit = path_mu(1.0)
     dyn = smooth_deriv - np.asarray(measured.deriv_mu)

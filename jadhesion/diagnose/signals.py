@@ -37,7 +37,8 @@ class Signals(NamedTuple):
     (frictional power of the axle); heat: power through ``1/(1 + s τ_th)`` [W] (the exact
     first-order-hold filter :func:`~jadhesion.data.observer.lowpass_foh`; τ_th =
     :data:`THERMAL_LAG_S` until :func:`jadhesion.diagnose.features.pick_thermal_lag` sets it);
-    traction_ratio ``F_t/(M g) = n T/(r M g)`` [-] from the smoothed torque; weight [-] 1 on the
+    traction_ratio ``F_t/(M g) = n T/(r M g)`` [-] from the smoothed torque; slip_sd [m/s] the
+    regressor slip's standard deviation (the smoother's; 0 for measured speeds); weight [-] 1 on the
     samples the fits use, 0 on those excluded (``--phase``: standstill, coasting, …) and on
     padding; dt () [s];
     speed_ref () mean speed [m/s];
@@ -55,6 +56,7 @@ class Signals(NamedTuple):
     power: jax.Array
     heat: jax.Array
     traction_ratio: jax.Array
+    slip_sd: jax.Array
     weight: jax.Array
     dt: jax.Array
     speed_ref: jax.Array
@@ -80,9 +82,10 @@ def from_columns(
 ) -> Signals:
     """Build :class:`Signals` from raw recording columns (time, vehicle_speed, wheel_speed,
     traction_torque) and the vehicle's constants; ``mask`` (n,) bool marks the samples the fits use
-    (default all); ``regressors = (v, v_w)`` [m/s] replace the measured speeds as the models' inputs
-    (speed, wheel speed, slip, power, acceleration: the diagnosis passes the smoothed latent
-    speeds), while the observer's target always uses the measured wheel speed. Raises
+    (default all); ``regressors = (v, v_w, slip_sd)`` [m/s] replace the measured speeds as the
+    models' inputs (speed, wheel speed, slip, power, acceleration) and give the slip's standard
+    deviation (the diagnosis passes the smoother's latent speeds, :func:`jadhesion.diagnose.null.
+    latent_speeds`), while the observer's target always uses the measured wheel speed. Raises
     :class:`InputError` if columns are missing."""
     missing = [c for c in ("time", "vehicle_speed", "wheel_speed", "traction_torque") if c not in columns]
     if missing:
@@ -107,8 +110,9 @@ def from_columns(
     )
     torque_mu = torque / scale
     adhesion = torque_mu - deriv_mu
+    slip_sd = np.zeros(t.size)
     if regressors is not None:
-        v, vw = (np.asarray(x, float) for x in regressors)
+        v, vw, slip_sd = (np.asarray(x, float) for x in regressors)
     slip = np.asarray(kinematics.slip_velocity(vw, v))
     power = np.abs(adhesion * slip) * vehicle.axle_weight_n
     dt = float(np.median(np.diff(t)))
@@ -128,6 +132,7 @@ def from_columns(
         power=f(power),
         heat=lowpass_foh(f(t), f(power), THERMAL_LAG_S),
         traction_ratio=f(traction),
+        slip_sd=f(slip_sd),
         weight=f(np.ones(t.size) if mask is None else np.asarray(mask, float)),
         dt=f(dt),
         speed_ref=f(np.mean(v) if mask is None else np.mean(v[np.asarray(mask, bool)])),

@@ -47,17 +47,18 @@ autoregressive two):
 
 **Errors in variables.** When the dataset carries ``slip_sd`` (the smoother's posterior standard
 deviation of the slip, :mod:`jadhesion.data.creep_state`), the true slip of sample i is
-``N(w_i, sd_i²)`` given the recording, and the curve is predicted by its expectation under that
-law, by Gauss–Hermite quadrature (:data:`GH_NODES` nodes ``z_j``, weights ``ω_j``, creep
-``s = w / max(|v|, floor)`` at each node):
+``N(w_i, sd_i²)`` given the recording, truncated to the sign of the adhesion force
+(:mod:`.slip_law`: why, and the nodes), and the curve is predicted by its expectation under that
+law, by Gauss–Hermite quadrature mapped onto the truncated normal (:func:`.slip_law.slip_nodes`:
+standardised nodes ``e_ij``, weights ``ω_j``; creep ``s = w / max(|v|, floor)`` at each node):
 
-    m_i = Σ_j ω_j mu_adh(w_i + sd_i z_j),    V_i = Σ_j ω_j mu_adh(w_i + sd_i z_j)² − m_i²
+    m_i = Σ_j ω_j mu_adh(w_i + sd_i e_j),    V_i = Σ_j ω_j mu_adh(w_i + sd_i e_j)² − m_i²
 
 ``m_i`` replaces the curve in every prediction (low-passed for ``"observer"``); residuals are
 heteroscedastic, ``r_i = λ_i e_i``, ``λ_i = √(1 + V_i / σ_m²)`` (``σ_m``: ``sigma``, AR(1)
 ``sigma/√(1 − rho²)``, or ``b``), ``e`` the likelihood's noise model, ``log L`` gains
 ``−Σ log λ_i`` — to first order the linearised ``σ_i² = σ² + (∂mu_adh/∂w · sd_i)²``. The moments
-are ~10 % rough where the interval straddles w = 0 (the kink of ``mu(|w|)``). Without ``slip_sd``
+are ~10 % rough where an untruncated interval straddles w = 0 (the kink of ``mu(|w|)``). Without ``slip_sd``
 (raw creep, creepage-only files) ``V_i = 0`` and ``m_i = mu_adh(s_i, w_i)``.
 
 Why: on simulated 22E recordings the i.i.d. likelihoods are biased by the observer's lag during the
@@ -81,6 +82,7 @@ from ..data.dataset import PolachDataset
 from ..models.kinematics import SPEED_FLOOR
 from ..models.polach import polach_adhesion
 from .observer_view import ObserverTerms, lowpass
+from .slip_law import GH_WEIGHTS, slip_nodes
 
 LIKELIHOODS = ("gauss", "laplace", "ar1", "observer", "student")
 #: Likelihoods with an AR(1) noise coefficient ``rho`` (the last sampled coordinate).
@@ -92,10 +94,6 @@ RHO_MAX = 0.99
 #: (``benchmarks/results/coverage_posterior_student.json``: ``tails_at_truth``) is 0.8–8.5 (median 3.0) on
 #: the independent generator's 18 recordings, 6.5–∞ (median 24) on ours; 4: their tails, finite variance.
 STUDENT_NU = 4.0
-#: Gauss–Hermite nodes of the errors-in-variables expectation over the slip.
-GH_NODES = 7
-_GH_Z, _GH_W = np.polynomial.hermite_e.hermegauss(GH_NODES)
-_GH_W = _GH_W / _GH_W.sum()
 
 
 def noise_names(likelihood: str, fixed_scale: bool = False) -> tuple:
@@ -112,9 +110,9 @@ def curve_moments(theta, data: PolachDataset):
     if data.slip_sd is None:
         return polach_adhesion(theta, data.creep, data.slip, data.k_eps), jnp.zeros_like(data.slip)
     speed = jnp.maximum(jnp.abs(data.vehicle_speed), SPEED_FLOOR)
-    w = data.slip[None, :] + data.slip_sd[None, :] * jnp.asarray(_GH_Z, data.slip.dtype)[:, None]
+    w = data.slip[None, :] + data.slip_sd[None, :] * slip_nodes(data.slip, data.slip_sd, data.adhesion)
     mu = polach_adhesion(theta, w / speed[None, :], w, data.k_eps)
-    weights = jnp.asarray(_GH_W, mu.dtype)[:, None]
+    weights = jnp.asarray(GH_WEIGHTS, mu.dtype)[:, None]
     mean = jnp.sum(weights * mu, axis=0)
     return mean, jnp.maximum(jnp.sum(weights * (mu - mean[None, :]) ** 2, axis=0), 0.0)
 
