@@ -1,8 +1,8 @@
 """The true slip's law given the smoothed slip: normal truncated to the sign of the force.
 
 Against scipy's truncated normal (means, quadrature), at its limits (zero sd, no sign, far from and
-beyond the bound), and the errors-in-variables effect it exists for: classical slip noise on a
-steep curve fitted with and without the truncation.
+beyond the bound), and the errors-in-variables effect it exists for: on data drawn from the law, the
+untruncated expected curve leaves the offset that the diagnosis's torque-offset candidate took up.
 """
 
 import jax
@@ -12,7 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import stats
 
-from jadhesion.identify.slip_law import GH_WEIGHTS, SLIP_SIGN_MIN, slip_nodes, truncated_mean
+from jadhesion.identify.slip_law import GH_NODES, GH_WEIGHTS, SLIP_SIGN_MIN, slip_nodes, truncated_mean
 from jadhesion.models.polach import polach_adhesion
 
 RNG = np.random.default_rng(0)
@@ -45,7 +45,7 @@ def test_every_node_on_the_force_side_and_untruncated_without_a_sign():
     signed = np.abs(np.asarray(MU)) >= SLIP_SIGN_MIN
     w = np.asarray(SLIP[None, :] + SD[None, :] * e)
     assert np.all(sign[signed] * w[:, signed] >= -1e-12)
-    gh = np.polynomial.hermite_e.hermegauss(len(GH_WEIGHTS))[0]
+    gh = np.polynomial.hermite_e.hermegauss(GH_NODES)[0]
     np.testing.assert_array_equal(
         np.asarray(e)[:, ~signed], np.broadcast_to(gh[:, None], e[:, ~signed].shape)
     )
@@ -55,7 +55,7 @@ def test_zero_sd_is_the_smoothed_slip_exactly():
     zero = jnp.zeros_like(SD)
     np.testing.assert_array_equal(truncated_mean(SLIP, zero, MU), SLIP)
     np.testing.assert_array_equal(
-        SLIP[None, :] + zero[None, :] * slip_nodes(SLIP, zero, MU), jnp.tile(SLIP, (7, 1))
+        SLIP[None, :] + zero[None, :] * slip_nodes(SLIP, zero, MU), jnp.tile(SLIP, (GH_NODES, 1))
     )
 
 
