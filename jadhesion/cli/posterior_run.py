@@ -14,7 +14,7 @@ from ..identify.laplace import colour_check, initial_spread, lm_optimum
 from ..identify.mcmc import sample_posterior
 from ..identify.observer_view import recording_observer_terms
 from ..identify.polach_fit import fit_polach, require_samples
-from ..identify.polach_residuals import polach_eiv_residual, residual_scale, standardised_residual
+from ..identify.polach_residuals import eiv_scale, standardised_residual
 from ..models.polach import PARAM_NAMES
 from ..plots.posterior import corner_plot, predictive_plot
 from .common import Progress, UserError, emit_json, table
@@ -27,7 +27,7 @@ def tail_check(data, theta, kappa: float) -> dict:
     :func:`~jadhesion.identify.polach_residuals.standardised_residual`, σ = 1.4826 MAD of the
     residuals), their excess kurtosis and ``"kurtosis_threshold"`` = three standard errors of a
     Gaussian sample's, ``3 √(24 κ / n)`` (n/κ effective samples). ``"heavy_tails"``: above it."""
-    sigma = residual_scale(polach_eiv_residual(theta, data), data)
+    sigma = eiv_scale(theta, data)
     z = np.asarray(standardised_residual(theta, data._replace(residual_scale=sigma)))
     zc = z - z.mean()
     excess = float(np.mean(zc**4) / max(np.mean(zc**2) ** 2, 1e-300) - 3.0)

@@ -186,9 +186,9 @@ def error_share(data_power: float, torque_power: float, power_of) -> float:
 
 def replicas(columns: dict, vehicle: Vehicle, p_base, n_replicas: int, seed: int, mask, latent) -> tuple:
     """``(replica column dicts, {"torque": noise model, "gamma": γ})``: measured speeds kept (so
-    the regressors, the latent speeds ``latent = (v̂, v̂_w)``, are the recording's), torque
-    re-synthesised from the base fit along the speeds ``x̄ + γ (x̂ − x̄)`` (module docstring; γ
-    matched on the selected samples ``mask``)."""
+    the regressors, the latent speeds and slip sd ``latent = (v̂, v̂_w, sd_w)``, are the
+    recording's), torque re-synthesised from the base fit along the speeds ``x̄ + γ (x̂ − x̄)``
+    with no slip error (module docstring; γ matched on the selected samples ``mask``)."""
     raw = {k: np.asarray(columns[k], float) for k in RAW}
     keep = np.asarray(mask, bool)
     t = raw["time"]

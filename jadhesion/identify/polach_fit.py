@@ -30,12 +30,11 @@ from .methods import POPULATION as ALGORITHMS
 from .polach_residuals import (
     MIN_SCALE,
     dataset_mae,
+    eiv_scale,
     mean_abs,
-    polach_eiv_residual,
     polach_lm_residual,
     polach_mae,
     polach_residual,
-    residual_scale,
 )
 
 #: Global LM for Polach: ``LM_POP`` uniform random points scored on a subsample of at most
@@ -137,11 +136,8 @@ def _two_stages(run, data, key):
     :data:`.polach_residuals.MIN_SCALE`: noise-free data, where a standardised stage would fit
     rounding; its steps stay counted), its scale, and the steps and evaluations of both."""
 
-    def scale_of(params, d):
-        return residual_scale(polach_eiv_residual(params, d), d)
-
     def next_scale(params):
-        return jax.vmap(scale_of)(params, data) if data.adhesion.ndim > 1 else scale_of(params, data)
+        return jax.vmap(eiv_scale)(params, data) if data.adhesion.ndim > 1 else eiv_scale(params, data)
 
     def stage(scale, index):
         out, n_pop = run(data._replace(residual_scale=scale), key, index == 1)

@@ -86,6 +86,13 @@ def residual_scale(r, data: PolachDataset):
     return jnp.maximum(1.4826 * mad, MIN_SCALE)
 
 
+def eiv_scale(theta, data: PolachDataset):
+    """:func:`residual_scale` of the errors-in-variables residual at ``theta``
+    (:func:`polach_eiv_residual`): the noise scale of LM's second stage and of the posterior's
+    tail check."""
+    return residual_scale(polach_eiv_residual(theta, data), data)
+
+
 def mean_abs(r):
     """Mean of ``|r|`` over the last axis, written as ``|r| · (1/n)``: a matrix–vector product once
     a population is vmapped. XLA:CPU's fused abs-and-reduce runs a 50 × 1000 population evaluation
