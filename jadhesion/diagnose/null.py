@@ -22,8 +22,8 @@ gives the replicas as much as the recording's fast residual allows. (Matched on 
 power instead, a concealed slow effect raised γ's error to its maximum and the null swallowed
 effects of any size: a 33 % rail change got p = 1.) The torque follows the wheelset dynamics along
 the smoothed wheel speed, ``T/(m g r) = μ_base + J d̂/(m g r)``, plus torque noise drawn from the
-model estimated on the recording (:func:`noise_model`: level σ, AR(1) coefficient ρ, quantisation
-step q); the observer then returns ``μ_base + J (d̂ − d)/(m g r)`` + noise, ``d`` from the measured
+model estimated on the recording (:func:`noise_model`: white level σ, quantisation step q); the
+observer then returns ``μ_base + J (d̂ − d)/(m g r)`` + noise, ``d`` from the measured
 wheel speed, as in the recording. Limits (measured in
 ``benchmarks/results/diagnose_null_final.json`` and ``diagnose_blind_n20.json``): the regressor
 error of a replica is one fixed path, so replicas differ only by their torque noise (a narrow null);
@@ -87,35 +87,20 @@ def _fit_batch(starts, idx, actives, batch, n_valid):
     return jax.lax.map(one, batch)
 
 
-def _second_difference_acf(rho):
-    """Variance factor and lag-1 correlation of ``Δ²e`` for AR(1) noise ``e`` of unit variance."""
-    c = np.array([1.0, -2.0, 1.0])
-    lag = np.arange(-4, 5)
-    gamma = rho[:, None] ** np.abs(lag)[None, :]
-    cov = [sum(c[i] * c[j] * gamma[:, 4 + k + i - j] for i in range(3) for j in range(3)) for k in (0, 1)]
-    return cov[0], cov[1] / cov[0]
-
-
-RHO_GRID = np.linspace(0.0, 0.98, 99)
-_VAR_FACTOR, _LAG1 = _second_difference_acf(RHO_GRID)
-
-
 def noise_model(x) -> dict:
-    """``{"sigma", "rho", "q"}`` of one signal's noise: level [signal units], AR(1) coefficient and
-    quantisation step (:func:`grid_step`, 0 when the samples are not on a grid). Estimated from
-    the second difference ``Δ²x``, which suppresses the signal's slow dynamics (a 1 Hz swing is
-    attenuated ~250× at 50 Hz): ρ matches the lag-1 correlation of ``Δ²x`` to its AR(1) value
-    (−2/3 for white noise), then ``σ² = var(Δ²x)/(6 − 8ρ + 2ρ²)`` with the quantisation's share
-    ``q²/12`` taken out (it is put back by rounding the replica to the grid)."""
+    """``{"sigma", "rho", "q"}`` of one signal's noise (the torque): white level [signal units]
+    from the third difference, ``σ = 1.4826 MAD(Δ³x)/√20`` (a smooth signal's third difference is
+    nearly zero, white noise gives ``Var Δ³e = 20 σ²``; the MAD ignores command steps), with the
+    quantisation's ``q²/12`` taken out (:func:`grid_step`; put back by rounding the replica to the
+    grid); ``rho = 0``. An AR(1) fit to the second difference, used before, read white + AR(1)
+    torque noise of the independent generator as 10–60× its level (ρ at the grid's end, 0.98):
+    correlated torque noise is not separable from the torque's own motion in one recording."""
     x = np.asarray(x, float)
-    d2 = np.diff(x, 2)
-    d2 = d2 - d2.mean()
-    r1 = float(np.dot(d2[1:], d2[:-1]) / max(np.dot(d2, d2), 1e-300))
-    k = int(np.argmin(np.abs(_LAG1 - r1)))
-    rho = float(RHO_GRID[k])
-    var = float(np.mean(d2 * d2) / _VAR_FACTOR[k])
+    d3 = np.diff(x, 3)
+    sigma = 1.4826 * float(np.median(np.abs(d3 - np.median(d3)))) / np.sqrt(20.0)
     q = grid_step(x)
-    return {"sigma": float(np.sqrt(max(var - q * q / 12.0, 0.25 * var))), "rho": rho, "q": q}
+    white = np.sqrt(max(sigma * sigma - q * q / 12.0, 0.25 * sigma * sigma))
+    return {"sigma": float(white), "rho": 0.0, "q": q}
 
 
 def _noisy(clean, model, rng):
