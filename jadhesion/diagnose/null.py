@@ -49,7 +49,7 @@ import jax
 import numpy as np
 from scipy.signal import lfilter
 
-from ..data.creep_state import smooth_creep
+from ..data.creep_state import difference_sd, smooth_creep
 from ..data.observer import lowpass_foh
 from ..data.vehicle import GRAVITY, Vehicle
 from ..status import Status
@@ -89,15 +89,14 @@ def _fit_batch(starts, idx, actives, batch, n_valid):
 
 def noise_model(x) -> dict:
     """``{"sigma", "rho", "q"}`` of one signal's noise (the torque): white level [signal units]
-    from the third difference, ``σ = 1.4826 MAD(Δ³x)/√20`` (a smooth signal's third difference is
-    nearly zero, white noise gives ``Var Δ³e = 20 σ²``; the MAD ignores command steps), with the
-    quantisation's ``q²/12`` taken out (:func:`grid_step`; put back by rounding the replica to the
-    grid); ``rho = 0``. An AR(1) fit to the second difference, used before, read white + AR(1)
-    torque noise of the independent generator as 10–60× its level (ρ at the grid's end, 0.98):
-    correlated torque noise is not separable from the torque's own motion in one recording."""
+    from the third difference (:func:`jadhesion.data.creep_state.difference_sd`, the smoother's
+    own: ``1.4826 MAD(Δ³x)/√20``; the MAD ignores command steps), with the quantisation's ``q²/12``
+    taken out (:func:`grid_step`; put back by rounding the replica to the grid); ``rho = 0``. An
+    AR(1) fit to the second difference, used before, read white + AR(1) torque noise of the
+    independent generator as 10–60× its level (ρ at the grid's end, 0.98): correlated torque noise
+    is not separable from the torque's own motion in one recording."""
     x = np.asarray(x, float)
-    d3 = np.diff(x, 3)
-    sigma = 1.4826 * float(np.median(np.abs(d3 - np.median(d3)))) / np.sqrt(20.0)
+    sigma = float(difference_sd(x))
     q = grid_step(x)
     white = np.sqrt(max(sigma * sigma - q * q / 12.0, 0.25 * sigma * sigma))
     return {"sigma": float(white), "rho": 0.0, "q": q}
