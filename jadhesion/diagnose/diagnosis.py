@@ -11,7 +11,8 @@ member),
 (``params``, ``mae``, ``heldout_mae``), ``generic`` (sparse discrepancy on
 the extended model's residual), ``sensitivity`` (per effect, the smallest magnitude this recording
 could detect and the run that would expose it: :mod:`.sensitivity`), ``residual_signatures`` (η² of
-the base residual per signal),
+the base residual per signal), ``errors_in_variables`` (the noise levels behind the fits'
+effective-variance weights, :func:`.fitting.eiv_weights`),
 ``explanation``; and ``_series`` (arrays for the report; not JSON, dropped by the CLI).
 """
 
@@ -20,7 +21,9 @@ from __future__ import annotations
 import jax
 import numpy as np
 
+from ..data.creep_state import difference_sd
 from ..data.observer import lowpass_foh
+from ..data.speed_noise import coloured_slip_variance
 from ..data.vehicle import Vehicle
 from ..errors import InputError
 from ..models.effects import EFFECTS as REGISTRY
@@ -162,6 +165,13 @@ def diagnose(
     latent = null.latent_speeds(columns, vehicle)
     sig = from_columns(columns, vehicle, name, keep, latent)
     n_valid = int(sig.time.shape[0])
+    # errors in variables: a first base fit gives the curve's slope, whose weights every fit uses
+    p_base, base_status = fitting.fit_base(fitting.pad_signals(sig), n_valid)
+    colour_var = coloured_slip_variance(
+        *(np.asarray(columns[k], float) for k in ("time", "wheel_speed", "vehicle_speed", "traction_torque"))
+    )
+    target_sd = float(difference_sd(np.asarray(sig.adhesion)))
+    sig = sig._replace(weight=fitting.eiv_weights(p_base, sig, colour_var, target_sd))
     p_base, base_status = fitting.fit_base(fitting.pad_signals(sig), n_valid)
     none = np.zeros(ext.N_EXTRA, bool)
     target, pred = (np.asarray(x) for x in _predict(p_base, none, sig))
@@ -187,7 +197,7 @@ def diagnose(
     if n_replicas:
         null_stats, noise = null.null_statistics(
             columns,
-            keep,
+            np.asarray(sig.weight),
             latent,
             vehicle,
             p_base,
@@ -288,6 +298,11 @@ def diagnose(
             "critical_sse_reduction": critical,
             "method": "parametric bootstrap on this recording (measured speeds, torque from the base "
             "fit along the smoothed creep), max-T p-values of the in-sample SSE reduction",
+        },
+        "errors_in_variables": {
+            "method": "effective-variance weights 1/sqrt(target_sd^2 + slope^2 (slip_sd^2 + colour_sd^2))",
+            "slip_colour_sd_m_s": float(np.sqrt(colour_var)),
+            "target_sd": target_sd,
         },
     }
     result["explanation"] = explain(result, vehicle)

@@ -21,10 +21,12 @@ the recording's own (:func:`error_share`): the regressors' remaining error is no
 gives the replicas as much as the recording's fast residual allows. (Matched on the whole residual
 power instead, a concealed slow effect raised γ's error to its maximum and the null swallowed
 effects of any size: a 33 % rail change got p = 1.) The torque follows the wheelset dynamics along
-the smoothed wheel speed, ``T/(m g r) = μ_base + J d̂/(m g r)``, plus torque noise drawn from the
+the latent wheel speed, ``T/(m g r) = μ_base + J ω̂̇/(m g r)``, plus torque noise drawn from the
 model estimated on the recording (:func:`noise_model`: white level σ, quantisation step q); the
-observer then returns ``μ_base + J (d̂ − d)/(m g r)`` + noise, ``d`` from the measured
-wheel speed, as in the recording. Limits (measured in
+target, whose ``J ω̇`` is the same latent derivative in recording and replica
+(:func:`jadhesion.diagnose.signals.from_columns`), is then ``μ_base`` + torque noise. The replicas
+share the recording's errors-in-variables weights (the ``mask`` of :func:`null_statistics`).
+Limits (measured in
 ``benchmarks/results/diagnose_null_final.json`` and ``diagnose_blind_n20.json``): the regressor
 error of a replica is one fixed path, so replicas differ only by their torque noise (a narrow null);
 sensor noise correlated over longer than the window (the foreign generator's AR noise, τ 0.1–2 s) is
@@ -181,7 +183,6 @@ def replicas(columns: dict, vehicle: Vehicle, p_base, n_replicas: int, seed: int
     scale = vehicle.axle_load_kg * GRAVITY * vehicle.wheel_radius_m
     none = np.zeros(ext.N_EXTRA, bool)
     measured = from_columns(raw, vehicle, regressors=latent)
-    smooth_deriv = np.asarray(from_columns({**raw, "wheel_speed": latent[1]}, vehicle).deriv_mu)
     exact = measured._replace(slip_sd=np.zeros_like(latent[2]))  # the replica's truth: no slip error
     model = noise_model(raw["traction_torque"])
 
@@ -190,15 +191,14 @@ def replicas(columns: dict, vehicle: Vehicle, p_base, n_replicas: int, seed: int
         return np.asarray(ext.predict(np.asarray(p_base), none, exact._replace(speed=v, wheel_speed=vw))[1])
 
     mu_fit = path_mu(1.0)
-    dyn = smooth_deriv - np.asarray(measured.deriv_mu)
     rho = model["rho"]
     torque_power = (2.0 * (1.0 - rho) * model["sigma"] ** 2 + model["q"] ** 2 / 6.0) / scale**2
     gamma = error_share(
         fast_power(np.asarray(measured.adhesion) - mu_fit, keep),
         torque_power,
-        lambda g: fast_power(path_mu(g) + dyn - mu_fit, keep),
+        lambda g: fast_power(path_mu(g) - mu_fit, keep),
     )
-    clean_torque = (path_mu(gamma) + smooth_deriv) * scale
+    clean_torque = (path_mu(gamma) + np.asarray(measured.deriv_mu)) * scale
     rng = np.random.default_rng(seed)
     out = [{**raw, "traction_torque": _noisy(clean_torque, model, rng)} for _ in range(n_replicas)]
     return out, {"torque": model, "gamma": gamma}
@@ -212,8 +212,8 @@ def null_statistics(
 
     ``rows = (starts, idx, actives)`` are the observed recording's round-1 rows (base first) and
     ``merge(table) -> table`` the same post-processing (best radius start); ``tau_heat`` the
-    thermal lag picked on the recording; ``mask`` its selected samples; ``latent`` its
-    :func:`latent_speeds`.
+    thermal lag picked on the recording; ``mask`` its fit weights (> 0 on the selected samples);
+    ``latent`` its :func:`latent_speeds`.
     """
     cols, model = replicas(columns, vehicle, p_base, n_replicas, seed, mask, latent)
     sigs = []

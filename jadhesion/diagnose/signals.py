@@ -82,11 +82,16 @@ def from_columns(
 ) -> Signals:
     """Build :class:`Signals` from raw recording columns (time, vehicle_speed, wheel_speed,
     traction_torque) and the vehicle's constants; ``mask`` (n,) bool marks the samples the fits use
-    (default all); ``regressors = (v, v_w, slip_sd)`` [m/s] replace the measured speeds as the
-    models' inputs (speed, wheel speed, slip, power, acceleration) and give the slip's standard
-    deviation (the diagnosis passes the smoother's latent speeds, :func:`jadhesion.diagnose.null.
-    latent_speeds`), while the observer's target always uses the measured wheel speed. Raises
-    :class:`InputError` if columns are missing."""
+    (default all; the diagnosis passes its errors-in-variables weights instead, zero where
+    excluded); ``regressors = (v, v_w, slip_sd)`` [m/s] replace the measured speeds as the models'
+    inputs (speed, wheel speed, slip, power, acceleration) and give the slip's standard deviation
+    (the diagnosis passes the smoother's latent speeds, :func:`jadhesion.diagnose.null.
+    latent_speeds`). The target's wheel-acceleration term ``J ω̇`` is then the derivative of the
+    latent wheel speed, without the observer's low-pass: torque and acceleration at the same
+    instant as the regressors' slip (the observer's lag on ``J ω̇`` alone left ``μ̂`` off by
+    ``J τ ω̈`` at every slip-up, which a fitted −τ torque delay took up on clean recordings of
+    the independent generator). Without regressors the target is the observer's (measured wheel
+    speed, time constant from the vehicle). Raises :class:`InputError` if columns are missing."""
     missing = [c for c in ("time", "vehicle_speed", "wheel_speed", "traction_torque") if c not in columns]
     if missing:
         raise InputError(f"{name}: diagnosis needs the raw signals; missing column(s) {', '.join(missing)}")
@@ -113,6 +118,10 @@ def from_columns(
     slip_sd = np.zeros(t.size)
     if regressors is not None:
         v, vw, slip_sd = (np.asarray(x, float) for x in regressors)
+        deriv_mu = vehicle.wheelset_inertia_kgm2 * np.gradient(vw, t) / (vehicle.wheel_radius_m * scale)
+        tau = vehicle.observer_time_constant_s
+        adhesion = np.asarray(lowpass_foh(jnp.asarray(t), jnp.asarray(torque_mu - deriv_mu), tau))
+        v, vw = (np.asarray(lowpass_foh(jnp.asarray(t), jnp.asarray(x), tau)) for x in (v, vw))
     slip = np.asarray(kinematics.slip_velocity(vw, v))
     power = np.abs(adhesion * slip) * vehicle.axle_weight_n
     dt = float(np.median(np.diff(t)))
