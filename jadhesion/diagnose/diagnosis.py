@@ -23,7 +23,6 @@ import numpy as np
 
 from ..data.creep_state import difference_sd
 from ..data.observer import lowpass_foh
-from ..data.speed_noise import coloured_slip_variance
 from ..data.vehicle import Vehicle
 from ..errors import InputError
 from ..models.effects import EFFECTS as REGISTRY
@@ -167,11 +166,8 @@ def diagnose(
     n_valid = int(sig.time.shape[0])
     # errors in variables: a first base fit gives the curve's slope, whose weights every fit uses
     p_base, base_status = fitting.fit_base(fitting.pad_signals(sig), n_valid)
-    colour_var = coloured_slip_variance(
-        *(np.asarray(columns[k], float) for k in ("time", "wheel_speed", "vehicle_speed", "traction_torque"))
-    )
     target_sd = float(difference_sd(np.asarray(sig.adhesion)))
-    sig = sig._replace(weight=fitting.eiv_weights(p_base, sig, colour_var, target_sd))
+    sig = sig._replace(weight=fitting.eiv_weights(p_base, sig, target_sd))
     p_base, base_status = fitting.fit_base(fitting.pad_signals(sig), n_valid)
     none = np.zeros(ext.N_EXTRA, bool)
     target, pred = (np.asarray(x) for x in _predict(p_base, none, sig))
@@ -300,9 +296,9 @@ def diagnose(
             "fit along the smoothed creep), max-T p-values of the in-sample SSE reduction",
         },
         "errors_in_variables": {
-            "method": "effective-variance weights 1/sqrt(target_sd^2 + slope^2 (slip_sd^2 + colour_sd^2))",
-            "slip_colour_sd_m_s": float(np.sqrt(colour_var)),
+            "method": "effective-variance weights 1/sqrt(target_sd^2 + slope^2 slip_sd^2)",
             "target_sd": target_sd,
+            "slip_sd_median_m_s": float(np.median(latent[2][keep])),
         },
     }
     result["explanation"] = explain(result, vehicle)

@@ -237,23 +237,26 @@ def fit_candidates(p0, idx, actives, sig: Signals, n_valid, folds: bool = True) 
     )
 
 
-def eiv_weights(params, sig: Signals, colour_var: float, target_sd: float) -> np.ndarray:
+def eiv_weights(params, sig: Signals, target_sd: float) -> np.ndarray:
     """Errors-in-variables weights (n,) of the fits' residuals: ``1/√(σ_μ² + (∂μ/∂w)² σ_w²)``
-    (Orear's effective variance, the first-order orthogonal-distance fit), ``∂μ/∂w`` the base
-    model's slope in the slip at ``params``, ``σ_w² = slip_sd² + colour_var`` [m²/s²] (the
-    smoother's slip variance plus the coloured speed noise it tracks as motion), ``σ_μ =
-    target_sd`` [-] (at least :data:`MIN_TARGET_SD`); times ``sig.weight`` and normalised to mean 1
-    over the selected samples. On the steep initial slope a slip error of a few mm/s moves the
-    curve by more than the target's noise, so those samples count for less; without it an
-    attenuated slope plus a torque offset or a radius error fitted the clean independent
-    recordings better than Polach alone (in-sample SSE reductions of 0.7–0.9 on 5 of 14)."""
+    (Orear's effective variance, the first-order orthogonal-distance fit, as LM's second stage in
+    :func:`jadhesion.identify.polach_residuals.polach_lm_residual`), ``∂μ/∂w`` the base model's
+    slope in the slip at ``params``, ``σ_w = sig.slip_sd`` [m/s] the smoother's, ``σ_μ = target_sd``
+    [-] (at least :data:`MIN_TARGET_SD`); times ``sig.weight`` and normalised to mean 1 over the
+    selected samples. On the steep initial slope a slip error of a few mm/s moves the curve by more
+    than the target's noise, so those samples count for less. Unweighted, an attenuated slope plus
+    a torque offset or a radius error fitted clean recordings of the independent generator far
+    better than Polach alone (in-sample SSE reductions 0.68–0.94 on 5 of its first 14 clean
+    recordings, seed 11). Coloured speed noise, which the smoother tracks as motion, is not in
+    ``slip_sd``: an estimate of it from the train dynamics read 18 mm/s on our simulator (whose
+    vehicle speed does not follow that model) and weighted real effects out of the fits."""
     none = jnp.zeros(ext.N_EXTRA, bool)
 
     def curve(vw):
         return ext.predict(jnp.asarray(params), none, sig._replace(wheel_speed=vw))[1]
 
     _, slope = jax.jvp(curve, (sig.wheel_speed,), (jnp.ones_like(sig.wheel_speed),))
-    var_w = np.asarray(sig.slip_sd) ** 2 + colour_var
+    var_w = np.asarray(sig.slip_sd) ** 2
     sd_mu = max(float(target_sd), MIN_TARGET_SD)
     w = np.asarray(sig.weight) / np.sqrt(sd_mu**2 + np.asarray(slope) ** 2 * var_w)
     return w / np.mean(w[np.asarray(sig.weight) > 0])

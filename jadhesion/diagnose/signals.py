@@ -33,14 +33,16 @@ class Signals(NamedTuple):
 
     time [s]; speed ``v`` [m/s]; wheel_speed ``v_w`` [m/s, at the nominal radius]; torque_mu
     ``T/(m g r)`` [-]; deriv_mu ``J d/(m g r)`` [-]; adhesion ``mu_hat = torque_mu − deriv_mu`` [-];
-    accel ``dv/dt`` [m/s²]; torque_rate ``d torque_mu/dt`` [1/s]; power ``|mu_hat m g w|`` [W]
-    (frictional power of the axle); heat: power through ``1/(1 + s τ_th)`` [W] (the exact
+    accel ``dv/dt`` [m/s²]; torque_rate ``d torque_mu/dt`` [1/s]; power ``|mu_obs m g w|`` [W]
+    (frictional power of the axle, ``mu_obs`` the observer's low-passed estimate even where the
+    target uses the latent acceleration: with the latter the thermal fit of a clean recording
+    stalled); heat: power through ``1/(1 + s τ_th)`` [W] (the exact
     first-order-hold filter :func:`~jadhesion.data.observer.lowpass_foh`; τ_th =
     :data:`THERMAL_LAG_S` until :func:`jadhesion.diagnose.features.pick_thermal_lag` sets it);
     traction_ratio ``F_t/(M g) = n T/(r M g)`` [-] from the smoothed torque; slip_sd [m/s] the
-    regressor slip's standard deviation (the smoother's; 0 for measured speeds); weight [-] 1 on the
-    samples the fits use, 0 on those excluded (``--phase``: standstill, coasting, …) and on
-    padding; dt () [s];
+    regressor slip's standard deviation (the smoother's; 0 for measured speeds); weight [-] > 0 on
+    the samples the fits use (1, or the diagnosis's errors-in-variables weights), 0 on those
+    excluded (``--phase``: standstill, coasting, …) and on padding; dt () [s];
     speed_ref () mean speed [m/s];
     duration () [s]; k_eps () Polach gradient constant [-].
     """
@@ -114,16 +116,14 @@ def from_columns(
         )
     )
     torque_mu = torque / scale
-    adhesion = torque_mu - deriv_mu
+    adhesion = observed = torque_mu - deriv_mu
     slip_sd = np.zeros(t.size)
     if regressors is not None:
         v, vw, slip_sd = (np.asarray(x, float) for x in regressors)
         deriv_mu = vehicle.wheelset_inertia_kgm2 * np.gradient(vw, t) / (vehicle.wheel_radius_m * scale)
-        tau = vehicle.observer_time_constant_s
-        adhesion = np.asarray(lowpass_foh(jnp.asarray(t), jnp.asarray(torque_mu - deriv_mu), tau))
-        v, vw = (np.asarray(lowpass_foh(jnp.asarray(t), jnp.asarray(x), tau)) for x in (v, vw))
+        adhesion = torque_mu - deriv_mu
     slip = np.asarray(kinematics.slip_velocity(vw, v))
-    power = np.abs(adhesion * slip) * vehicle.axle_weight_n
+    power = np.abs(observed * slip) * vehicle.axle_weight_n
     dt = float(np.median(np.diff(t)))
     traction = (
         vehicle.n_axles * smooth(torque, dt) / (vehicle.wheel_radius_m * vehicle.locomotive_mass_kg * GRAVITY)
