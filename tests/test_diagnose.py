@@ -12,6 +12,7 @@ from jadhesion.cli import main
 from jadhesion.data.recording import save_recording
 from jadhesion.data.scenarios import SCENARIOS
 from jadhesion.data.simulator import simulate
+from jadhesion.data.vehicle import GRAVITY
 from jadhesion.diagnose import EFFECT_NAMES, diagnose, fitting, null, select
 from jadhesion.diagnose import extensions as ext
 from jadhesion.diagnose.signals import from_columns
@@ -48,6 +49,44 @@ def test_gradients_finite(clean):
     g = jax.grad(lambda p: jnp.sum(ext.residual(p, args) ** 2))(params)
     assert np.all(np.isfinite(np.asarray(g)))
     assert np.all(np.asarray(g)[5:] != 0.0)
+
+
+def test_eiv_weights_are_the_effective_variance(clean):
+    """Orear's weights ``1/√(σ_μ² + (∂μ/∂w)² σ_w²)``: against a finite-difference slope of the base
+    curve, sample by sample; uniform without slip error; zero off the selection; mean 1 on it."""
+    sig = from_columns(_raw(clean), clean.vehicle)
+    rng = np.random.default_rng(0)
+    keep = rng.random(N) > 0.2
+    sd_w = rng.uniform(1e-3, 5e-3, N)
+    sig = sig._replace(slip_sd=jnp.asarray(sd_w), weight=jnp.asarray(keep, float))
+    params = np.concatenate([[0.43, 0.9, 0.35, 0.36, 0.13], np.asarray(ext.NEUTRAL)])
+    w = fitting.eiv_weights(params, sig, 0.01)
+    none = np.zeros(ext.N_EXTRA, bool)
+    h = 1e-6
+    up, down = (
+        np.asarray(ext.predict(params, none, sig._replace(wheel_speed=sig.wheel_speed + d))[1])
+        for d in (h, -h)
+    )
+    expected = keep / np.sqrt(0.01**2 + ((up - down) / (2 * h)) ** 2 * sd_w**2)
+    np.testing.assert_allclose(w, expected / expected[keep].mean(), rtol=1e-5)
+    assert np.all(w[~keep] == 0.0) and w[keep].mean() == pytest.approx(1.0)
+    flat = fitting.eiv_weights(params, sig._replace(slip_sd=jnp.zeros(N)), 0.01)
+    np.testing.assert_allclose(flat, keep.astype(float))
+
+
+def test_target_uses_the_latent_acceleration(clean):
+    """With latent regressors the target's ``J ω̇`` is the latent wheel speed's derivative (no
+    observer lag); without them it is the observer's."""
+    raw = _raw(clean)
+    t, v, vw = (np.asarray(raw[k], float) for k in ("time", "vehicle_speed", "wheel_speed"))
+    sig = from_columns(raw, clean.vehicle, regressors=(v, vw, np.zeros(N)))
+    veh = clean.vehicle
+    scale = veh.axle_load_kg * GRAVITY * veh.wheel_radius_m
+    latent = veh.wheelset_inertia_kgm2 * np.gradient(vw, t) / (veh.wheel_radius_m * scale)
+    np.testing.assert_allclose(np.asarray(sig.deriv_mu), latent)
+    np.testing.assert_allclose(np.asarray(sig.adhesion), np.asarray(sig.torque_mu - sig.deriv_mu))
+    observer = from_columns(raw, veh)
+    assert not np.allclose(np.asarray(observer.deriv_mu), np.asarray(sig.deriv_mu))
 
 
 def test_base_starts_are_generic():

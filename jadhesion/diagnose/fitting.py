@@ -246,7 +246,7 @@ def eiv_weights(params, sig: Signals, target_sd: float) -> np.ndarray:
     selected samples. On the steep initial slope a slip error of a few mm/s moves the curve by more
     than the target's noise, so those samples count for less. Unweighted, an attenuated slope plus
     a torque offset or a radius error fitted clean recordings of the independent generator far
-    better than Polach alone (in-sample SSE reductions 0.68–0.94 on 5 of its first 14 clean
+    better than Polach alone (in-sample SSE reductions 0.68–0.94 on 6 of its first 14 clean
     recordings, seed 11). Coloured speed noise, which the smoother tracks as motion, is not in
     ``slip_sd``: an estimate of it from the train dynamics read 18 mm/s on our simulator (whose
     vehicle speed does not follow that model) and weighted real effects out of the fits."""

@@ -4,7 +4,9 @@ re-synthesised versions of the very recording (parametric bootstrap), and max-T 
 **Regressors.** Every diagnosis fit (recording and replicas) takes as its speeds the latent ones
 of the Kalman/RTS smoother (:func:`latent_speeds`, :func:`jadhesion.data.creep_state.smooth_creep`):
 white sensor noise is mostly removed from the creep before it meets Polach's steep initial slope
-(errors in variables); the target ``mu_hat`` is the observer's output of the measured signals.
+(errors in variables); the target ``mu_hat`` is the measured torque less ``J ω̇`` of the latent
+wheel speed. What slip error is left is weighted by Orear's effective variance
+(:func:`jadhesion.diagnose.fitting.eiv_weights`), the same weights in recording and replicas.
 
 **Re-synthesis.** A replica keeps the recording's measured speeds (so its regressors are the
 recording's) and replaces the torque by what a clean Polach wheelset would have needed along a
