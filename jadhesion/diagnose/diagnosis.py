@@ -165,9 +165,9 @@ def diagnose(
     sig = from_columns(columns, vehicle, name, keep, latent)
     n_valid = int(sig.time.shape[0])
     # errors in variables: a first base fit gives the curve's slope, whose weights every fit uses
-    p_base, base_status = fitting.fit_base(fitting.pad_signals(sig), n_valid)
+    p_first, _ = fitting.fit_base(fitting.pad_signals(sig), n_valid)
     target_sd = float(difference_sd(np.asarray(sig.adhesion)))
-    sig = sig._replace(weight=fitting.eiv_weights(p_base, sig, target_sd))
+    sig = sig._replace(weight=fitting.eiv_weights(p_first, sig, target_sd))
     p_base, base_status = fitting.fit_base(fitting.pad_signals(sig), n_valid)
     none = np.zeros(ext.N_EXTRA, bool)
     target, pred = (np.asarray(x) for x in _predict(p_base, none, sig))
