@@ -13,7 +13,7 @@ from jadhesion.data.recording import save_recording
 from jadhesion.data.scenarios import SCENARIOS
 from jadhesion.data.simulator import simulate
 from jadhesion.data.vehicle import GRAVITY
-from jadhesion.diagnose import EFFECT_NAMES, diagnose, fitting, null, select
+from jadhesion.diagnose import EFFECT_NAMES, diagnose, diagnosis, fitting, null, select
 from jadhesion.diagnose import extensions as ext
 from jadhesion.diagnose.signals import from_columns
 from jadhesion.status import Status
@@ -153,6 +153,28 @@ def test_unconverged_candidate_is_never_ranked():
     assert select.effects_from(rows, None) == ([], [])
 
 
+def test_warnings_say_what_was_not_tested():
+    """An unconverged candidate above the null's critical value opens the verdict; a null at γ = 0
+    and an unconverged base fit are named."""
+
+    def cand(name, status, reduction):
+        return {"name": name, "status": status, "sse_reduction": reduction, "gain": 0.1, "p_value": None}
+
+    result = {
+        "base": {"status": "stalled"},
+        "null": {"critical_sse_reduction": 0.3, "noise": {"gamma": 0.0}},
+        "candidates": [cand("rail_change", "stalled", 0.9), cand("load_transfer", "max_steps", 0.1)],
+    }
+    warnings = {w["code"]: w for w in diagnosis._warnings(result)}
+    assert set(warnings) == {"base_not_converged", "candidates_not_tested", "null_at_widest"}
+    assert warnings["candidates_not_tested"]["candidates"] == ["rail_change", "load_transfer"]
+    assert warnings["candidates_not_tested"]["above_critical"] == ["rail_change"]
+    result["null"] = {"critical_sse_reduction": 0.95, "noise": {"gamma": 0.5}}
+    result["base"]["status"] = "converged"
+    warnings = diagnosis._warnings(result)
+    assert [w["code"] for w in warnings] == ["candidates_not_tested"] and not warnings[0]["above_critical"]
+
+
 def test_effects_the_evidence_cannot_separate_form_a_set():
     """A candidate with a positive held-out gain and a ΔBIC within BIC_SEPARATION of the verdict's
     joins its indistinguishable set; one that the evidence separates does not."""
@@ -190,8 +212,13 @@ def test_cli_json_and_report(tmp_path, capsys):
     assert seen["absorbed"] > 0.9 and not seen["visible"]
     assert doc["base"]["status"] == "converged"
     assert all(c["status"] in STATUS_LABELS for c in doc["candidates"])
-    assert all(0.0 < c["p_value"] <= 1.0 for c in doc["candidates"])
-    assert (tmp_path / "rep" / "report.md").exists()
+    # tested against the null exactly when the fits converged; untested ones are warned about
+    assert all((c["p_value"] is None) == (c["status"] != "converged") for c in doc["candidates"])
+    assert all(0.0 < c["p_value"] <= 1.0 for c in doc["candidates"] if c["p_value"] is not None)
+    untested = {c["name"] for c in doc["candidates"] if c["status"] != "converged"}
+    warned = {n for w in doc["warnings"] if w["code"] == "candidates_not_tested" for n in w["candidates"]}
+    assert warned == untested
+    assert "## Warnings" in (tmp_path / "rep" / "report.md").read_text()
     assert (tmp_path / "rep" / "adhesion_vs_creep.png").exists()
 
 

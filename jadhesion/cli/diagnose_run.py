@@ -81,6 +81,8 @@ def run(args) -> int:
     rows.insert(0, {"candidate": "(base)", "heldout_mae": result["base"]["heldout_mae"]})
     print(table(rows, ["candidate", "heldout_mae", "gain", "p_value", "delta_bic", "detectable_from"]))
     print(result["explanation"])
+    for w in result["warnings"]:
+        print(f"warning [{w['code']}]: {w['message']}")
     if args.report:
         print(f"report: {result['report']}")
     return 0

@@ -13,6 +13,8 @@ the extended model's residual), ``sensitivity`` (per effect, the smallest magnit
 could detect and the run that would expose it: :mod:`.sensitivity`), ``residual_signatures`` (η² of
 the base residual per signal), ``errors_in_variables`` (the noise levels behind the fits'
 effective-variance weights, :func:`.fitting.eiv_weights`),
+``warnings`` (``code``, ``message``: an unconverged base fit, candidates whose fits did not
+converge — their ``p_value`` is null, they are never ranked — and a null at its widest),
 ``explanation``; and ``_series`` (arrays for the report; not JSON, dropped by the CLI).
 """
 
@@ -115,6 +117,59 @@ def _status(table: dict, i: int) -> str:
     return Status(int(max(table["status"][i], table["fold_status"][i]))).label
 
 
+def _reduction(value: float) -> str:
+    """``", in-sample SSE reduction 91%"`` (nothing when the full-data fit itself did not converge)."""
+    return f", in-sample SSE reduction {value:.0%}" if np.isfinite(value) else ""
+
+
+def _warnings(result: dict) -> list:
+    """How far to trust the decision: ``[{"code", "message", ...}]`` for a base fit that did not
+    converge, candidates whose fits did not converge (untested, never ranked; those whose in-sample
+    SSE reduction exceeds the null's critical value named in ``above_critical``), and a null at its
+    widest (γ = 0, :func:`.null.replicas`)."""
+    out = []
+    if result["base"]["status"] != "converged":
+        out.append(
+            {
+                "code": "base_not_converged",
+                "message": f"the base fit stopped {result['base']['status']}: every gain is measured "
+                "against an unconverged fit",
+            }
+        )
+    critical = result["null"]["critical_sse_reduction"]
+    untested = [c for c in result["candidates"] if c["status"] != "converged"]
+    if untested:
+        strong = [c["name"] for c in untested if critical is not None and c["sse_reduction"] > critical]
+        out.append(
+            {
+                "code": "candidates_not_tested",
+                "message": "not tested against the null and not ranked (a fit did not converge): "
+                + ", ".join(f"{c['name']} ({c['status']}{_reduction(c['sse_reduction'])})" for c in untested)
+                + (
+                    f"; {', '.join(strong)} lowered the SSE beyond the null's critical "
+                    f"{critical:.0%} and may be real"
+                    if strong
+                    else ""
+                ),
+                "candidates": [c["name"] for c in untested],
+                "above_critical": strong,
+            }
+        )
+    noise = result["null"]["noise"]
+    if noise is not None and noise["gamma"] == 0.0:
+        out.append(
+            {
+                "code": "null_at_widest",
+                "message": "this recording's fast residual is larger than clean replicas reproduce even "
+                "with all latent-speed motion faster than "
+                f"±{null.SLOW_HALF_WIDTH_S:g} s counted as sensor error (γ = 0): the null is at its "
+                "widest, and only effects well above the 'smallest detectable' sizes can reach "
+                f"p ≤ {null.ALPHA}",
+            }
+        )
+    return out
+
+
 def _n_extra(names) -> int:
     """Extra parameters of an effect set for BIC (grid-picked ones, e.g. a thermal lag, count)."""
     return sum(len(e.params) + e.grid_params for e in ext.EFFECTS if e.name in names)
@@ -205,7 +260,8 @@ def diagnose(
             seed,
         )
         ok = np.array([_status(t1, i) == "converged" for i in range(1, len(sets1))])
-        p_values = [None] + list(null.max_t_pvalues(np.where(ok, observed, -np.inf), null_stats))
+        tested = null.max_t_pvalues(np.where(ok, observed, -np.inf), null_stats)
+        p_values = [None] + [float(p) if k else None for p, k in zip(tested, ok, strict=True)]
         critical = float(np.quantile(np.max(null_stats, axis=1), 1.0 - null.ALPHA))
     candidates = []
     for i in np.argsort(t1["heldout_mae"][1:]) + 1:
@@ -301,6 +357,7 @@ def diagnose(
             "slip_sd_median_m_s": float(np.median(latent[2][keep])),
         },
     }
+    result["warnings"] = _warnings(result)
     result["explanation"] = explain(result, vehicle)
     result["_series"] = {
         "creep": lib["creep"],

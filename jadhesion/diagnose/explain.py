@@ -35,12 +35,23 @@ def explain(result: dict, vehicle: Vehicle) -> str:
     the effects this recording cannot see."""
     base, extended = result["base"], result["extended"]
     if not result["effects"]:
-        best = result["candidates"][0]
+        ranked = [c for c in result["candidates"] if c["status"] == "converged"]
+        best = (ranked or result["candidates"])[0]
         p = best.get("p_value")
+        strong = [n for w in result.get("warnings", []) for n in w.get("above_critical", [])]
+        opening = (
+            "The verdict is open: the fits of "
+            + ", ".join(n.replace("_", " ") for n in strong)
+            + " did not converge, yet lowered the error beyond what clean re-synthesised versions "
+            "of this recording show; among the converged candidates, "
+            if strong
+            else "The Polach model explains this recording: "
+        )
         text = (
-            "The Polach model explains this recording: no catalogue effect lowers the held-out "
+            opening + "no catalogue effect lowers the held-out "
             "error beyond the calibrated threshold and beyond what clean re-synthesised "
-            f"versions of this recording show (best candidate {best['name']}, "
+            f"versions of this recording show (best {'converged ' if ranked else ''}candidate "
+            f"{best['name']}, "
             f"{best['gain']:+.1%}" + ("" if p is None else f", p = {p:.2f}") + ")."
         )
         if result["generic"]["used"]:

@@ -85,6 +85,12 @@ def figures(result: dict, series: dict, out: Path) -> list:
     return names
 
 
+def _p_text(p) -> str:
+    """A p-value for the table; ``–`` for a candidate not tested (no null, or a fit that did not
+    converge)."""
+    return "–" if p is None else f"{p:.2f}"
+
+
 def write_report(result: dict, series: dict, directory) -> Path:
     """Write ``report.md`` and its figures into ``directory``; returns the Markdown path."""
     out = Path(directory)
@@ -92,7 +98,7 @@ def write_report(result: dict, series: dict, directory) -> Path:
     figs = figures(result, series, out)
     rows = "\n".join(
         f"| {c['name']} | {c['heldout_mae']:.5f} | {100 * c['gain']:+.1f} % | "
-        f"{c['delta_bic']:+.1f} | {c['p_value']} | {c['status']} | "
+        f"{c['delta_bic']:+.1f} | {_p_text(c['p_value'])} | {c['status']} | "
         f"{c['evidence']['signal']} |"
         for c in result["candidates"]
     )
@@ -102,6 +108,7 @@ def write_report(result: dict, series: dict, directory) -> Path:
         f"{'yes' if s['visible'] else 'no: ' + s['experiment']} |"
         for n, s in result["sensitivity"].items()
     )
+    warnings = "\n".join(f"- **{w['code']}**: {w['message']}" for w in result["warnings"]) or "None."
     text = f"""# Diagnosis: {result["verdict"]}
 
 {result["explanation"]}
@@ -130,6 +137,10 @@ Decision: an effect is accepted when it has the best held-out error, its gain ex
 calibrated {100 * GAIN_THRESHOLD:.1f} %, its max-T p-value against {result["null"]["replicas"]}
 clean re-synthesised replicas of this recording is ≤ {result["null"]["alpha"]}, its fits converged
 and ΔBIC < 0 (n_eff = {result["n_eff"]:.0f}).
+
+## Warnings
+
+{warnings}
 
 ## What this recording can see
 
