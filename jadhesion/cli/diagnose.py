@@ -5,7 +5,8 @@ string; ``effects`` — the accepted effects in order (0, 1 or 2; with two, ``ve
 ``candidates`` (name, params, mae, heldout_mae, delta_bic, gain, sse_reduction, status, p_value,
 evidence), ``indistinguishable``, ``base`` and ``extended`` (params, mae, heldout_mae, status),
 ``generic``, ``null`` (replicas, level, the recording's torque noise model and error share γ, critical
-statistic), ``verdict_set``,
+statistic), ``verdict_set``, ``warnings`` (code, message: unconverged fits — their candidates'
+``p_value`` is null — and a null at its widest),
 ``selection`` (the samples used: ``--phase``, ``--start``/``--end``), ``explanation``, ``seconds``.
 
 This module defines the arguments only; :mod:`.diagnose_run` does the work.
