@@ -51,7 +51,6 @@ from __future__ import annotations
 
 import jax
 import numpy as np
-from scipy.signal import lfilter
 
 from ..data.creep_state import difference_sd, smooth_creep
 from ..data.observer import lowpass_foh
@@ -107,14 +106,9 @@ def noise_model(x) -> dict:
 
 
 def _noisy(clean, model, rng):
-    """``clean`` plus AR(1) noise of the model's level and colour, then quantised."""
-    rho = model["rho"]
-    e = (
-        lfilter([1.0], [1.0, -rho], rng.standard_normal(clean.size))
-        * model["sigma"]
-        * np.sqrt(1.0 - rho * rho)
-    )
-    x = clean + e
+    """``clean`` plus white noise of the model's level, then quantised (:func:`noise_model`'s
+    ``rho`` is always 0)."""
+    x = clean + model["sigma"] * rng.standard_normal(clean.size)
     return np.round(x / model["q"]) * model["q"] if model["q"] > 0 else x
 
 
@@ -193,8 +187,7 @@ def replicas(columns: dict, vehicle: Vehicle, p_base, n_replicas: int, seed: int
         return np.asarray(ext.predict(np.asarray(p_base), none, exact._replace(speed=v, wheel_speed=vw))[1])
 
     mu_fit = path_mu(1.0)
-    rho = model["rho"]
-    torque_power = (2.0 * (1.0 - rho) * model["sigma"] ** 2 + model["q"] ** 2 / 6.0) / scale**2
+    torque_power = (2.0 * model["sigma"] ** 2 + model["q"] ** 2 / 6.0) / scale**2
     gamma = error_share(
         fast_power(np.asarray(measured.adhesion) - mu_fit, keep),
         torque_power,
