@@ -163,7 +163,7 @@ def _warnings(result: dict) -> list:
                 "message": "this recording's fast residual is larger than clean replicas reproduce even "
                 "with all latent-speed motion faster than "
                 f"±{null.SLOW_HALF_WIDTH_S:g} s counted as sensor error (γ = 0): the null is at its "
-                f"widest (critical SSE reduction {result['null']['critical_sse_reduction']:.0%}), "
+                f"widest (critical SSE reduction {critical:.0%}), "
                 "and the smallest detectable sizes are large accordingly",
             }
         )
