@@ -74,7 +74,15 @@ def figures(result: dict, series: dict, out: Path) -> list:
     cands = result["candidates"][::-1]
     fig, ax = plt.subplots(figsize=(6.5, 3.6))
     colors = ["C3" if c["name"] in result["effects"] else "0.6" for c in cands]
-    ax.barh([c["name"] for c in cands], [100 * c["gain"] for c in cands], color=colors)
+    bars = ax.barh([c["name"] for c in cands], [100 * c["gain"] for c in cands], color=colors)
+    untested = [bar for bar, c in zip(bars, cands, strict=True) if c["status"] != "converged"]
+    for k, bar in enumerate(untested):  # never ranked: hatched, one legend entry
+        bar.set(
+            hatch="///",
+            edgecolor="k",
+            facecolor="white",
+            label="_" if k else "fit not converged (not ranked)",
+        )
     ax.axvline(100 * GAIN_THRESHOLD, color="k", ls="--", lw=0.8, label="calibrated threshold")
     ax.set_xlabel("held-out error reduction vs base [%]")
     ax.legend(loc="lower right")
