@@ -15,7 +15,7 @@ from jadhesion.data.simulator import simulate
 from jadhesion.data.vehicle import GRAVITY
 from jadhesion.diagnose import EFFECT_NAMES, diagnose, diagnosis, fitting, null, select
 from jadhesion.diagnose import extensions as ext
-from jadhesion.diagnose.signals import from_columns
+from jadhesion.diagnose.signals import from_columns, torque_builder
 from jadhesion.status import Status
 
 STATUS_LABELS = {s.label for s in Status}
@@ -135,6 +135,38 @@ def test_one_program_per_padded_length(clean):
     result = diagnose(_raw(sim), sim.vehicle, n_replicas=0)
     assert result["second_round"] is not None  # round 2 ran
     assert fitting.fit_candidates._cache_size() == before
+
+
+def test_replica_signals_are_the_recording_with_its_torque(clean):
+    """The null builds its replicas' signals from the speeds once (torque_builder): the same,
+    bit for bit, as building them from scratch with the replica's torque."""
+    cols = _raw(clean)
+    latent = null.latent_speeds(cols, clean.vehicle)
+    mask = np.arange(N) % 5 != 0
+    torque = np.asarray(cols["traction_torque"]) * 1.01 + 30.0
+    build = torque_builder(cols, clean.vehicle, mask=mask, regressors=latent)
+    fresh = from_columns({**cols, "traction_torque": torque}, clean.vehicle, mask=mask, regressors=latent)
+    for field, a, b in zip(fresh._fields, build(torque), fresh, strict=True):
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b), err_msg=field)
+    slow = build(torque, thermal_lag=7.0).heat
+    assert not np.array_equal(np.asarray(slow), np.asarray(fresh.heat))
+
+
+def test_threaded_null_equals_one_replica_after_another(clean, monkeypatch):
+    """Replicas fitted on several threads give the statistics of fitting them one by one."""
+    cols = _raw(clean)
+    latent = null.latent_speeds(cols, clean.vehicle)
+    sig = from_columns(cols, clean.vehicle, regressors=latent)
+    p_base, _ = fitting.fit_base(fitting.pad_signals(sig), N)
+    sets = [()] + [(n,) for n in ext.NAMES]
+    args = (cols, np.ones(N), latent, clean.vehicle, p_base, 2.0)
+    rest = (diagnosis._round_rows(p_base, sets), diagnosis._merger(sets), N, 3)
+    monkeypatch.setattr(null, "workers", lambda n: 3)  # three threads whatever the machine's cores
+    threaded, _ = null.null_statistics(*args, *rest)
+    monkeypatch.setattr(null, "workers", lambda n: 1)
+    serial, _ = null.null_statistics(*args, *rest)
+    assert threaded.shape == (3, len(ext.NAMES))
+    np.testing.assert_array_equal(threaded, serial)
 
 
 def test_heat_filter_starts_at_first_sample(clean):

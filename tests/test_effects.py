@@ -58,13 +58,15 @@ def clean():
 def test_neutral_extension_is_the_base_model(name, clean):
     """With the effect switched on at its record's neutral values (every other extra off, at
     values far from neutral) the extended model is the plain Polach curve and the target the
-    observer's adhesion, bit for bit."""
+    observer's adhesion, bit for bit (op by op: under jit XLA may fuse the two programs
+    differently, a last-bit difference that says nothing about the extension)."""
     _, sig = clean
     theta = jnp.array([0.43, 0.9, 0.35, 0.36, 0.13])
     extras = ext.NEUTRAL + 0.3
     for p in EFFECTS[name].extension:
         extras[ext.EXTRA_NAMES.index(p.name)] = p.neutral
-    target, pred = ext.predict(jnp.concatenate([theta, extras]), ext.active_mask([name]), sig)
+    with jax.disable_jit():
+        target, pred = ext.predict(jnp.concatenate([theta, extras]), ext.active_mask([name]), sig)
     slip = sig.wheel_speed - sig.speed
     base = polach_adhesion(theta, creepage(slip, sig.speed), slip, sig.k_eps)
     np.testing.assert_array_equal(np.asarray(pred), np.asarray(base))

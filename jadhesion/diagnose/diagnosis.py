@@ -20,7 +20,6 @@ converge — their ``p_value`` is null, they are never ranked — and a null at 
 
 from __future__ import annotations
 
-import jax
 import numpy as np
 
 from ..data.creep_state import difference_sd
@@ -37,8 +36,6 @@ from .signals import from_columns
 
 N_CANDIDATES = fitting.N_CANDIDATES
 assert N_CANDIDATES >= 1 + len(ext.NAMES) + sum(len(e.extra_starts) for e in ext.EFFECTS)
-#: The extended model's (target, prediction), compiled once per recording length.
-_predict = jax.jit(ext.predict)
 
 
 def _row(params, active, sig, tau_th: float) -> dict:
@@ -225,7 +222,7 @@ def diagnose(
     sig = sig._replace(weight=fitting.eiv_weights(p_first, sig, target_sd))
     p_base, base_status = fitting.fit_base(fitting.pad_signals(sig), n_valid)
     none = np.zeros(ext.N_EXTRA, bool)
-    target, pred = (np.asarray(x) for x in _predict(p_base, none, sig))
+    target, pred = (np.asarray(x) for x in ext.predict(p_base, none, sig))
     r_base = target - pred
     lib = features.library(sig, pred)
     sigs = features.signatures(r_base[keep], {k: v[keep] for k, v in lib.items()})
@@ -313,7 +310,7 @@ def diagnose(
     seen = sensitivity.detectable_magnitudes(
         table["params"][final], acts[final], u_change, padded, n_valid, effects, critical
     )
-    t_ext, p_ext = (np.asarray(x) for x in _predict(table["params"][final], acts[final], sig))
+    t_ext, p_ext = (np.asarray(x) for x in ext.predict(table["params"][final], acts[final], sig))
     generic = _generic(sig, t_ext - p_ext, p_ext)
     generic["used"] = generic["gain"] >= select.GENERIC_THRESHOLD
     strongest = max(sigs, key=sigs.get)

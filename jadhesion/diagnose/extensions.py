@@ -106,8 +106,10 @@ def unpack(params, active):
     return params[:5], dict(zip(EXTRA_NAMES, extra, strict=True))
 
 
+@jax.jit
 def predict(params, active, sig: Signals):
-    """``(target, prediction)`` of the observed adhesion [-], each shape (n,) (module docstring)."""
+    """``(target, prediction)`` of the observed adhesion [-], each shape (n,) (module docstring);
+    jitted (inside a fit it is inlined; called on its own it is one program, not op by op)."""
     theta, e = unpack(params, active)
     target = sig.adhesion + e["delay_s"] * sig.torque_rate
     gain_r = 1.0 + e["delta_r"]

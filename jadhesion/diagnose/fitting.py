@@ -237,6 +237,18 @@ def fit_candidates(p0, idx, actives, sig: Signals, n_valid, folds: bool = True) 
     )
 
 
+@jax.jit
+def _slip_slope(params, sig: Signals) -> jax.Array:
+    """``∂μ/∂w`` (n,) of the plain model at ``params``: the prediction's derivative in the wheel
+    speed, sample by sample (forward mode, one pass)."""
+    none = jnp.zeros(ext.N_EXTRA, bool)
+
+    def curve(vw):
+        return ext.predict(params, none, sig._replace(wheel_speed=vw))[1]
+
+    return jax.jvp(curve, (sig.wheel_speed,), (jnp.ones_like(sig.wheel_speed),))[1]
+
+
 def eiv_weights(params, sig: Signals, target_sd: float) -> np.ndarray:
     """Errors-in-variables weights (n,) of the fits' residuals: ``1/√(σ_μ² + (∂μ/∂w)² σ_w²)``
     (Orear's effective variance, the first-order orthogonal-distance fit, as LM's second stage in
@@ -250,12 +262,7 @@ def eiv_weights(params, sig: Signals, target_sd: float) -> np.ndarray:
     recordings, seed 11). Coloured speed noise, which the smoother tracks as motion, is not in
     ``slip_sd``: an estimate of it from the train dynamics read 18 mm/s on our simulator (whose
     vehicle speed does not follow that model) and weighted real effects out of the fits."""
-    none = jnp.zeros(ext.N_EXTRA, bool)
-
-    def curve(vw):
-        return ext.predict(jnp.asarray(params), none, sig._replace(wheel_speed=vw))[1]
-
-    _, slope = jax.jvp(curve, (sig.wheel_speed,), (jnp.ones_like(sig.wheel_speed),))
+    slope = _slip_slope(jnp.asarray(params), sig)
     var_w = np.asarray(sig.slip_sd) ** 2
     sd_mu = max(float(target_sd), MIN_TARGET_SD)
     w = np.asarray(sig.weight) / np.sqrt(sd_mu**2 + np.asarray(slope) ** 2 * var_w)

@@ -39,8 +39,9 @@ clean recordings, but only 1 of 16 concealed single effects named.
 
 **Test.** The statistic of candidate c is its in-sample relative reduction of the sum of squares
 against the base fit, ``T_c = 1 − SSE_c/SSE_0`` (no cross-validation folds in the null: the
-replicas are fitted on all data only, one compiled program with candidates and replicas one after
-another by ``lax.map``, so memory does not grow with R). With ``M_r = max_c T_{r,c}`` the largest
+replicas are fitted on all data only, one compiled program for a replica's candidates, one after
+another by ``lax.map``; the replicas on :func:`workers` threads, so memory grows with the cores,
+not with R). With ``M_r = max_c T_{r,c}`` the largest
 statistic among replica r's candidates, c's p-value is ``(1 + #{r: M_r ≥ T_c})/(R + 1)``
 (single-step max-T, Westfall & Young 1993): rejecting at ``p ≤ α`` holds the family-wise false
 alarm rate over all candidates at α by construction (up to the re-synthesis being faithful).
@@ -49,18 +50,19 @@ Bonferroni or Holm would need R ≥ 7/α − 1 = 139 replicas to be able to reje
 
 from __future__ import annotations
 
+import os
+from concurrent.futures import ThreadPoolExecutor
+
 import jax
 import numpy as np
 
 from ..data.creep_state import difference_sd, smooth_creep
-from ..data.observer import lowpass_foh
 from ..data.vehicle import GRAVITY, Vehicle
 from ..status import Status
 from . import extensions as ext
 from . import fitting
-from .signals import from_columns
+from .signals import torque_builder
 
-RAW = ("time", "vehicle_speed", "wheel_speed", "traction_torque")
 #: Replicas of the null (the smallest R for which p ≤ 0.05 is attainable is 19) and the level.
 N_REPLICAS = 19
 ALPHA = 0.05
@@ -79,15 +81,10 @@ GRID_TOL = 1e-3
 
 
 @jax.jit
-def _fit_batch(starts, idx, actives, batch, n_valid):
-    """In-sample :func:`fitting.fit_candidates` (no folds) of every replica in ``batch``, one
-    after another: ``(sse (R, C), status (R, C))``."""
-
-    def one(s):
-        table = fitting.fit_candidates(starts, idx, actives, s, n_valid, folds=False)
-        return table.sse, table.status
-
-    return jax.lax.map(one, batch)
+def _fit_replica(starts, idx, actives, sig, n_valid):
+    """In-sample :func:`fitting.fit_candidates` (no folds) of one replica: ``(sse (C,), status (C,))``."""
+    table = fitting.fit_candidates(starts, idx, actives, sig, n_valid, folds=False)
+    return table.sse, table.status
 
 
 def noise_model(x) -> dict:
@@ -166,21 +163,21 @@ def error_share(data_power: float, torque_power: float, power_of) -> float:
     return 0.0
 
 
-def replicas(columns: dict, vehicle: Vehicle, p_base, n_replicas: int, seed: int, mask, latent) -> tuple:
-    """``(replica column dicts, {"torque": noise model, "gamma": γ})``: measured speeds kept (so
+def replicas(torque, measured, vehicle: Vehicle, p_base, n_replicas: int, seed: int, latent) -> tuple:
+    """``(replica torques [N·m], {"torque": noise model, "gamma": γ})``: measured speeds kept (so
     the regressors, the latent speeds and slip sd ``latent = (v̂, v̂_w, sd_w)``, are the
     recording's), torque re-synthesised from the base fit along the speeds ``x̄ + γ (x̂ − x̄)``
-    with no slip error (module docstring; γ matched on the selected samples ``mask``)."""
-    raw = {k: np.asarray(columns[k], float) for k in RAW}
-    keep = np.asarray(mask, bool)
-    t = raw["time"]
+    with no slip error (module docstring). ``torque``: the recording's; ``measured``: its
+    :class:`Signals` on the latent speeds, whose weights select the samples γ is matched on."""
+    torque = np.asarray(torque, float)
+    keep = np.asarray(measured.weight) > 0
+    t = np.asarray(measured.time)
     half = max(1, int(round(SLOW_HALF_WIDTH_S / float(np.median(np.diff(t))))))
     slow = [local_mean(x, half) for x in latent[:2]]
     scale = vehicle.axle_load_kg * GRAVITY * vehicle.wheel_radius_m
     none = np.zeros(ext.N_EXTRA, bool)
-    measured = from_columns(raw, vehicle, regressors=latent)
     exact = measured._replace(slip_sd=np.zeros_like(latent[2]))  # the replica's truth: no slip error
-    model = noise_model(raw["traction_torque"])
+    model = noise_model(torque)
 
     def path_mu(gamma):
         v, vw = (xs + gamma * (x - xs) for xs, x in zip(slow, latent[:2], strict=True))
@@ -195,7 +192,7 @@ def replicas(columns: dict, vehicle: Vehicle, p_base, n_replicas: int, seed: int
     )
     clean_torque = (path_mu(gamma) + np.asarray(measured.deriv_mu)) * scale
     rng = np.random.default_rng(seed)
-    out = [{**raw, "traction_torque": _noisy(clean_torque, model, rng)} for _ in range(n_replicas)]
+    out = [_noisy(clean_torque, model, rng) for _ in range(n_replicas)]
     return out, {"torque": model, "gamma": gamma}
 
 
@@ -208,18 +205,27 @@ def null_statistics(
     ``rows = (starts, idx, actives)`` are the observed recording's round-1 rows (base first) and
     ``merge(table) -> table`` the same post-processing (best radius start); ``tau_heat`` the
     thermal lag picked on the recording; ``mask`` its fit weights (> 0 on the selected samples);
-    ``latent`` its :func:`latent_speeds`.
+    ``latent`` its :func:`latent_speeds`. The replicas differ from the recording only in their
+    torque, so their signals share everything the speeds determine (:func:`torque_builder`); they
+    are fitted on :data:`workers` threads (XLA runs them in parallel; the results are those of
+    one after another).
     """
-    cols, model = replicas(columns, vehicle, p_base, n_replicas, seed, mask, latent)
-    sigs = []
-    for c in cols:
-        s = from_columns(c, vehicle, mask=mask, regressors=latent)
-        s = s._replace(heat=lowpass_foh(s.time, s.power, tau_heat))
-        sigs.append(fitting.pad_signals(s))
-    batch = jax.tree_util.tree_map(lambda *x: np.stack(x), *sigs)
-    sse, status = (np.asarray(x) for x in _fit_batch(*rows, batch, n_valid))
-    stats = [statistic(merge({"sse": sse[r].copy(), "status": status[r].copy()})) for r in range(n_replicas)]
+    build = torque_builder(columns, vehicle, mask=mask, regressors=latent)
+    torque = columns["traction_torque"]
+    torques, model = replicas(torque, build(torque), vehicle, p_base, n_replicas, seed, latent)
+
+    def fit(torque):
+        sse, status = _fit_replica(*rows, fitting.pad_signals(build(torque, tau_heat)), n_valid)
+        return statistic(merge({"sse": np.array(sse), "status": np.array(status)}))
+
+    with ThreadPoolExecutor(workers(n_replicas)) as pool:
+        stats = list(pool.map(fit, torques))
     return np.array(stats), model
+
+
+def workers(n_replicas: int) -> int:
+    """Threads fitting the replicas: one per CPU core, at most one per replica."""
+    return max(1, min(os.cpu_count() or 1, n_replicas))
 
 
 def statistic(table: dict) -> np.ndarray:

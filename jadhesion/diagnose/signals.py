@@ -94,6 +94,14 @@ def from_columns(
     ``J τ ω̈`` at every slip-up, which a fitted −τ torque delay took up on clean recordings of
     the independent generator). Without regressors the target is the observer's (measured wheel
     speed, time constant from the vehicle). Raises :class:`InputError` if columns are missing."""
+    return torque_builder(columns, vehicle, name, mask, regressors)(columns["traction_torque"])
+
+
+def torque_builder(columns: dict, vehicle: Vehicle, name: str = "recording", mask=None, regressors=None):
+    """``build(torque [N·m], thermal_lag=THERMAL_LAG_S) -> Signals``: :func:`from_columns` with
+    everything the speeds determine (observer derivative, slip, acceleration, weights, ``k_eps``)
+    computed once, so recordings that differ only in their torque (the null's replicas) pay only
+    for the torque's terms; ``thermal_lag`` [s] sets :attr:`Signals.heat`'s lag."""
     missing = [c for c in ("time", "vehicle_speed", "wheel_speed", "traction_torque") if c not in columns]
     if missing:
         raise InputError(f"{name}: diagnosis needs the raw signals; missing column(s) {', '.join(missing)}")
@@ -102,9 +110,8 @@ def from_columns(
         raise InputError(f"{name}: diagnosis needs at least 50 samples, got {t.size}")
     v = np.asarray(columns["vehicle_speed"], float)
     vw = np.asarray(columns["wheel_speed"], float)
-    torque = np.asarray(columns["traction_torque"], float)
     scale = vehicle.axle_load_kg * GRAVITY * vehicle.wheel_radius_m
-    deriv_mu = -np.asarray(
+    observer_deriv = -np.asarray(
         observer_core(
             jnp.asarray(t),
             jnp.asarray(vw),
@@ -115,32 +122,19 @@ def from_columns(
             vehicle.observer_time_constant_s,
         )
     )
-    torque_mu = torque / scale
-    adhesion = observed = torque_mu - deriv_mu
-    slip_sd = np.zeros(t.size)
+    deriv_mu, slip_sd = observer_deriv, np.zeros(t.size)
     if regressors is not None:
         v, vw, slip_sd = (np.asarray(x, float) for x in regressors)
         deriv_mu = vehicle.wheelset_inertia_kgm2 * np.gradient(vw, t) / (vehicle.wheel_radius_m * scale)
-        adhesion = torque_mu - deriv_mu
-    slip = np.asarray(kinematics.slip_velocity(vw, v))
-    power = np.abs(observed * slip) * vehicle.axle_weight_n
+    slip = np.abs(np.asarray(kinematics.slip_velocity(vw, v)))
     dt = float(np.median(np.diff(t)))
-    traction = (
-        vehicle.n_axles * smooth(torque, dt) / (vehicle.wheel_radius_m * vehicle.locomotive_mass_kg * GRAVITY)
-    )
     f = jnp.asarray
-    return Signals(
+    fixed = dict(
         time=f(t),
         speed=f(v),
         wheel_speed=f(vw),
-        torque_mu=f(torque_mu),
         deriv_mu=f(deriv_mu),
-        adhesion=f(adhesion),
         accel=f(smooth_derivative(t, v)),
-        torque_rate=f(smooth_derivative(t, torque_mu)),
-        power=f(power),
-        heat=lowpass_foh(f(t), f(power), THERMAL_LAG_S),
-        traction_ratio=f(traction),
         slip_sd=f(slip_sd),
         weight=f(np.ones(t.size) if mask is None else np.asarray(mask, float)),
         dt=f(dt),
@@ -148,3 +142,20 @@ def from_columns(
         duration=f(t[-1] - t[0]),
         k_eps=f(vehicle.k_eps()),
     )
+    traction_scale = vehicle.wheel_radius_m * vehicle.locomotive_mass_kg * GRAVITY
+
+    def build(torque, thermal_lag: float = THERMAL_LAG_S) -> Signals:
+        torque = np.asarray(torque, float)
+        torque_mu = torque / scale
+        power = f(np.abs(torque_mu - observer_deriv) * slip * vehicle.axle_weight_n)
+        return Signals(
+            **fixed,
+            torque_mu=f(torque_mu),
+            adhesion=f(torque_mu - deriv_mu),
+            torque_rate=f(smooth_derivative(t, torque_mu)),
+            power=power,
+            heat=lowpass_foh(fixed["time"], power, thermal_lag),
+            traction_ratio=f(vehicle.n_axles * smooth(torque, dt) / traction_scale),
+        )
+
+    return build
