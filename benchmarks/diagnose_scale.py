@@ -4,8 +4,10 @@ For each length a recording of our simulator (dry, seed 0, ``sensors="realistic"
 CSV; a fresh process then runs the CLI's code path on it (load, selection, diagnosis with the
 null's replicas) and reports its wall time and peak resident memory (``ru_maxrss``, the whole
 process: Python, JAX, the compiled programs and the data), and its CPU seconds (all threads; less
-sensitive than wall time to the other jobs on the 2 shared cores). The result file records the
-commit, the settings and the load average.
+sensitive than wall time to the other jobs on the 2 shared cores). Each length runs twice on a
+fresh compilation cache: ``cold`` (compiles and fills the cache, as a user's first run) and
+``warm`` (reads it, as every later run), reported apart. The result file records the commit, the
+settings and the load average.
 
     python -m benchmarks.diagnose_scale [--lengths 5000,20000,60000,180000] [--replicas 19]
 """
@@ -60,18 +62,25 @@ def main(argv=None) -> int:
         for n in (int(x) for x in args.lengths.split(",")):
             path = str(Path(tmp) / f"rec_{n}.csv")
             subprocess.run([sys.executable, "-c", WRITE, path, str(n)], check=True, env=env)
-            out = subprocess.run(
-                [sys.executable, "-c", CHILD, path, str(args.replicas)],
-                check=True,
-                env=env,
-                capture_output=True,
-                text=True,
-            ).stdout
-            row = {"samples": n, **json.loads(out.strip().splitlines()[-1]), "loadavg": os.getloadavg()}
-            rows.append(row)
-            print(json.dumps(row), flush=True)
-            doc = {"commit": head, "settings": vars(args), "rows": rows}
-            Path(args.out).write_text(json.dumps(doc, indent=1))
+            cache = {**env, "JADHESION_CACHE": str(Path(tmp) / f"cache_{n}")}
+            for start in ("cold", "warm"):
+                out = subprocess.run(
+                    [sys.executable, "-c", CHILD, path, str(args.replicas)],
+                    check=True,
+                    env=cache,
+                    capture_output=True,
+                    text=True,
+                ).stdout
+                row = {
+                    "samples": n,
+                    "start": start,
+                    **json.loads(out.strip().splitlines()[-1]),
+                    "loadavg": os.getloadavg(),
+                }
+                rows.append(row)
+                print(json.dumps(row), flush=True)
+                doc = {"commit": head, "settings": vars(args), "rows": rows}
+                Path(args.out).write_text(json.dumps(doc, indent=1))
     return 0
 
 
