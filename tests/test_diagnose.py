@@ -277,6 +277,18 @@ def test_noise_model_recovers_white_level_and_quantisation():
     assert q == pytest.approx(0.01, rel=1e-9)
 
 
+def test_replica_statistic_keeps_stalled_fits():
+    """A stalled fit's SSE only bounds its optimum from above: the recording's candidate is not
+    tested (−inf), a replica's counts with the reduction it reached; a non-finite SSE never counts."""
+    stalled, converged = int(Status.STALLED), int(Status.CONVERGED)
+    table = {
+        "sse": np.array([10.0, 8.0, 9.0, np.inf]),
+        "status": np.array([converged, stalled, converged, int(Status.NONFINITE)]),
+    }
+    np.testing.assert_allclose(null.statistic(table), [-np.inf, 0.1, -np.inf], rtol=1e-12)
+    np.testing.assert_allclose(null.statistic(table, converged_only=False), [0.2, 0.1, -np.inf], rtol=1e-12)
+
+
 def test_max_t_pvalues_hold_their_level():
     """Under the null (observed gains exchangeable with the replicas'), P(p ≤ 0.05) ≤ 0.05."""
     rng = np.random.default_rng(5)

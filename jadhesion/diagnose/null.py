@@ -216,7 +216,7 @@ def null_statistics(
 
     def fit(torque):
         sse, status = _fit_replica(*rows, fitting.pad_signals(build(torque, tau_heat)), n_valid)
-        return statistic(merge({"sse": np.array(sse), "status": np.array(status)}))
+        return statistic(merge({"sse": np.array(sse), "status": np.array(status)}), converged_only=False)
 
     with ThreadPoolExecutor(workers(n_replicas)) as pool:
         stats = list(pool.map(fit, torques))
@@ -228,10 +228,15 @@ def workers(n_replicas: int) -> int:
     return max(1, min(os.cpu_count() or 1, n_replicas))
 
 
-def statistic(table: dict) -> np.ndarray:
+def statistic(table: dict, converged_only: bool = True) -> np.ndarray:
     """``1 − SSE_c/SSE_0`` of the candidates (rows 1…) of a fit table against its base row 0;
-    −inf where a fit did not converge (such a candidate is never ranked)."""
-    ok = table["status"][1:] == int(Status.CONVERGED)
+    −inf where a fit did not converge (such a candidate of the recording is never ranked).
+
+    ``converged_only=False`` (the replicas): −inf only where the SSE is not finite. LM accepts only
+    decreases, so a stalled fit's SSE bounds its optimum from above and its reduction is a lower
+    bound; dropping it instead took that candidate out of the replica's max, which made the null
+    narrower than the fits it stands for."""
+    ok = table["status"][1:] == int(Status.CONVERGED) if converged_only else np.isfinite(table["sse"][1:])
     return np.where(ok, 1.0 - table["sse"][1:] / table["sse"][0], -np.inf)
 
 
