@@ -429,3 +429,14 @@ def test_kalker_c11_tends_to_asymptotes(nu):
     if nu < 0.5:
         x = jnp.geomspace(1e-4, 1e4, 2001)
         assert bool(jnp.all(jnp.diff(_c11_jit(x, nu)) > 0))
+
+
+def test_vehicle_k_eps_is_the_gradient_constant_of_its_contact():
+    """``Vehicle.k_eps`` (cached per vehicle, one compiled program) is eq 3 of its contact, for a
+    hashable vehicle and for one given a list by hand (uncached); another contact, another value."""
+    v = LOCO_22E
+    direct = float(gradient_constant(v.contact(), v.wheel_load, v.shear_modulus, v.poisson_ratio))
+    np.testing.assert_allclose(v.k_eps(), direct, rtol=1e-14)
+    by_hand = v.replace(contact_semi_axes_m=[0.007, 0.006])
+    as_tuple = v.replace(contact_semi_axes_m=(0.007, 0.006))
+    assert by_hand.k_eps() == as_tuple.k_eps() != v.k_eps()

@@ -102,7 +102,12 @@ class Vehicle:
 
     def k_eps(self) -> float:
         """Polach gradient constant ``k_eps`` [-] (``eps = k_eps · s / mu``); computed once per
-        vehicle (op by op, the contact's table lookups took ~80 ms a call)."""
+        vehicle (op by op, the contact's table lookups took ~80 ms a call); uncached when a field
+        is not hashable (a list or an array given by hand)."""
+        try:
+            hash(self)
+        except TypeError:
+            return _k_eps.__wrapped__(self)
         return _k_eps(self)
 
     def replace(self, **changes) -> "Vehicle":

@@ -207,15 +207,15 @@ def null_statistics(
     thermal lag picked on the recording; ``mask`` its fit weights (> 0 on the selected samples);
     ``latent`` its :func:`latent_speeds`. The replicas differ from the recording only in their
     torque, so their signals share everything the speeds determine (:func:`torque_builder`); they
-    are fitted on :data:`workers` threads (XLA runs them in parallel; the results are those of
+    are fitted on :func:`workers` threads (XLA runs them in parallel; the results are those of
     one after another).
     """
     build = torque_builder(columns, vehicle, mask=mask, regressors=latent)
     torque = columns["traction_torque"]
     torques, model = replicas(torque, build(torque), vehicle, p_base, n_replicas, seed, latent)
 
-    def fit(torque):
-        sse, status = _fit_replica(*rows, fitting.pad_signals(build(torque, tau_heat)), n_valid)
+    def fit(replica_torque):
+        sse, status = _fit_replica(*rows, fitting.pad_signals(build(replica_torque, tau_heat)), n_valid)
         return statistic(merge({"sse": np.array(sse), "status": np.array(status)}), converged_only=False)
 
     with ThreadPoolExecutor(workers(n_replicas)) as pool:
@@ -224,8 +224,9 @@ def null_statistics(
 
 
 def workers(n_replicas: int) -> int:
-    """Threads fitting the replicas: one per CPU core, at most one per replica."""
-    return max(1, min(os.cpu_count() or 1, n_replicas))
+    """Threads fitting the replicas: one per CPU core this process may use, at most one per replica."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    return max(1, min(cores, n_replicas))
 
 
 def statistic(table: dict, converged_only: bool = True) -> np.ndarray:
