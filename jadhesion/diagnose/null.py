@@ -66,6 +66,9 @@ from .signals import torque_builder
 #: Replicas of the null (the smallest R for which p ≤ 0.05 is attainable is 19) and the level.
 N_REPLICAS = 19
 ALPHA = 0.05
+#: Most threads fitting replicas at once: each holds one fit's working memory (at 180 000 samples
+#: the whole diagnosis peaked at 1.46 GB with two), so many cores must not multiply it unbounded.
+MAX_WORKERS = 4
 #: Shares γ of the latent speeds' fast part kept as true motion in the replicas, tried from 1 down.
 GAMMA_GRID = 1.0 - np.array(
     [0.0, 0.002, 0.005, 0.01, 0.02, 0.03, 0.05, 0.07, 0.1, 0.15, 0.2, 0.3, 0.5, 0.7, 1.0]
@@ -224,9 +227,10 @@ def null_statistics(
 
 
 def workers(n_replicas: int) -> int:
-    """Threads fitting the replicas: one per CPU core this process may use, at most one per replica."""
+    """Threads fitting the replicas: one per CPU core this process may use, at most one per replica
+    and :data:`MAX_WORKERS`."""
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
-    return max(1, min(cores, n_replicas))
+    return max(1, min(cores, n_replicas, MAX_WORKERS))
 
 
 def statistic(table: dict, converged_only: bool = True) -> np.ndarray:
