@@ -59,7 +59,7 @@ def _extra_rows(sets) -> list:
     for i, s in enumerate(sets):
         spec = REGISTRY[s[-1]] if s else None
         if spec is not None and spec.extra_starts:
-            col = 5 + ext.EXTRA_NAMES.index(spec.magnitude_param)
+            col = 5 + ext.EXTRA_NAMES.index(spec.extra_start_param)
             out += [(i, col, d) for d in spec.extra_starts]
     return out
 

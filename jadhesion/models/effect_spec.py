@@ -48,9 +48,10 @@ class EffectSpec(NamedTuple):
     comes first in the registry), ``sentence`` and ``terms`` (the explanation: a :meth:`str.format`
     template over the fitted parameters, the vehicle's ``wheel_radius_m``, ``axle_load_kg`` and
     ``gravity``, and the derived ``terms``), ``detection`` (:class:`Detection`), ``extra_starts``
-    (further starts of the magnitude parameter where its fit from the neutral value can end in a
-    wrong local minimum; the best converged fit is kept), ``grid_params`` (parameters picked on a
-    grid before the fit, e.g. a time constant: counted in BIC beside the fitted ones).
+    (further starts of ``start_param``, by default the magnitude parameter, where its fit from the
+    recording's starting value can end in a wrong local minimum; the best converged fit is kept),
+    ``grid_params`` (parameters picked on a grid before the fit, e.g. a time constant: counted in
+    BIC beside the fitted ones).
     """
 
     name: str
@@ -70,6 +71,7 @@ class EffectSpec(NamedTuple):
     detection: Detection
     terms: Callable[[Mapping], dict] = _no_terms
     extra_starts: tuple = ()
+    start_param: str = ""
     grid_params: int = 0
 
     @property
@@ -81,6 +83,11 @@ class EffectSpec(NamedTuple):
     def magnitude_param(self) -> str:
         """The extension parameter that estimates the simulator's magnitude."""
         return self.extension[0].name
+
+    @property
+    def extra_start_param(self) -> str:
+        """The parameter :attr:`extra_starts` are values of."""
+        return self.start_param or self.magnitude_param
 
     def explain(self, values: Mapping) -> str:
         """The explanation sentence from the fitted parameters and the vehicle (class docstring)."""
