@@ -110,14 +110,8 @@ def _fit_round(sig, n, p0, sets):
 
 
 def _status(table: dict, i: int) -> str:
-    """Status label of the full-data fit of row ``i`` of a fit table (its statistic, p-value and
-    parameters come from that fit)."""
-    return Status(int(table["status"][i])).label
-
-
-def _cv_status(table: dict, i: int) -> str:
-    """Status label of the worst cross-validation fold fit of row ``i`` (its held-out error)."""
-    return Status(int(table["fold_status"][i])).label
+    """Status label of row ``i`` of a fit table: the worse of its full-data and fold fits."""
+    return Status(int(max(table["status"][i], table["fold_status"][i]))).label
 
 
 def _reduction(value: float) -> str:
@@ -279,7 +273,6 @@ def diagnose(
                 "gain": float(gain1[i]),
                 "sse_reduction": float(observed[i - 1]),
                 "status": _status(t1, i),
-                "cv_status": _cv_status(t1, i),
                 "steps": int(t1["steps"][i]),
                 "p_value": None if p_values[i] is None else float(p_values[i]),
                 "evidence": {"signal": signal, "eta2_base_residual": sigs[signal]},
@@ -304,7 +297,6 @@ def diagnose(
                     "delta_bic": float(dbic2[j + 1]),
                     "heldout_mae": float(t2["heldout_mae"][j + 1]),
                     "status": _status(t2, j + 1),
-                    "cv_status": _cv_status(t2, j + 1),
                 }
                 for j, n in enumerate(others)
             ],
@@ -334,7 +326,7 @@ def diagnose(
             "mae": float(t1["mae"][0]),
             "heldout_mae": float(t1["heldout_mae"][0]),
             "status": base_status.label,
-            "cv_status": _cv_status(t1, 0),
+            "cv_status": _status(t1, 0),
         },
         "extended": {
             "effects": effects,

@@ -5,14 +5,8 @@ confirms, and a threshold calibrated on clean simulated recordings bounds the fa
   the reference model (the base fit in round 1, the accepted effect in round 2).
 * ``ΔBIC_c = n_eff ln(SSE_c/SSE_ref) + k_c ln(n_eff)``, ``n_eff = n (1 − ρ1)/(1 + ρ1)`` from the
   lag-1 autocorrelation ρ1 of the reference residual (clipped to [10, n]).
-* Only candidates whose full-data fit converged are ranked (their statistic, p-value and
-  parameters come from it); the others are reported with their status. A fold fit that did not
-  converge is reported as the candidate's ``cv_status`` and its held-out error used as measured:
-  warm-started from the full fit and stopped short of its fold's optimum, it fits its training
-  blocks worse than a converged one would. (Requiring every fold to converge dropped true effects:
-  on the independent generator 4 of 14 concealed effects lost their own candidate to a stalled
-  fit, full or fold, which the status did not tell apart then; on one, 300007, the full fit had
-  converged and a fold had stalled.)
+* Only candidates whose fits (full data and every fold) converged are ranked; the others are
+  reported with their status.
 * An effect is accepted when it has the best held-out error, ``gain ≥ GAIN_THRESHOLD``,
   ``ΔBIC < 0`` and, when the recording's null was run (:mod:`.null`), its max-T p-value is at
   most :data:`ALPHA` (the null, not the threshold, is what holds the false alarms on recordings
