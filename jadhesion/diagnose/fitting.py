@@ -40,8 +40,8 @@ MAX_STEPS, MAX_STEPS_FOLD = 200, 100
 MIN_TARGET_SD = 1e-6
 OPTIONS = BoxLMOptions(ftol=1e-9, xtol=1e-7, gtol=1e-10)
 #: Rows of every :func:`fit_candidates` call (base + 7 effects + 2 extra radius starts + 3 extra
-#: rail-change times) and free
-#: parameters per row (the Polach five + at most four extras: rail change with load transfer).
+#: rail-change times) and free parameters per row (the Polach five + at most four extras: rail
+#: change with load transfer).
 N_CANDIDATES = 13
 WIDTH = 9
 #: Recordings are padded to a multiple of this many samples (one compiled program per multiple).
