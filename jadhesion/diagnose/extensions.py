@@ -85,6 +85,8 @@ EXTRA_NAMES = tuple(p.name for p in PARAMS)
 N_EXTRA = len(EXTRA_NAMES)
 N_PARAMS = len(PARAM_NAMES) + N_EXTRA
 NEUTRAL = np.array([p.neutral for p in PARAMS])
+#: (N_PARAMS,) the entries that cross-validation folds keep at the full-data fit (``Param.fold_fixed``).
+FOLD_FIXED = np.array([False] * len(PARAM_NAMES) + [p.fold_fixed for p in PARAMS])
 BOUNDS = (
     np.concatenate([POLACH_BOUNDS[0], np.array([p.lower for p in PARAMS])]),
     np.concatenate([POLACH_BOUNDS[1], np.array([p.upper for p in PARAMS])]),

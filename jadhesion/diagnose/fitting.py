@@ -3,7 +3,10 @@
 Held-out error is measured by blocked cross-validation in time: the recording is cut into
 ``N_FOLDS`` contiguous blocks; fold k fits on the other blocks (zero weight on block k) and predicts
 block k. Contiguous blocks keep autocorrelated neighbours out of the training set, so the held-out
-error is honest for slowly varying effects. Every fit uses the project's one bounded LM,
+error is honest for slowly varying effects. A parameter that places an effect in time (the rail
+change's ``u_change``, :attr:`~jadhesion.models.effect_spec.Param.fold_fixed`) is kept at the
+full-data fit in the folds: the fold holding out the change cannot place it, and its LM would walk
+a flat direction to the step cap. Every fit uses the project's one bounded LM,
 :func:`jadhesion.identify.lm.box_lm` (projected LM, MINPACK convergence tests), run to its
 convergence test with :data:`MAX_STEPS` / :data:`MAX_STEPS_FOLD` as caps, and every fit carries its
 :class:`jadhesion.status.Status` code (:attr:`FitTable.status`).
@@ -57,6 +60,7 @@ N_SCREEN = 128
 PAD = ext.N_PARAMS
 _LO = np.concatenate([ext.BOUNDS[0], [-1.0]])
 _HI = np.concatenate([ext.BOUNDS[1], [1.0]])
+_FOLD_FIXED = np.concatenate([ext.FOLD_FIXED, [False]])
 
 
 def halton(n: int, dim: int = 5, skip: int = 1) -> np.ndarray:
@@ -217,8 +221,10 @@ def fit_candidates(p0, idx, actives, sig: Signals, n_valid, folds: bool = True) 
         if not folds:
             return full, status, steps, r_full, jnp.nan, jnp.int32(int(Status.CONVERGED))
 
+        i_fold = jnp.where(jnp.asarray(_FOLD_FIXED)[i], PAD, i)  # a change time stays put
+
         def fold(w):
-            pk, sk, _ = _solve(full, i, a, w, sig, MAX_STEPS_FOLD)
+            pk, sk, _ = _solve(full, i_fold, a, w, sig, MAX_STEPS_FOLD)
             return jnp.sum(jnp.abs(resid(pk, a)) * (weights[0] - w)), sk
 
         held, fold_status = jax.lax.map(fold, weights[1:])

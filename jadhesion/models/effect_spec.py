@@ -10,13 +10,16 @@ from typing import NamedTuple, Optional
 class Param(NamedTuple):
     """A parameter of an effect's extension (:mod:`jadhesion.diagnose.extensions`): its name, the
     fit's box ``[lower, upper]``, the ``neutral`` value at which the extension is the base model
-    exactly, and its ``unit``."""
+    exactly, and its ``unit``; ``fold_fixed``: it places the effect in time, so a cross-validation
+    fold whose held-out block contains that place cannot determine it (a flat direction: the fold's
+    LM never meets its step test) — the folds keep it at the full-data fit's value."""
 
     name: str
     lower: float
     upper: float
     neutral: float
     unit: str
+    fold_fixed: bool = False
 
 
 class Detection(NamedTuple):

@@ -37,7 +37,10 @@ EFFECTS = {
             high=0.95,
             unit="-",
             summary="relative drop of mu0 at a step in time",
-            extension=(Param("drop", -1.5, 0.95, 0.0, "-"), Param("u_change", 0.02, 0.98, 0.5, "-")),
+            extension=(
+                Param("drop", -1.5, 0.95, 0.0, "-"),
+                Param("u_change", 0.02, 0.98, 0.5, "-", fold_fixed=True),
+            ),
             # the residual's change point misleads when the base fit has bent its curve into the
             # step: independent generator, a −17 % change at 57 % of a sweep started at 18 % and
             # stalled there (SSE −20 %) while a speed term took −52 %
