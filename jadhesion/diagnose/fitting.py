@@ -5,8 +5,8 @@ Held-out error is measured by blocked cross-validation in time: the recording is
 block k. Contiguous blocks keep autocorrelated neighbours out of the training set, so the held-out
 error is honest for slowly varying effects. A parameter that places an effect in time (the rail
 change's ``u_change``, :attr:`~jadhesion.models.effect_spec.Param.fold_fixed`) is kept at the
-full-data fit in the folds: the fold holding out the change cannot place it, and its LM would walk
-a flat direction to the step cap. Every fit uses the project's one bounded LM,
+full-data fit in the folds: the fold holding out the change cannot place it, and on that flat
+direction its LM stalled or ran to the step cap. Every fit uses the project's one bounded LM,
 :func:`jadhesion.identify.lm.box_lm` (projected LM, MINPACK convergence tests), run to its
 convergence test with :data:`MAX_STEPS` / :data:`MAX_STEPS_FOLD` as caps, and every fit carries its
 :class:`jadhesion.status.Status` code (:attr:`FitTable.status`).

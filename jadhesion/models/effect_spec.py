@@ -12,7 +12,7 @@ class Param(NamedTuple):
     fit's box ``[lower, upper]``, the ``neutral`` value at which the extension is the base model
     exactly, and its ``unit``; ``fold_fixed``: it places the effect in time, so a cross-validation
     fold whose held-out block contains that place cannot determine it (a flat direction: the fold's
-    LM never meets its step test) — the folds keep it at the full-data fit's value."""
+    LM stalls or runs to its cap) — the folds keep it at the full-data fit's value."""
 
     name: str
     lower: float
