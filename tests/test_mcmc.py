@@ -1,7 +1,11 @@
 """Bayesian posterior (emcee): log-posterior, sampler wrapper, Laplace agreement, calibration."""
 
 import json
+import os
+import subprocess
+import sys
 import warnings
+from pathlib import Path
 
 import jax.numpy as jnp
 import numpy as np
@@ -282,6 +286,23 @@ def test_inference_data_and_plots(posterior, data, tmp_path):
     idata = posterior.to_inference_data()
     assert isinstance(idata, az.InferenceData)
     assert idata.posterior["kA"].shape == (32, posterior.chain.shape[0])
+
+
+def test_corner_plot_stays_quiet_on_the_day_arviz_announces_its_refactor(tmp_path):
+    """corner imports arviz where it is installed, and arviz 0.23 warns (FutureWarning) on its
+    first import each day: drawing must not pass that on (the CLI would print it, the suite's
+    ``-W error`` fail). A fresh cache folder makes the day's first import."""
+    pytest.importorskip("arviz")
+    code = (
+        f"import sys; sys.path.insert(0, {str(Path(__file__).parent)!r}); "
+        "from test_mcmc import _prior_result; "
+        "from jadhesion.plots.posterior import corner_plot; corner_plot(_prior_result(0))"
+    )
+    env = {**os.environ, "XDG_CACHE_HOME": str(tmp_path)}
+    proc = subprocess.run(
+        [sys.executable, "-W", "error::FutureWarning", "-c", code], env=env, capture_output=True, text=True
+    )
+    assert proc.returncode == 0 and "FutureWarning" not in proc.stderr, proc.stderr
 
 
 def test_cli_posterior_json(tmp_path, capsys):

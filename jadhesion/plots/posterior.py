@@ -3,6 +3,8 @@ data on the adhesion–creep plane."""
 
 from __future__ import annotations
 
+import warnings
+
 import jax.numpy as jnp
 import numpy as np
 from matplotlib.figure import Figure
@@ -26,7 +28,9 @@ _LABELS = {
 def corner_plot(result: PosteriorResult, truths=None) -> Figure:
     """Corner plot of all sampled coordinates with 5/50/95 % quantile lines (``truths``: optional
     true values, same order as ``result.names``, ``None`` entries allowed)."""
-    import corner  # here, not at the top: it imports pyplot (+0.25 s), paid only when drawing
+    with warnings.catch_warnings():  # corner imports arviz where installed: its daily refactor notice
+        warnings.simplefilter("ignore", FutureWarning)
+        import corner  # here, not at the top: it imports pyplot (+0.25 s), paid only when drawing
 
     d = result.samples.shape[1]
     fig = Figure(figsize=(1.9 * d, 1.9 * d))
