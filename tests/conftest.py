@@ -32,3 +32,29 @@ def _compilation_cache_off_between_tests():
     if jax.config.jax_compilation_cache_dir != _CACHE_DIR:
         jax.config.update("jax_compilation_cache_dir", _CACHE_DIR)
         compilation_cache.reset_cache()
+
+
+#: The slowest files (CPU seconds of a whole-suite run with ``--durations``, slowest first). With
+#: whole files per worker (``--dist loadfile``) the files are handed out in collection order, so a
+#: slow file collected last keeps one worker busy while the others idle; handing the slowest out
+#: first (longest-processing-time-first scheduling) leaves only short files for the tail.
+SLOWEST_FILES = (
+    "test_multifile.py",
+    "test_cli.py",
+    "test_optimisers.py",
+    "test_notebooks.py",
+    "test_diagnose.py",
+    "test_uncertainty.py",
+    "test_sweep.py",
+    "test_programs.py",
+    "test_mcmc.py",
+    "test_effects.py",
+    "test_simulator.py",
+    "test_segments.py",
+)
+
+
+def pytest_collection_modifyitems(items):
+    """Slowest files first (:data:`SLOWEST_FILES`); the order within a file is kept."""
+    rank = {name: i for i, name in enumerate(SLOWEST_FILES)}
+    items.sort(key=lambda item: rank.get(item.path.name, len(rank)))
