@@ -7,8 +7,10 @@ For every set of recordings — ``ours/<scenario>/<level>`` from our simulator (
 historical 5e-5 m/s white sensors; a number: that multiple of the realistic sensor model of
 :mod:`jadhesion.data.sensors`) and ``foreign/start/<preset>`` from
 :mod:`validation.foreign_generator` (no effects, walking-pace starts, written to CSV and read back
-as the CLI does) — the fit's own path runs: :func:`jadhesion.data.dataset.to_dataset` (creep
-``smoothed``, the default, and ``raw`` for comparison), global LM on the errors-in-variables
+as the CLI does) — the fit's own path runs: the samples ``jadhesion fit`` keeps
+(:func:`jadhesion.data.selected.selected_dataset`, its default ``--phase traction``: standstill
+below 0.2 m/s, coasting and direction changes excluded; creep ``smoothed``, the default, and
+``raw`` for comparison), global LM on the errors-in-variables
 residual (:data:`jadhesion.identify.polach_fit.LM_RESIDUAL`), and the trust report
 (:func:`jadhesion.identify.trust.fit_report`, HAC sandwich). Recorded per recording: the estimate
 and stderr of every parameter; per set: coverage of the 90 % and 95 % intervals ``θ ± z·stderr``
@@ -17,6 +19,9 @@ truth is that bound), ``z = (estimate − truth)/stderr`` mean and sd (calibrate
 from 0 is bias, an sd above 1 intervals too narrow), the initial slope ``(kA + kS)/2`` within 25 %
 of the truth, median |μ0 error|.
 
+Runs before 2026-11-24 (``coverage_fit.json`` at 8d588e4, ``coverage_fit_robust.json``,
+``coverage_fit_truncated.json``) fitted every sample (:func:`jadhesion.data.dataset.to_dataset`),
+standstill and coasting included, which ``jadhesion fit`` never does.
 ``results/coverage_fit_conditional.json`` is the same run before the trust block stopped
 conditioning on parameters at a bound (commit 26731cc). The JSON records the git commit, every
 setting and ``os.getloadavg()``; the figure plots, per
@@ -44,9 +49,9 @@ import numpy as np  # noqa: E402
 jax.config.update("jax_enable_x64", True)
 
 from benchmarks.provenance import commit  # noqa: E402
-from jadhesion.data.dataset import to_dataset  # noqa: E402
 from jadhesion.data.recording import load_recording  # noqa: E402
 from jadhesion.data.scenarios import SCENARIOS  # noqa: E402
+from jadhesion.data.selected import selected_dataset  # noqa: E402
 from jadhesion.data.sensors import CLEAN, REALISTIC  # noqa: E402
 from jadhesion.data.simulator import simulate_many  # noqa: E402
 from jadhesion.identify.polach_fit import fit_polach, fit_polach_batch  # noqa: E402
@@ -55,6 +60,8 @@ from jadhesion.models.polach import PARAM_NAMES  # noqa: E402
 from validation.foreign_generator import generate, write  # noqa: E402
 
 CREEPS = ("smoothed", "raw")
+#: The samples fitted: ``jadhesion fit``'s default ``--phase``.
+PHASE = "traction"
 CHECKED = ("kS", "mu0")
 Z = {"90": 1.6448536269514722, "95": 1.959963984540054}
 RESULTS = Path(__file__).parent / "results"
@@ -93,7 +100,7 @@ def score(recordings, truths):
     """Per creep option: per-recording estimates, stderrs and hac lags of one set."""
     out = {}
     for creep in CREEPS:
-        datasets = [to_dataset(r, creep=creep) for r in recordings]
+        datasets = [selected_dataset(r, PHASE, creep=creep)[0] for r in recordings]
         fits = _fits(datasets)
         rows = []
         for d, f, t in zip(datasets, fits, truths, strict=True):
