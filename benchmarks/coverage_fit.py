@@ -54,7 +54,8 @@ from jadhesion.data.scenarios import SCENARIOS  # noqa: E402
 from jadhesion.data.selected import selected_dataset  # noqa: E402
 from jadhesion.data.sensors import CLEAN, REALISTIC  # noqa: E402
 from jadhesion.data.simulator import simulate_many  # noqa: E402
-from jadhesion.identify.polach_fit import fit_polach, fit_polach_batch  # noqa: E402
+from jadhesion.identify.batch_fit import fit_datasets  # noqa: E402
+from jadhesion.identify.polach_fit import fit_polach_batch  # noqa: E402
 from jadhesion.identify.trust import fit_report  # noqa: E402
 from jadhesion.models.polach import PARAM_NAMES  # noqa: E402
 from validation.foreign_generator import generate, write  # noqa: E402
@@ -93,7 +94,9 @@ def _fits(datasets):
         stacked = jax.tree.map(lambda *a: jnp.stack(a), *datasets)
         fits = fit_polach_batch(stacked, "lm", jax.random.split(jax.random.key(0), len(datasets)))
         return [jax.tree.map(lambda a, i=i: a[i], fits) for i in range(len(datasets))]
-    return [fit_polach(d, "lm", jax.random.key(0)) for d in datasets]
+    # lengths differ (the selection): padded to the command line's buckets, few programs (one per
+    # length exhausted XLA's code memory: "LLVM ERROR: Unable to allocate section memory")
+    return [r.fit for r in fit_datasets(datasets, "lm", jax.random.key(0))]
 
 
 def score(recordings, truths):
