@@ -7,8 +7,15 @@ The CLI turns JAX's persistent compilation cache on for its process (``enable_co
 Tests that call it in-process would leave it on for every later test of that worker, so every test
 ends with the cache as the session began: XLA's executable serialisation (jaxlib 0.10.2, CPU) once aborted
 a worker mid-suite in CI, in a library test that never asked for the cache.
+
+Every program XLA:CPU compiles holds a few memory maps for as long as JAX's caches keep it, and a
+worker that runs half the suite compiles thousands: one reached 64 031 of Linux's default 65 530
+(``vm.max_map_count``) in a whole-suite run, and in CI a worker died there, in LLVM's section
+allocator. So after any file that leaves the worker above a quarter of the limit, JAX's caches are
+cleared (:func:`_release_compiled_programs`); the largest file adds about 25 000 maps.
 """
 
+import gc
 import os
 import tempfile
 
@@ -20,6 +27,26 @@ os.environ.setdefault("JADHESION_CACHE", tempfile.mkdtemp(prefix="jadhesion-test
 jax.config.update("jax_enable_x64", True)
 jax.config.update("jax_numpy_rank_promotion", "raise")
 
+
+_MAPS = "/proc/self/maps"
+_MAP_LIMIT = "/proc/sys/vm/max_map_count"
+
+
+def _map_count() -> int:
+    with open(_MAPS) as maps:
+        return sum(1 for _ in maps)
+
+
+def _release_threshold() -> int | None:
+    """A quarter of the kernel's memory-map limit per process; None where there is no such limit."""
+    try:
+        with open(_MAP_LIMIT) as limit:
+            return int(limit.read()) // 4
+    except OSError:
+        return None
+
+
+_RELEASE_AT = _release_threshold()
 
 _CACHE_DIR = jax.config.jax_compilation_cache_dir  # off (None) unless the environment sets one
 
@@ -35,9 +62,11 @@ def _compilation_cache_off_between_tests():
 
 
 #: The slowest files (CPU seconds of a whole-suite run with ``--durations``, slowest first). With
-#: whole files per worker (``--dist loadfile``) the files are handed out in collection order, so a
-#: slow file collected last keeps one worker busy while the others idle; handing the slowest out
-#: first (longest-processing-time-first scheduling) leaves only short files for the tail.
+#: whole files per worker (``--dist loadfile --no-loadscope-reorder``, pyproject.toml) the files are
+#: handed out in collection order, so a slow file collected last keeps one worker busy while the
+#: others idle; handing the slowest out first (longest-processing-time-first scheduling) leaves only
+#: short files for the tail. Without ``--no-loadscope-reorder`` xdist hands out the files with the
+#: most tests first and this order has no effect.
 SLOWEST_FILES = (
     "test_multifile.py",
     "test_cli.py",
@@ -58,3 +87,19 @@ def pytest_collection_modifyitems(items):
     """Slowest files first (:data:`SLOWEST_FILES`); the order within a file is kept."""
     rank = {name: i for i, name in enumerate(SLOWEST_FILES)}
     items.sort(key=lambda item: rank.get(item.path.name, len(rank)))
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_teardown(item, nextitem):
+    """After a file's last test (module fixtures torn down), release the compiled programs if the
+    worker holds more than :data:`_RELEASE_AT` memory maps."""
+    yield
+    if _RELEASE_AT is None or (nextitem is not None and nextitem.path == item.path):
+        return
+    if _map_count() > _RELEASE_AT:
+        _release_compiled_programs()
+
+
+def _release_compiled_programs():
+    jax.clear_caches()
+    gc.collect()
