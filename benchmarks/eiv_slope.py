@@ -3,11 +3,16 @@
     python -m benchmarks.eiv_slope                   # defaults below; JSON in benchmarks/results/
     python -m benchmarks.eiv_slope --per 8 --points 500 --foreign 8 --foreign-duration 30
 
-For each recording the dataset is ``to_dataset(recording)`` (smoothed creep with ``slip_sd``) and
-``fit --method lm`` runs twice: with the plain residual ``mu_adh(s, w) − mu_hat``
+For each recording the dataset is that of the samples ``jadhesion fit`` keeps
+(``selected_dataset(recording, "traction")``: smoothed creep with ``slip_sd``; results before
+2026-11-24, ``eiv_slope.json`` and ``eiv_slope_sd2.json``, used every sample) and
+``fit --method lm`` runs once per residual: with the plain residual ``mu_adh(s, w) − mu_hat``
 (:func:`jadhesion.identify.polach_residuals.polach_residual`, the fit before this change) and with the
 errors-in-variables residual ``E[mu_adh] − mu_hat`` over ``w ~ N(slip, slip_sd²)``
-(:func:`jadhesion.identify.polach_residuals.polach_eiv_residual`, now LM's default). Sets:
+(:func:`jadhesion.identify.polach_residuals.polach_eiv_residual`), and with LM's default since
+then, ``lm``: the effective-variance pseudo-Huber residual of its two stages
+(:func:`jadhesion.identify.polach_residuals.polach_lm_residual`; ``plain`` and ``eiv`` ignore the
+second stage's noise scale, so they stay least squares). Sets:
 
 * ``ours/<scenario>/<sensors>``: our simulator, the three paper scenarios, ``--per`` seeds each,
   ``--points`` samples, realistic sensors (and clean ones, where the correction must vanish);
@@ -19,7 +24,8 @@ errors-in-variables residual ``E[mu_adh] − mu_hat`` over ``w ~ N(slip, slip_sd
 ``eiv_sd2`` (``--residuals``) is an experiment: the EIV residual with the slip sd doubled.
 
 Recorded per fit: the initial slope ``(kA + kS)/2`` against the truth (within 25 %?), ``|μ0
-error|``, the MAE of the fitted curve to μ̂, and the wall time of the fit. The JSON records the git
+error|``, the MAE of the fitted curve to μ̂, and the wall time of the fit (with compilation where
+the selected length differs from the previous recording's). The JSON records the git
 commit and every setting.
 """
 
@@ -27,7 +33,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import subprocess
 import sys
 import tempfile
 import time
@@ -38,12 +43,16 @@ import numpy as np
 
 jax.config.update("jax_enable_x64", True)
 
-from jadhesion.data.dataset import to_dataset  # noqa: E402
+from benchmarks.provenance import commit  # noqa: E402
 from jadhesion.data.recording import load_recording  # noqa: E402
 from jadhesion.data.scenarios import SCENARIOS  # noqa: E402
+from jadhesion.data.selected import selected_dataset  # noqa: E402
 from jadhesion.data.simulator import simulate_many  # noqa: E402
 from jadhesion.identify import polach_fit, polach_residuals  # noqa: E402
 from validation.foreign_generator import generate, write  # noqa: E402
+
+#: The samples fitted: ``jadhesion fit``'s default ``--phase``.
+PHASE = "traction"
 
 
 def _inflated(factor):
@@ -61,17 +70,10 @@ def _inflated(factor):
 RESIDUALS = {
     "plain": polach_residuals.polach_residual,
     "eiv": polach_residuals.polach_eiv_residual,
+    "lm": polach_residuals.polach_lm_residual,
     "eiv_sd2": _inflated(2.0),
 }
 NAMES = ("kA", "kS", "mu0", "A", "B")
-
-
-def _commit() -> str:
-    out = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True)
-    dirty = subprocess.run(
-        ["git", "status", "--porcelain", "--untracked-files=no"], capture_output=True, text=True
-    ).stdout.strip()
-    return out.stdout.strip() + ("-dirty" if dirty else "")
 
 
 def fit_with(residual: str, datasets):
@@ -79,7 +81,9 @@ def fit_with(residual: str, datasets):
     polach_fit.LM_RESIDUAL = RESIDUALS[residual]
     jax.clear_caches()
     fits, seconds = [], []
-    for d in datasets:
+    for i, d in enumerate(datasets):
+        if i and d.adhesion.shape != datasets[i - 1].adhesion.shape:
+            jax.clear_caches()  # a new length compiles anew: free the old programs' code memory
         t0 = time.perf_counter()
         f = polach_fit.fit_polach(d, "lm", jax.random.key(0))
         params = np.asarray(f.params)
@@ -108,7 +112,8 @@ def ours(per, points, sensors):
     for name, sc in SCENARIOS.items():
         seeds = list(range(3000, 3000 + per))
         sims = simulate_many(name, seeds, n_samples=points, sensors=sensors)
-        yield f"ours/{name}/{sensors}", [to_dataset(r) for r in sims], [np.asarray(sc.params)] * per
+        datasets = [selected_dataset(r, PHASE)[0] for r in sims]
+        yield f"ours/{name}/{sensors}", datasets, [np.asarray(sc.params)] * per
 
 
 def foreign(n, rate, duration, sensor, profile, tmp):
@@ -116,7 +121,7 @@ def foreign(n, rate, duration, sensor, profile, tmp):
     for seed in range(n):
         rec = generate(seed, effect="none", sensor=sensor, profile=profile, rate_hz=rate, duration_s=duration)
         path = write(rec, Path(tmp) / f"{profile}_{sensor}_{seed}.csv")
-        datasets.append(to_dataset(load_recording(path)))
+        datasets.append(selected_dataset(load_recording(path), PHASE)[0])
         truths.append(np.array([rec.truth["params"][k] for k in NAMES]))
     yield f"foreign/{profile}/{sensor}", datasets, truths
 
@@ -143,10 +148,11 @@ def main(argv=None):
     p.add_argument("--foreign-duration", type=float, default=30.0)
     p.add_argument("--foreign-sensors", default="realistic,mild")
     p.add_argument("--profiles", default="start")
-    p.add_argument("--residuals", default="plain,eiv", help=f"of {', '.join(RESIDUALS)}")
+    p.add_argument("--residuals", default="plain,eiv,lm", help=f"of {', '.join(RESIDUALS)}")
     p.add_argument("--save", default="benchmarks/results/eiv_slope.json")
     args = p.parse_args(argv)
     t_start = time.time()
+    default = polach_fit.LM_RESIDUAL
     sets = []
     sensor_sets = ["realistic"] + (["clean"] if args.clean else [])
     for s in sensor_sets:
@@ -166,9 +172,9 @@ def main(argv=None):
             results[f"{key}/{residual}"] = block
             summary[f"{key}/{residual}"] = summarise(block)
             sys.stderr.write(f"{key}/{residual}: {summary[f'{key}/{residual}']}\n")
-    polach_fit.LM_RESIDUAL = RESIDUALS["eiv"]
+    polach_fit.LM_RESIDUAL = default
     doc = {
-        "commit": _commit(),
+        "commit": commit(),
         "settings": vars(args),
         "summary": summary,
         "results": results,

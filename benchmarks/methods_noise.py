@@ -7,8 +7,10 @@ Sets of clean recordings (no effects): ``ours/<level>`` from our simulator, the 
 scenarios in turn (``clean``: the historical 5e-5 m/s white sensors; a number: that multiple of the
 realistic sensor model of :mod:`jadhesion.data.sensors`; 2000 samples), and ``foreign/<preset>``
 from :mod:`validation.foreign_generator` (walking-pace starts, 30 s at a random 20–200 Hz, written
-to CSV and read back as the CLI does). Each recording goes through the fit's own path
-(:func:`jadhesion.data.dataset.to_dataset`, smoothed creep) and is identified by every method of
+to CSV and read back as the CLI does). Each recording goes through the fit's own path: the samples
+``jadhesion fit`` keeps (:func:`jadhesion.data.selected.selected_dataset`, its default ``--phase
+traction``; smoothed creep) — results before 2026-11-24 (``methods_noise.json`` at 2b3af6b,
+``methods_noise_least_squares.json``) fitted every sample — and is identified by every method of
 the registry (:data:`jadhesion.identify.methods.METHODS`, their defaults, 300 iterations for the
 population methods) and by the posterior as ``jadhesion posterior`` runs it by default (Gaussian
 errors-in-variables likelihood tempered by 1/κ; 32 walkers, ``--steps``; its median).
@@ -39,9 +41,9 @@ jax.config.update("jax_enable_x64", True)
 
 from emcee.autocorr import AutocorrError  # noqa: E402
 
-from benchmarks.coverage_fit import FOREIGN_SD, foreign_starts  # noqa: E402
+from benchmarks.coverage_fit import FOREIGN_SD, PHASE, foreign_starts  # noqa: E402
 from benchmarks.provenance import commit  # noqa: E402
-from jadhesion.data.dataset import to_dataset  # noqa: E402
+from jadhesion.data.selected import selected_dataset  # noqa: E402
 from jadhesion.data.sensors import CLEAN, REALISTIC  # noqa: E402
 from jadhesion.data.simulator import simulate_many  # noqa: E402
 from jadhesion.identify.laplace import colour_check, initial_spread, lm_optimum  # noqa: E402
@@ -87,7 +89,7 @@ def _slope(p) -> float:
 def run_set(recordings, steps: int) -> dict:
     rows = {m: [] for m in (*METHODS, POSTERIOR)}
     for i, (rec, truth) in enumerate(recordings):
-        data = to_dataset(rec)
+        data = selected_dataset(rec, PHASE)[0]
         for m in rows:
             if m == POSTERIOR:
                 t0 = time.perf_counter()
@@ -99,6 +101,7 @@ def run_set(recordings, steps: int) -> dict:
                 p = np.asarray(fit_polach(data, m, jax.random.key(i)).params)
             seconds = time.perf_counter() - t0
             rows[m].append((abs(p[2] - truth[2]), _slope(p) / _slope(truth) - 1.0, seconds))
+        jax.clear_caches()  # each length compiles its own programs: free their code memory (LLVM)
     out = {}
     for m, r in rows.items():
         a = np.array(r)
@@ -147,6 +150,7 @@ def main(argv=None) -> None:
     a = p.parse_args(argv)
     sha = commit()
     settings = {k: getattr(a, k) for k in ("per", "levels", "foreign", "steps")}
+    settings["phase"] = PHASE
     settings["load_average_at_start"] = list(os.getloadavg())
     results = {}
     with tempfile.TemporaryDirectory() as tmp:
