@@ -12,7 +12,8 @@ Every program XLA:CPU compiles holds a few memory maps for as long as JAX's cach
 worker that runs half the suite compiles thousands: one reached 64 031 of Linux's default 65 530
 (``vm.max_map_count``) in a whole-suite run, and in CI a worker died there, in LLVM's section
 allocator. So after any file that leaves the worker above a quarter of the limit, JAX's caches are
-cleared (:func:`_release_compiled_programs`); the largest file adds about 25 000 maps.
+cleared (:func:`_release_compiled_programs`); the largest file adds about 25 000 maps. (The
+serialisation abort above was in test_eiv too, late in a worker's run: likely the same exhaustion.)
 """
 
 import gc
