@@ -15,6 +15,7 @@ import pytest
 from jadhesion import LOCO_22E, polach_adhesion
 from jadhesion.cli import main
 from jadhesion.data.dataset import PolachDataset
+from jadhesion.identify import polach_fit
 from jadhesion.identify.batch_fit import (
     FINE_BUCKETS_FROM,
     SHORT_BUCKET,
@@ -110,7 +111,7 @@ def test_padded_subsample_keeps_the_slip_uncertainty():
     sub, sub_padded = subsample(data), subsample(pad_dataset(data))
     for name in ("creep", "slip", "adhesion", "slip_sd", "creep_sd"):
         np.testing.assert_array_equal(getattr(sub_padded, name), getattr(sub, name), err_msg=name)
-    a = fit_polach(data, "lm", jax.random.key(0))
+    a = fit_polach(data, "lm", jax.random.key(0), pad=False)
     b = fit_polach(pad_dataset(data), "lm", jax.random.key(0))
     np.testing.assert_allclose(b.params, a.params, rtol=1e-12, atol=1e-12)
 
@@ -131,9 +132,26 @@ def test_blocked_linearisation_equals_one_piece_to_round_off():
 def test_weight_of_ones_is_bit_identical_to_no_weight():
     data = _dataset(300, 1)
     ones = data._replace(weight=jnp.ones(300))
-    a = fit_polach(data, "lm", jax.random.key(0))
+    a = fit_polach(data, "lm", jax.random.key(0), pad=False)
     b = fit_polach(ones, "lm", jax.random.key(0))
     assert np.array_equal(a.params, b.params) and float(a.mae) == float(b.mae)
+
+
+def test_fit_polach_compiles_one_program_per_bucket():
+    """A loop of ``fit_polach`` over datasets of many lengths compiles once per length bucket (each
+    program holds ~1000 memory maps: one per length exhausted Linux's limit after ~65 lengths), and
+    each fit is the fit of its own samples (``pad=False``) to round-off."""
+    lengths = (520, 611, 777, 1024)  # one bucket: 1024
+    assert {bucket_length(n) for n in lengths} == {1024}
+    datasets = [_dataset(n, n % 7) for n in lengths]
+    fits, programs = [], []
+    for data in datasets:
+        fits.append(fit_polach(data, "pso", jax.random.key(1), **SMALL))
+        programs.append(polach_fit._fit_one._cache_size())
+    assert programs == [programs[0]] * len(lengths)
+    for data, got in zip(datasets, fits, strict=True):
+        ref = fit_polach(data, "pso", jax.random.key(1), **SMALL, pad=False)
+        assert np.array_equal(got.params, ref.params)
 
 
 @pytest.mark.parametrize("method", ["itlbo", "tlbo", "pso"])
@@ -141,7 +159,7 @@ def test_population_methods_padded_equal_unpadded_bit_for_bit(method):
     key = jax.random.key(3)
     for n, seed in ((60, 0), (300, 1)):
         data = _dataset(n, seed)
-        a = fit_polach(data, method, key, **SMALL)
+        a = fit_polach(data, method, key, **SMALL, pad=False)
         b = fit_polach(pad_dataset(data), method, key, **SMALL)
         assert np.array_equal(a.params, b.params), (method, n)
         assert int(a.iterations) == int(b.iterations) and int(a.status) == int(b.status)
@@ -152,7 +170,7 @@ def test_lm_padded_equals_unpadded_to_round_off():
     key = jax.random.key(0)
     for n, seed, rel in ((300, 1, 1e-12), (700, 2, 1e-12), (60, 0, 1e-6)):
         data = _dataset(n, seed)
-        a = fit_polach(data, "lm", key)
+        a = fit_polach(data, "lm", key, pad=False)
         b = fit_polach(pad_dataset(data), "lm", key)
         np.testing.assert_allclose(b.params, a.params, rtol=rel, atol=rel)
         assert float(b.mae) == pytest.approx(float(a.mae), rel=rel)
