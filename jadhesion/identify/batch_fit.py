@@ -78,10 +78,10 @@ def pad_dataset(data: PolachDataset, length: int | None = None) -> PolachDataset
     extra = length - n
 
     def pad(a):
-        return None if a is None else jnp.asarray(np.pad(np.asarray(a), (0, extra), mode="edge"))
+        return None if a is None else jnp.pad(jnp.asarray(a), (0, extra), mode="edge")
 
     fields = {f: pad(getattr(data, f)) for f in SAMPLE_FIELDS}
-    weight = np.zeros(length, np.asarray(data.adhesion).dtype)
+    weight = np.zeros(length, jnp.result_type(data.adhesion))
     weight[:n] = 1.0
     return data._replace(**fields, weight=jnp.asarray(weight))
 
