@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmarks.provenance import commit
 from jadhesion.data.recording import save_recording
 from jadhesion.data.vehicle import LOCO_22E
 
@@ -60,8 +61,7 @@ def main(argv=None) -> dict:
             seconds, peak_mb = map(float, proc.stdout.split())
             results[name] = {"seconds": seconds, "peak_rss_mb": peak_mb}
         size_mb = path.stat().st_size / 2**20
-    commit = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True).stdout
-    doc = {"commit": commit.strip(), "rows": args.rows, "file_mb": size_mb, "results": results}
+    doc = {"commit": commit(), "rows": args.rows, "file_mb": size_mb, "results": results}
     out = Path(__file__).parent / "results" / "bench_loading.json"
     out.write_text(json.dumps(doc, indent=2) + "\n")
     print(json.dumps(doc, indent=2))

@@ -41,6 +41,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from benchmarks.provenance import commit
+
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "benchmarks" / "results" / "bench_startup.json"
 
@@ -111,19 +113,6 @@ def _breakdown(rec: Path, method: str, env) -> dict:
     return phases, doc["scipy"]
 
 
-def _commit() -> str:
-    try:
-        out = subprocess.run(
-            ["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True, check=True
-        )
-        dirty = subprocess.run(
-            ["git", "status", "--porcelain", "--untracked-files=no"], cwd=ROOT, capture_output=True, text=True
-        ).stdout.strip()
-        return out.stdout.strip() + ("-dirty" if dirty else "")
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
-
-
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=7, help="interleaved rounds (default 7, >= 5)")
@@ -189,7 +178,7 @@ def main(argv=None) -> int:
     cpu_medians = {k: statistics.median(v) for k, v in cpu.items()}
     base = medians["import_jax"]
     doc = {
-        "commit": _commit(),
+        "commit": commit(),
         "settings": {
             "method": args.method,
             "samples": 2000,

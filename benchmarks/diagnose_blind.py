@@ -24,13 +24,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import subprocess
 import sys
 import tempfile
 from pathlib import Path
 
 import numpy as np
 
+from benchmarks.provenance import commit
 from jadhesion.cli.common import Progress, emit_json, table
 from jadhesion.config import enable_compilation_cache, enable_x64
 from jadhesion.diagnose.extensions import NAMES
@@ -46,14 +46,6 @@ TARGET_ACCURACY = 0.9
 MIN_CASES = 5
 #: Mix of the main cases: clean, one effect, two effects.
 P_CLEAN, P_PAIR = 0.15, 0.1
-
-
-def commit() -> str:
-    """``git rev-parse HEAD`` (with ``+dirty`` when the tree has changes)."""
-    root = Path(__file__).resolve().parent.parent
-    head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=root, capture_output=True, text=True).stdout
-    dirty = subprocess.run(["git", "status", "--porcelain"], cwd=root, capture_output=True, text=True).stdout
-    return head.strip() + ("+dirty" if dirty.strip() else "")
 
 
 def draw(rng) -> list:
