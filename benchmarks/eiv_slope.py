@@ -25,8 +25,8 @@ second stage's noise scale, so they stay least squares). Sets:
 
 Recorded per fit: the initial slope ``(kA + kS)/2`` against the truth (within 25 %?), ``|μ0
 error|``, the MAE of the fitted curve to μ̂, and the wall time of the fit (with compilation where
-the selected length differs from the previous recording's). The JSON records the git
-commit and every setting.
+the selected length's bucket differs from the previous recording's; before 1005bff, where
+``fit_polach`` began to pad, its length). The JSON records the git commit and every setting.
 """
 
 from __future__ import annotations
@@ -50,6 +50,7 @@ from jadhesion.data.scenarios import SCENARIOS  # noqa: E402
 from jadhesion.data.selected import selected_dataset  # noqa: E402
 from jadhesion.data.simulator import simulate_many  # noqa: E402
 from jadhesion.identify import polach_fit, polach_residuals  # noqa: E402
+from jadhesion.identify.batch_fit import bucket_length  # noqa: E402
 from validation.foreign_generator import generate, write  # noqa: E402
 
 
@@ -80,8 +81,8 @@ def fit_with(residual: str, datasets):
     jax.clear_caches()
     fits, seconds = [], []
     for i, d in enumerate(datasets):
-        if i and d.adhesion.shape != datasets[i - 1].adhesion.shape:
-            jax.clear_caches()  # a new length compiles anew: free the old programs' code memory
+        if i and bucket_length(d.adhesion.shape[-1]) != bucket_length(datasets[i - 1].adhesion.shape[-1]):
+            jax.clear_caches()  # a new length bucket compiles anew: free the old programs' code memory
         t0 = time.perf_counter()
         f = polach_fit.fit_polach(d, "lm", jax.random.key(0))
         params = np.asarray(f.params)

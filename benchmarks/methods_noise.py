@@ -101,7 +101,7 @@ def run_set(recordings, steps: int) -> dict:
                 p = np.asarray(fit_polach(data, m, jax.random.key(i)).params)
             seconds = time.perf_counter() - t0
             rows[m].append((abs(p[2] - truth[2]), _slope(p) / _slope(truth) - 1.0, seconds))
-        jax.clear_caches()  # each length compiles its own programs: free their code memory (LLVM)
+        jax.clear_caches()  # the smoother and posterior compile per length: free their code memory (LLVM)
     out = {}
     for m, r in rows.items():
         a = np.array(r)
