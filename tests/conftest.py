@@ -12,11 +12,11 @@ Every program XLA:CPU compiles holds a few memory maps for as long as JAX's cach
 worker that runs half the suite compiles thousands: one reached 64 031 of Linux's default 65 530
 (``vm.max_map_count``) in a whole-suite run, and in CI a worker died there, in LLVM's section
 allocator. So after any file that leaves the worker above a quarter of the limit, JAX's caches are
-cleared (:func:`_release_compiled_programs`); the largest file adds about 25 000 maps. (The
+cleared (:func:`jadhesion.memory_maps.release_if_near_limit`); the largest file adds about 25 000
+maps. (The
 serialisation abort above was in test_eiv too, late in a worker's run: likely the same exhaustion.)
 """
 
-import gc
 import os
 import tempfile
 
@@ -24,30 +24,15 @@ import jax
 import pytest
 from jax.experimental.compilation_cache import compilation_cache
 
+from jadhesion.memory_maps import release_if_near_limit
+
 os.environ.setdefault("JADHESION_CACHE", tempfile.mkdtemp(prefix="jadhesion-test-cache-"))
 jax.config.update("jax_enable_x64", True)
 jax.config.update("jax_numpy_rank_promotion", "raise")
 
 
-_MAPS = "/proc/self/maps"
-_MAP_LIMIT = "/proc/sys/vm/max_map_count"
-
-
-def _map_count() -> int:
-    with open(_MAPS) as maps:
-        return sum(1 for _ in maps)
-
-
-def _release_threshold() -> int | None:
-    """A quarter of the kernel's memory-map limit per process; None where there is no such limit."""
-    try:
-        with open(_MAP_LIMIT) as limit:
-            return int(limit.read()) // 4
-    except OSError:
-        return None
-
-
-_RELEASE_AT = _release_threshold()
+#: Share of the kernel's memory-map limit above which a worker releases its compiled programs.
+_RELEASE_SHARE = 0.25
 
 _CACHE_DIR = jax.config.jax_compilation_cache_dir  # off (None) unless the environment sets one
 
@@ -93,14 +78,7 @@ def pytest_collection_modifyitems(items):
 @pytest.hookimpl(hookwrapper=True)
 def pytest_runtest_teardown(item, nextitem):
     """After a file's last test (module fixtures torn down), release the compiled programs if the
-    worker holds more than :data:`_RELEASE_AT` memory maps."""
+    worker holds more than :data:`_RELEASE_SHARE` of the memory-map limit."""
     yield
-    if _RELEASE_AT is None or (nextitem is not None and nextitem.path == item.path):
-        return
-    if _map_count() > _RELEASE_AT:
-        _release_compiled_programs()
-
-
-def _release_compiled_programs():
-    jax.clear_caches()
-    gc.collect()
+    if nextitem is None or nextitem.path != item.path:
+        release_if_near_limit(_RELEASE_SHARE)

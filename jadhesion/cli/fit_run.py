@@ -22,6 +22,7 @@ from ..identify.batch_fit import fit_datasets
 from ..identify.kiencke_fit import fit_document, fit_kiencke
 from ..identify.polach_fit import MIN_SAMPLES, RECOMMENDED_SAMPLES, require_samples, scaled
 from ..identify.trust import fit_report
+from ..memory_maps import release_if_near_limit
 from ..models.polach import PARAM_NAMES
 from ..status import status_of
 from .common import UserError, emit_json, require_at_least, table
@@ -78,6 +79,7 @@ def _load(args, path):
         )
     _, dataset, selection = load_dataset(args, path, to_dataset, recording=recording)
     require_samples(dataset, str(path))
+    release_if_near_limit()  # each length compiles its own observer and smoother
     return dataset, selection
 
 
@@ -116,6 +118,7 @@ def _polach_doc(args, dataset, fit, seconds) -> dict:
     """One file's document (``fit.mae``/``sse`` over its own samples; the trust block from the
     unpadded dataset)."""
     status = status_of(fit.status)
+    release_if_near_limit()  # each length compiles its own trust block
     return {
         "model": "polach",
         "method": args.method,
