@@ -27,8 +27,10 @@ from jadhesion.identify.batch_fit import (
     valid_samples,
 )
 from jadhesion.identify.box_lm import box_lm
-from jadhesion.identify.polach_fit import LM_RESIDUAL, SEED_SAMPLES, fit_polach, subsample
+from jadhesion.identify.polach_fit import LM_RESIDUAL, SEED_SAMPLES, fit_polach, scaled, subsample
 from jadhesion.identify.polach_residuals import polach_mae
+from jadhesion.identify.trust import fit_report, trust_numbers
+from jadhesion.models.polach import PARAM_NAMES
 
 THETA = np.array([0.43, 0.6, 0.36, 0.36, 0.13])
 SMALL = {"pop_size": 8, "max_iter": 25}  # population budgets: equality, not accuracy, is tested
@@ -152,6 +154,24 @@ def test_fit_polach_compiles_one_program_per_bucket():
     for data, got in zip(datasets, fits, strict=True):
         ref = fit_polach(data, "pso", jax.random.key(1), **SMALL, pad=False)
         assert np.array_equal(got.params, ref.params)
+
+
+def test_trust_block_is_computed_padded_and_equals_the_unpadded_one():
+    """``fit_report`` computes the covariance on the dataset padded to its bucket (one program per
+    bucket): the same standard errors to round-off and the same HAC bandwidth as on its own
+    samples; padding rows count in neither the degrees of freedom nor the bandwidth."""
+    data = _uncertain(700, 2)
+    fit = fit_polach(data, "lm", jax.random.key(0))
+    report = fit_report(data, fit)
+    cov, lags = trust_numbers(fit.params, scaled(data, fit))  # unpadded, directly
+    assert report["hac_lags"] == int(lags)
+    for i, name in enumerate(PARAM_NAMES):
+        se = report["uncertainty"][name]["stderr"]
+        if se is not None and np.isfinite(se):
+            assert se == pytest.approx(float(np.sqrt(cov[i, i])), rel=1e-9), name
+    before = trust_numbers._cache_size()
+    fit_report(_uncertain(800, 3), fit_polach(_uncertain(800, 3), "lm", jax.random.key(0)))
+    assert trust_numbers._cache_size() == before  # 800 rows: the same 1024-row program
 
 
 @pytest.mark.parametrize("method", ["itlbo", "tlbo", "pso"])

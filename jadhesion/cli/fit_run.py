@@ -18,7 +18,7 @@ import numpy as np
 
 from ..atomic import atomic_write
 from ..data.formats import MAT_SUFFIXES, PARQUET_SUFFIXES
-from ..identify.batch_fit import fit_datasets
+from ..identify.batch_fit import fit_datasets, pad_dataset
 from ..identify.kiencke_fit import fit_document, fit_kiencke
 from ..identify.polach_fit import MIN_SAMPLES, RECOMMENDED_SAMPLES, require_samples, scaled
 from ..identify.trust import fit_report
@@ -79,7 +79,7 @@ def _load(args, path):
         )
     _, dataset, selection = load_dataset(args, path, to_dataset, recording=recording)
     require_samples(dataset, str(path))
-    release_if_near_limit()  # each length compiles its own observer and smoother
+    release_if_near_limit()  # each length compiles its own observer and smoother (fits: per bucket)
     return dataset, selection
 
 
@@ -118,7 +118,6 @@ def _polach_doc(args, dataset, fit, seconds) -> dict:
     """One file's document (``fit.mae``/``sse`` over its own samples; the trust block from the
     unpadded dataset)."""
     status = status_of(fit.status)
-    release_if_near_limit()  # each length compiles its own trust block
     return {
         "model": "polach",
         "method": args.method,
@@ -131,7 +130,8 @@ def _polach_doc(args, dataset, fit, seconds) -> dict:
         "converged": status.converged,
         # LM's robust sd of mu_hat about the curve (its standardised residual's scale); None else
         "noise_scale": None if fit.residual_scale is None else float(fit.residual_scale),
-        **fit_report(dataset, fit, numbers=trust_numbers(fit.params, scaled(dataset, fit))),
+        # padded to its length bucket, as the fit: one trust program per bucket
+        **fit_report(dataset, fit, numbers=trust_numbers(fit.params, scaled(pad_dataset(dataset), fit))),
     }
 
 

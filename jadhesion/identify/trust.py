@@ -33,6 +33,7 @@ import numpy as np
 
 from ..models.polach import PARAM_NAMES
 from ..status import status_of
+from .batch_fit import pad_dataset, valid_samples
 from .polach_fit import LM_RESIDUAL, RECOMMENDED_SAMPLES, scaled
 from .uncertainty import Z95, correlation, covariance
 
@@ -58,15 +59,22 @@ def trust_numbers(params, data):
     Jacobian over every row, one compiled program)."""
     r = LM_RESIDUAL(params, data)
     jac = jax.jacfwd(LM_RESIDUAL)(params, data)
-    return covariance(jac, r)  # bound parameters stay free (module docstring)
+    return covariance(jac, r, weight=data.weight)  # bound parameters stay free (module docstring)
 
 
 def fit_report(data, fit, numbers=None) -> dict:
     """The trust block of a fit of ``data`` (see the module docstring); ``numbers``:
-    :func:`trust_numbers` of it when already computed (the command line's kept program)."""
+    :func:`trust_numbers` of it when already computed (the command line's kept program), else
+    computed on ``data`` padded to its length bucket (:func:`.batch_fit.pad_dataset`, as
+    :func:`.polach_fit.fit_polach` pads: one compiled program per bucket, the same numbers to
+    round-off)."""
     theta = np.asarray(fit.params, float)
     fixed = held_fixed(theta)
-    cov, lags = trust_numbers(fit.params, scaled(data, fit)) if numbers is None else numbers
+    if numbers is None:  # padded to its length bucket: one compiled program per bucket
+        numbers = trust_numbers(
+            fit.params, scaled(data if data.weight is not None else pad_dataset(data), fit)
+        )
+    cov, lags = numbers
     cov = np.asarray(cov)
     sd = np.sqrt(np.diag(cov))
     uncertainty, warnings = {}, []
@@ -113,7 +121,7 @@ def fit_report(data, fit, numbers=None) -> dict:
                 (f"the solver stopped with status {status.label}: the parameters may not be a minimum"),
             )
         )
-    n = int(data.adhesion.shape[-1])
+    n = valid_samples(data)
     if n < RECOMMENDED_SAMPLES:
         warnings.append(
             _warning(

@@ -42,9 +42,10 @@ def lag1_autocorrelation(r):
     return jnp.sum(r[1:] * r[:-1]) / jnp.maximum(jnp.sum(r * r), jnp.finfo(r.dtype).tiny)
 
 
-def bandwidth(r):
-    """Newey–West lag truncation ``L`` from the residuals (Andrews' AR(1) plug-in, see above)."""
-    n = r.shape[0]
+def bandwidth(r, n=None):
+    """Newey–West lag truncation ``L`` from the residuals (Andrews' AR(1) plug-in, see above);
+    ``n`` the number of samples that count (default all; padding rows are zero residuals)."""
+    n = r.shape[0] if n is None else n
     rho = jnp.clip(lag1_autocorrelation(r), -0.97, 0.97)
     alpha = 4 * rho**2 / ((1 - rho) ** 2 * (1 + rho) ** 2)
     return jnp.minimum(jnp.ceil(1.1447 * (alpha * n) ** (1.0 / 3.0)), n - 1)
@@ -62,11 +63,14 @@ def _long_run(g, lags):
 
 
 @functools.partial(jax.jit, static_argnames=("hac",))
-def covariance(jac, r, fixed=None, hac=True):
+def covariance(jac, r, fixed=None, hac=True, weight=None):
     """Covariance (d, d) of the least-squares parameters from ``jac`` (n, d) and ``r`` (n,);
     ``fixed`` (d,) bool leaves parameters out (``nan``); ``hac`` selects the sandwich (else
-    i.i.d.). Returns ``(cov, lags)`` — ``lags`` the bandwidth used (0 for i.i.d.)."""
-    n, d = jac.shape
+    i.i.d.); ``weight`` (n,) a padding mask (0 on padded rows, whose ``jac`` and ``r`` must be 0):
+    only its nonzero rows count in ``n``. Returns ``(cov, lags)`` — ``lags`` the bandwidth used
+    (0 for i.i.d.)."""
+    d = jac.shape[1]
+    n = jac.shape[0] if weight is None else jnp.sum(weight > 0)
     fixed = jnp.zeros(d, bool) if fixed is None else fixed
     jac = jnp.where(fixed[None], 0.0, jac)
     scale = jnp.sqrt(jnp.sum(jac * jac, axis=0))
@@ -77,7 +81,7 @@ def covariance(jac, r, fixed=None, hac=True):
     pinv = ((vt.T * inv2[None]) @ vt) / scale[:, None] / scale[None, :]  # (JᵀJ)⁺
     dof = jnp.maximum(n - jnp.sum(~fixed), 1)
     if hac:
-        lags = bandwidth(r)
+        lags = bandwidth(r, n)
         meat = _long_run(jac * r[:, None], lags)
         cov = (n / dof) * pinv @ meat @ pinv
     else:
