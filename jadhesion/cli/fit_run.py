@@ -18,7 +18,7 @@ import numpy as np
 
 from ..atomic import atomic_write
 from ..data.formats import MAT_SUFFIXES, PARQUET_SUFFIXES
-from ..identify.batch_fit import fit_datasets, pad_dataset
+from ..identify.batch_fit import bucketed, fit_datasets
 from ..identify.kiencke_fit import fit_document, fit_kiencke
 from ..identify.polach_fit import MIN_SAMPLES, RECOMMENDED_SAMPLES, require_samples, scaled
 from ..identify.trust import fit_report
@@ -131,7 +131,7 @@ def _polach_doc(args, dataset, fit, seconds) -> dict:
         # LM's robust sd of mu_hat about the curve (its standardised residual's scale); None else
         "noise_scale": None if fit.residual_scale is None else float(fit.residual_scale),
         # padded to its length bucket, as the fit: one trust program per bucket
-        **fit_report(dataset, fit, numbers=trust_numbers(fit.params, scaled(pad_dataset(dataset), fit))),
+        **fit_report(dataset, fit, numbers=trust_numbers(fit.params, scaled(bucketed(dataset), fit))),
     }
 
 

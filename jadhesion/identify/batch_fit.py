@@ -86,6 +86,13 @@ def pad_dataset(data: PolachDataset, length: int | None = None) -> PolachDataset
     return data._replace(**fields, weight=jnp.asarray(weight))
 
 
+def bucketed(data: PolachDataset) -> PolachDataset:
+    """``data`` padded to its length bucket (:func:`pad_dataset`), or as it is when it has a
+    ``weight`` (padded already): what the fit and its trust block compute on, one compiled program
+    per bucket."""
+    return data if data.weight is not None else pad_dataset(data)
+
+
 def valid_samples(data: PolachDataset) -> int:
     """Samples that count: all of them, or the mask's ones."""
     if data.weight is None:

@@ -23,7 +23,7 @@ import numpy as np
 
 from ..data.dataset import PolachDataset
 from ..errors import InputError
-from .batch_fit import pad_dataset
+from .batch_fit import bucketed
 from .driver import STALL_FTOL, run_until
 from .lm import best_of, box_lm_queue, global_lm, seed_starts
 from .methods import NAMES as METHODS
@@ -315,16 +315,16 @@ def fit_polach(
     do not apply to LM (see :data:`LM_POP`: the best 4 of 64 random points, scored on at most 128
     samples, seed projected LM there; the best is polished on all samples).
 
-    ``pad``: fit the dataset padded to its length bucket (:func:`.batch_fit.pad_dataset`, unless it
-    has a ``weight`` already): the same problem, the same answer (population methods bit for bit,
+    ``pad``: fit the dataset padded to its length bucket (:func:`.batch_fit.bucketed`; as it is
+    when it has a ``weight`` already): the same problem, the same answer (population methods bit for bit,
     LM to round-off), and one compiled program for every length of a bucket, so a loop over
     recordings of many lengths compiles a few programs instead of one per length (each holds about
     a thousand of the process's memory maps; tens of thousands exhaust Linux's default limit and
     abort the process). ``pad=False`` fits the samples as given.
     """
     _check(method, dataset, pop_size, max_iter, target)
-    if pad and dataset.weight is None:
-        dataset = pad_dataset(dataset)
+    if pad:
+        dataset = bucketed(dataset)
     target_ = jnp.asarray(0.0 if target is None else target, dataset.adhesion.dtype)
     return _fit_one(method, pop_size, max_iter, target is not None, dataset, key, target_)
 

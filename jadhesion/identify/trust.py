@@ -33,7 +33,7 @@ import numpy as np
 
 from ..models.polach import PARAM_NAMES
 from ..status import status_of
-from .batch_fit import pad_dataset, valid_samples
+from .batch_fit import bucketed, valid_samples
 from .polach_fit import LM_RESIDUAL, RECOMMENDED_SAMPLES, scaled
 from .uncertainty import Z95, correlation, covariance
 
@@ -65,16 +65,12 @@ def trust_numbers(params, data):
 def fit_report(data, fit, numbers=None) -> dict:
     """The trust block of a fit of ``data`` (see the module docstring); ``numbers``:
     :func:`trust_numbers` of it when already computed (the command line's kept program), else
-    computed on ``data`` padded to its length bucket (:func:`.batch_fit.pad_dataset`, as
+    computed on ``data`` padded to its length bucket (:func:`.batch_fit.bucketed`, as
     :func:`.polach_fit.fit_polach` pads: one compiled program per bucket, the same numbers to
     round-off)."""
     theta = np.asarray(fit.params, float)
     fixed = held_fixed(theta)
-    if numbers is None:  # padded to its length bucket: one compiled program per bucket
-        numbers = trust_numbers(
-            fit.params, scaled(data if data.weight is not None else pad_dataset(data), fit)
-        )
-    cov, lags = numbers
+    cov, lags = trust_numbers(fit.params, scaled(bucketed(data), fit)) if numbers is None else numbers
     cov = np.asarray(cov)
     sd = np.sqrt(np.diag(cov))
     uncertainty, warnings = {}, []
