@@ -13,8 +13,8 @@ worker that runs half the suite compiles thousands: one reached 64 031 of Linux'
 (``vm.max_map_count``) in a whole-suite run, and in CI a worker died there, in LLVM's section
 allocator. So after any file that leaves the worker above a quarter of the limit, JAX's caches are
 cleared (:func:`jadhesion.memory_maps.release_if_near_limit`); the largest file adds about 25 000
-maps. (The
-serialisation abort above was in test_eiv too, late in a worker's run: likely the same exhaustion.)
+maps. (The serialisation abort above was in test_eiv too, late in a worker's run: likely the same
+exhaustion.)
 """
 
 import os

@@ -12,7 +12,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jadhesion import LOCO_22E, polach_adhesion
+from jadhesion import LOCO_22E, memory_maps, polach_adhesion
 from jadhesion.cli import main
 from jadhesion.data.dataset import PolachDataset
 from jadhesion.identify import polach_fit
@@ -30,6 +30,7 @@ from jadhesion.identify.box_lm import box_lm
 from jadhesion.identify.polach_fit import LM_RESIDUAL, SEED_SAMPLES, fit_polach, scaled, subsample
 from jadhesion.identify.polach_residuals import polach_mae
 from jadhesion.identify.trust import fit_report, trust_numbers
+from jadhesion.memory_maps import map_count, map_limit
 from jadhesion.models.polach import PARAM_NAMES
 
 THETA = np.array([0.43, 0.6, 0.36, 0.36, 0.13])
@@ -219,6 +220,30 @@ def _fit(capsys, *argv):
     code = main(["fit", *map(str, argv)])
     out = capsys.readouterr()
     return code, out.out, out.err
+
+
+@pytest.mark.skipif(map_count() is None or map_limit() is None, reason="no /proc memory-map accounting")
+def test_many_files_releasing_compiled_programs_after_each_give_the_same_results(files, capsys, monkeypatch):
+    """``jadhesion fit DIR`` releases the compiled programs between files when the process nears
+    the memory-map limit (:func:`jadhesion.memory_maps.release_if_near_limit`); the fits compiled
+    again after a release are the same."""
+    folder = files[0].parent
+
+    def fits():
+        assert main(["fit", str(folder), "--method", "lm", "--json"]) == 0
+        docs = json.loads(capsys.readouterr().out)["fits"]
+        return [{k: f[k] for k in ("params", "mae", "status", "uncertainty")} for f in docs]
+
+    calls = []
+    release = memory_maps.release_if_near_limit
+    monkeypatch.setattr("jadhesion.cli.fit_run.release_if_near_limit", lambda: calls.append(release()))
+    kept = fits()
+    assert len(calls) == len(files) and not any(calls)  # far below the limit: nothing released
+    calls.clear()
+    monkeypatch.setattr(memory_maps, "map_limit", lambda: 1)  # every check is "near the limit"
+    released = fits()
+    assert len(calls) == len(files) and all(calls)  # after each file's load
+    assert released == kept
 
 
 @pytest.mark.parametrize("method", ["lm", "pso"])
