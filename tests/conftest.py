@@ -1,7 +1,8 @@
 """Strict test settings: float64, no silent rank promotion, fixed keys (see STYLE.md §7).
 
 The tests need nothing outside the repository (reference data is vendored in ``validation/data``) and
-write nothing to the user's home: the CLI's compilation cache goes to a temporary folder.
+write nothing to the user's home: the CLI's compilation cache goes to a temporary folder, removed
+when the process that made it exits.
 
 The CLI turns JAX's persistent compilation cache on for its process (``enable_compilation_cache``).
 Tests that call it in-process would leave it on for every later test of that worker, so every test
@@ -17,7 +18,9 @@ maps. (The serialisation abort above was in test_eiv too, late in a worker's run
 exhaustion.)
 """
 
+import atexit
 import os
+import shutil
 import tempfile
 
 import jax
@@ -26,7 +29,9 @@ from jax.experimental.compilation_cache import compilation_cache
 
 from jadhesion.memory_maps import release_if_near_limit
 
-os.environ.setdefault("JADHESION_CACHE", tempfile.mkdtemp(prefix="jadhesion-test-cache-"))
+if "JADHESION_CACHE" not in os.environ:  # xdist workers and the CLI's subprocesses inherit it
+    os.environ["JADHESION_CACHE"] = tempfile.mkdtemp(prefix="jadhesion-test-cache-")
+    atexit.register(shutil.rmtree, os.environ["JADHESION_CACHE"], ignore_errors=True)
 jax.config.update("jax_enable_x64", True)
 jax.config.update("jax_numpy_rank_promotion", "raise")
 
