@@ -45,12 +45,12 @@ jax.config.update("jax_enable_x64", True)
 
 from benchmarks.coverage_fit import PHASE  # noqa: E402
 from benchmarks.provenance import commit  # noqa: E402
+from jadhesion.data.length_buckets import bucket_length  # noqa: E402
 from jadhesion.data.recording import load_recording  # noqa: E402
 from jadhesion.data.scenarios import SCENARIOS  # noqa: E402
 from jadhesion.data.selected import selected_dataset  # noqa: E402
 from jadhesion.data.simulator import simulate_many  # noqa: E402
 from jadhesion.identify import polach_fit, polach_residuals  # noqa: E402
-from jadhesion.identify.batch_fit import bucket_length  # noqa: E402
 from validation.foreign_generator import generate, write  # noqa: E402
 
 

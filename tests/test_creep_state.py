@@ -8,7 +8,7 @@ import pytest
 
 from jadhesion.data import creep_state
 from jadhesion.data.creep_state import difference_sd, smooth_creep, smooth_recording
-from jadhesion.data.dataset import to_dataset
+from jadhesion.data.dataset import RAW_SIGNALS, Signals, to_dataset
 from jadhesion.data.sensors import SensorModel
 from jadhesion.data.simulator import simulate
 from jadhesion.data.vehicle import LOCO_22E
@@ -107,7 +107,7 @@ def test_elementwise_filter_and_backward_pass_equal_the_textbook_ones():
 
     @jax.jit
     def fast(q):
-        stored, ll = creep_state._filter(jnp.asarray(y), jnp.diff(t), jnp.asarray(r), q)
+        stored, ll = creep_state._filter(jnp.asarray(y), jnp.diff(t), jnp.asarray(r), q, jnp.ones(len(t)))
         return ll, creep_state._smooth(stored, jnp.diff(t))
 
     for q in ((1e-8, 1e-1), (1e-3, 1e-6), (10.0, 1e3)):
@@ -131,3 +131,44 @@ def test_to_dataset_smoothed_default_and_raw_option():
     assert jax.vmap(lambda d: jnp.sum(d.creep))(stacked).shape == (2,)
     with pytest.raises(ValueError):
         to_dataset(result, creep="kalman")
+
+
+def test_end_padding_leaves_the_recorded_samples_estimates_bit_for_bit():
+    """Padding after the last sample (the last row repeated, mask 0: how recordings of different
+    lengths share one compiled program) changes no estimate of the recorded samples, not even in
+    the last bit — noise levels, likelihood grid, filter and smoother all skip it — and the padded
+    rows stay finite."""
+    sig = _signals(300, jax.random.PRNGKey(7), jitter=True)
+    ref = _smooth(sig)
+    veh = LOCO_22E
+    valid = (jnp.arange(512) < 300).astype(float)
+    got = smooth_creep(
+        *(jnp.pad(a, (0, 212), mode="edge") for a in sig),
+        veh.wheelset_inertia_kgm2,
+        veh.wheel_radius_m,
+        veh.axle_load_kg,
+        valid,
+    )
+    for name, want in ref._asdict().items():
+        have = np.asarray(getattr(got, name))
+        assert np.isfinite(have).all(), name
+        have = have[:300] if have.shape[:1] == (512,) else have
+        np.testing.assert_array_equal(have, np.asarray(want), err_msg=name)
+
+
+def test_to_dataset_runs_at_its_length_bucket_with_the_same_values():
+    """``to_dataset`` pads the raw signals to their length bucket and cuts the dataset back: the
+    same values as unpadded, and a second length of the bucket (400 and 350 rows: 512) compiles
+    no new smoother."""
+    result = simulate("dry", 2, n_samples=400)
+    padded, plain = to_dataset(result), to_dataset(result, pad=False)
+    for name, want in plain._asdict().items():
+        have = getattr(padded, name)
+        assert (have is None) == (want is None), name
+        if want is not None:
+            np.testing.assert_array_equal(np.asarray(have), np.asarray(want), err_msg=name)
+    shorter = Signals({c: np.asarray(result.columns[c])[:350] for c in RAW_SIGNALS}, result.vehicle)
+    compiled = smooth_creep._cache_size()
+    data = to_dataset(shorter)
+    assert smooth_creep._cache_size() == compiled and data.creep.shape == (350,)
+    np.testing.assert_array_equal(np.asarray(data.creep), np.asarray(to_dataset(shorter, pad=False).creep))

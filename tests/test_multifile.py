@@ -15,11 +15,9 @@ import pytest
 from jadhesion import LOCO_22E, memory_maps, polach_adhesion
 from jadhesion.cli import main
 from jadhesion.data.dataset import PolachDataset
+from jadhesion.data.length_buckets import FINE_BUCKETS_FROM, SHORT_BUCKET, bucket_length
 from jadhesion.identify import polach_fit
 from jadhesion.identify.batch_fit import (
-    FINE_BUCKETS_FROM,
-    SHORT_BUCKET,
-    bucket_length,
     buckets,
     fit_datasets,
     fit_datasets_vmapped,

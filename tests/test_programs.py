@@ -164,7 +164,7 @@ def test_remembered_value_is_the_computed_one(tmp_path):
     assert cache.remember("k", {"v": 1}, lambda: 2.5) == 2.5
 
 
-def _raw_recording(tmp_path, n=400, seed=0):
+def _raw_recording(tmp_path, n=400, seed=0, name="raw.csv"):
     """A recording of the four raw signals (numbers only, no simulator)."""
     rng = np.random.default_rng(seed)
     t = np.arange(n) * 0.02
@@ -175,19 +175,22 @@ def _raw_recording(tmp_path, n=400, seed=0):
         save_recording(
             {"time": t, "vehicle_speed": v, "wheel_speed": v + slip, "traction_torque": torque},
             LOCO_22E,
-            tmp_path / "raw.csv",
+            tmp_path / name,
         )
     )
 
 
 def test_dataset_and_trust_programs_equal_library_bit_for_bit(programs, tmp_path):
     """Observer + creep smoother and the trust block's covariance as kept programs: miss, hit and
-    the library give the same numbers bit for bit."""
+    the library give the same numbers bit for bit; two lengths of one bucket (400 and 300 rows:
+    512) keep one dataset program."""
     recording = _raw_recording(tmp_path)
     ref = to_dataset(recording)
     for _ in range(2):  # miss (exported), then hit (deserialised)
         got = fit_program.to_dataset(recording)
         _assert_same(got, ref)
+    shorter = _raw_recording(tmp_path, n=300, seed=1, name="shorter.csv")
+    _assert_same(fit_program.to_dataset(shorter), to_dataset(shorter, pad=False))
     assert len(list(programs.directory.glob("polach_dataset-*.jaxexport"))) == 1
     params = jnp.asarray([0.4, 1.0, 0.35, 0.3, 0.2])  # kS on its bound: held fixed
     ref_cov, ref_lags = trust_numbers(params, ref)

@@ -3,14 +3,14 @@
 Three programs, each exported once (``jax.export``) and kept in the program cache
 (:func:`jadhesion.config.program_cache_dir`, :mod:`jadhesion.programs`) under its shapes, options
 and code: ``polach_dataset`` (observer, kinematics and Kalman/RTS creep smoother of a recording's
-raw signals: :func:`to_dataset`), ``polach_fit`` (the fit of a padded dataset: :func:`fit_polach`)
-and ``polach_trust`` (the Jacobian of LM's residual over every row and the HAC covariance:
-:func:`trust_numbers`). Each is a drop-in for its library function with the same results, bit for
-bit. A process that finds them deserialises and calls them, with the compiled executables from
-the persistent compilation cache: it traces and lowers nothing, and imports no optimistix or
-equinox (the fit's LM is the projected LM of :mod:`jadhesion.identify.box_lm`). On a miss the
-library function is exported, kept and called (so its compilation lands in the compilation cache
-under the key a later process looks up). The vehicle's gradient constant ``k_eps`` — about a
+raw signals padded to their length bucket: :func:`to_dataset`), ``polach_fit`` (the fit of a padded
+dataset: :func:`fit_polach`) and ``polach_trust`` (the Jacobian of LM's residual over every row and
+the HAC covariance: :func:`trust_numbers`). Each is a drop-in for its library function with the same
+results, bit for bit. A process that finds them deserialises and calls them, with the compiled
+executables from the persistent compilation cache: it traces and lowers nothing, and imports no
+optimistix or equinox (the fit's LM is the projected LM of :mod:`jadhesion.identify.box_lm`). On a
+miss the library function is exported, kept and called (so its compilation lands in the compilation
+cache under the key a later process looks up). The vehicle's gradient constant ``k_eps`` — about a
 second of eager JAX operations in a new process — is remembered as the value it computed.
 
 ``JADHESION_PROGRAMS=0`` in the environment turns all of this off: the library is called and
@@ -24,7 +24,6 @@ import dataclasses
 import functools
 import os
 import types
-from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -32,6 +31,7 @@ import numpy as np
 
 from ..config import program_cache_dir
 from ..data import dataset as _dataset
+from ..data.length_buckets import bucket_length
 from ..programs import ProgramCache, code_key
 
 #: jadhesion sources that define the exported fit, and the libraries it is built from.
@@ -72,22 +72,15 @@ def _cache() -> ProgramCache:
 VEHICLE_FIELDS = ("wheelset_inertia_kgm2", "wheel_radius_m", "axle_load_kg", "observer_time_constant_s")
 
 
-class _Signals(NamedTuple):
-    """What :func:`jadhesion.data.dataset.to_dataset` reads of a recording with the raw signals:
-    their columns and the vehicle's numbers (a namespace of :data:`VEHICLE_FIELDS`)."""
-
-    columns: dict
-    vehicle: object
-
-
 def _dataset_program(observer_variant, creep):
-    """The function kept as program ``polach_dataset``: ``(raw signals, vehicle numbers, k_eps)
-    -> dataset dict`` (observer, kinematics and creep smoother). The vehicle's numbers are
-    arguments, as in the library's calls, so that the compiled arithmetic is the same."""
+    """The function kept as program ``polach_dataset``: ``(raw signals padded to their length
+    bucket, vehicle numbers, k_eps, mask of the real rows) -> dataset dict`` (observer, kinematics
+    and creep smoother). The vehicle's numbers are arguments, as in the library's calls, so that
+    the compiled arithmetic is the same."""
 
-    def program(columns, vehicle, k_eps):
-        signals = _Signals(columns, types.SimpleNamespace(**vehicle))
-        return _dataset.to_dataset(signals, observer_variant, creep, k_eps=k_eps)._asdict()
+    def program(columns, vehicle, k_eps, valid):
+        signals = _dataset.Signals(columns, types.SimpleNamespace(**vehicle))
+        return _dataset.to_dataset(signals, observer_variant, creep, k_eps=k_eps, valid=valid)._asdict()
 
     return program
 
@@ -95,8 +88,9 @@ def _dataset_program(observer_variant, creep):
 def to_dataset(recording, observer_variant: str = "paper", creep: str = "smoothed"):
     """:func:`jadhesion.data.dataset.to_dataset` with ``k_eps`` remembered across processes
     (keyed on every vehicle field and the sources of ``k_eps``) and, for a recording with the raw
-    signals, the observer and the creep smoother run as a kept program (keyed on the length and
-    the options); the same dataset bit for bit."""
+    signals, the observer and the creep smoother run as a kept program (keyed on the length bucket,
+    :func:`jadhesion.data.length_buckets.bucket_length`, and the options); the same dataset bit for
+    bit."""
     vehicle = recording.vehicle
     if not _enabled():
         return _dataset.to_dataset(recording, observer_variant, creep)
@@ -104,16 +98,14 @@ def to_dataset(recording, observer_variant: str = "paper", creep: str = "smoothe
     k_eps = _cache().remember("k_eps", key, vehicle.k_eps)
     if _dataset.adhesion_source(recording) == "column":  # a fitting dataset: a few array operations
         return _dataset.to_dataset(recording, observer_variant, creep, k_eps=k_eps)
-    args = (
-        {c: np.asarray(recording.columns[c]) for c in _dataset.RAW_SIGNALS},
-        {f: np.asarray(getattr(vehicle, f)) for f in VEHICLE_FIELDS},
-        np.asarray(k_eps),
-    )
+    n = len(recording.columns["time"])
+    columns, valid = _dataset.padded_signals(recording.columns, bucket_length(n))
+    args = (columns, {f: np.asarray(getattr(vehicle, f)) for f in VEHICLE_FIELDS}, np.asarray(k_eps), valid)
     static = {"observer_variant": observer_variant, "creep": creep}
     make = functools.partial(_dataset_program, observer_variant, creep)
     out = _kept("polach_dataset", make, args, static, DATASET_SOURCES)
     # NumPy arrays: the selection's masking and the padding then run no eager JAX operation
-    return _dataset.PolachDataset(**jax.tree.map(np.asarray, out))
+    return _dataset.cut(_dataset.PolachDataset(**jax.tree.map(np.asarray, out)), n)
 
 
 @functools.cache

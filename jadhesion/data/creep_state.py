@@ -77,10 +77,14 @@ class CreepEstimate(NamedTuple):
     process_q: jax.Array  # (q_v, q_w) [m²/s⁵]
 
 
-def difference_sd(y):
-    """White-noise sd of a smooth signal plus noise: ``1.4826 MAD(Δ³y) / √20``."""
+def difference_sd(y, valid=None):
+    """White-noise sd of a smooth signal plus noise: ``1.4826 MAD(Δ³y) / √20``. ``valid``: (n,)
+    mask of the real samples, padding only at the end (:func:`smooth_creep`); third differences
+    that reach into the padding are left out of both medians (the same values as without it)."""
     d3 = jnp.diff(y, n=3)
-    return 1.4826 * jnp.median(jnp.abs(d3 - jnp.median(d3))) / jnp.sqrt(20.0)
+    if valid is not None:
+        d3 = jnp.where(valid[3:] > 0, d3, jnp.nan)  # nanmedian: jnp.median's arithmetic on the rest
+    return 1.4826 * jnp.nanmedian(jnp.abs(d3 - jnp.nanmedian(d3))) / jnp.sqrt(20.0)
 
 
 def _predict(x, p, dt, q):
@@ -100,15 +104,17 @@ def _mv(a, b):
     return sum(a[:, j] * b[j] for j in range(4))
 
 
-def _update(x, p, idx, obs, r):
+def _update(x, p, idx, obs, r, real):
     """One scalar measurement ``obs = Σ_{i ∈ idx} x_i + e``, ``Var e = r``: updated mean and
     covariance, the log-likelihood of ``obs`` and what the backward pass needs (gain ``k``, ``ν/s``,
-    ``1/s``). Sums over the sensor's states instead of products with ``h``: no reductions."""
+    ``1/s``). Sums over the sensor's states instead of products with ``h``: no reductions. ``real``
+    (1 or 0) scales the update: 0 on a padded sample (no update, no likelihood, zero gain)."""
     ph = sum(p[:, i] for i in idx)
     s = sum(ph[i] for i in idx) + r
     nu = obs - sum(x[i] for i in idx)
     ll = -0.5 * (jnp.log(2.0 * jnp.pi * s) + nu * nu / s)
-    return x + ph * (nu / s), p - ph[:, None] * ph[None, :] / s, ll, (ph / s, nu / s, 1.0 / s)
+    k, nu_s, inv_s = real * (ph / s), real * (nu / s), real / s
+    return x + ph * nu_s, p - real * (ph[:, None] * ph[None, :] / s), real * ll, (k, nu_s, inv_s)
 
 
 def _initial(y, r):
@@ -117,27 +123,28 @@ def _initial(y, r):
     return x0, p0
 
 
-def _filter(y, dts, r, q, keep=True):
+def _filter(y, dts, r, q, valid, keep=True):
     """Kalman filter over ``y`` (n, 2) = (wheel speed, vehicle speed) with steps ``dts`` (n − 1,):
     its exact log-likelihood (prediction-error decomposition) and, with ``keep``, per sample the
     predicted mean (n, 4) and covariance (n, 4, 4) and each update's ``(k, ν/s, 1/s)`` (stacked
-    vehicle, wheel) for :func:`_smooth`. Sample 0 is a zero step from the prior :func:`_initial`."""
+    vehicle, wheel) for :func:`_smooth`. Sample 0 is a zero step from the prior :func:`_initial`.
+    ``valid`` (n,): 1 for a sample, 0 for end padding (no update there)."""
     obs_r = (r[1], r[0])
 
     def step(carry, inputs):
         x, p, ll = carry
-        obs, dt = inputs
+        obs, dt, real = inputs
         x, p = _predict(x, p, dt, q)
         xp, pp, parts = x, p, []
         for idx, o, rr in zip(_SENSORS, (obs[1], obs[0]), obs_r, strict=True):
-            x, p, l1, part = _update(x, p, idx, o, rr)
+            x, p, l1, part = _update(x, p, idx, o, rr, real)
             ll, parts = ll + l1, parts + [part]
         stored = (xp, pp, *(jnp.stack(a) for a in zip(*parts, strict=True))) if keep else None
         return (x, p, ll), stored
 
     x0, p0 = _initial(y, r)
     dts = jnp.concatenate([jnp.zeros(1, dts.dtype), dts])
-    (_, _, ll), stored = jax.lax.scan(step, (x0, p0, jnp.zeros((), y.dtype)), (y, dts))
+    (_, _, ll), stored = jax.lax.scan(step, (x0, p0, jnp.zeros((), y.dtype)), (y, dts, valid))
     return (stored, ll) if keep else ll
 
 
@@ -180,24 +187,24 @@ def _smooth(stored, dts):
     return xs, var.T
 
 
-def _log_likelihood(y, dts, r, q):
-    return _filter(y, dts, r, q, keep=False)
+def _log_likelihood(y, dts, r, q, valid):
+    return _filter(y, dts, r, q, valid, keep=False)
 
 
-def estimate_noise(time, wheel_speed, vehicle_speed):
+def estimate_noise(time, wheel_speed, vehicle_speed, valid=None):
     """``(measurement variances (R_w, R_v) [m²/s²], process densities (q_v, q_w) [m²/s⁵])`` of a
-    recording (module docstring: differencing for R, grid maximum likelihood for q)."""
+    recording (module docstring: differencing for R, grid maximum likelihood for q); ``valid`` as
+    in :func:`smooth_creep`."""
     y = jnp.stack([wheel_speed, vehicle_speed], axis=1)
     dts = jnp.diff(time)
-    r = (
-        jnp.maximum(jnp.stack([difference_sd(wheel_speed), difference_sd(vehicle_speed)]), MIN_MEASUREMENT_SD)
-        ** 2
-    )
+    sds = jnp.stack([difference_sd(wheel_speed, valid), difference_sd(vehicle_speed, valid)])
+    r = jnp.maximum(sds, MIN_MEASUREMENT_SD) ** 2
     grid = jnp.asarray(10.0**Q_GRID, y.dtype)
-    ll_many = jax.vmap(_log_likelihood, in_axes=(None, None, None, 0))
+    ll_many = jax.vmap(_log_likelihood, in_axes=(None, None, None, 0, None))
+    real = jnp.ones(y.shape[0], y.dtype) if valid is None else jnp.asarray(valid, y.dtype)
 
     def best(qs):
-        ll = ll_many(y, dts, r, qs)
+        ll = ll_many(y, dts, r, qs, real)
         return qs[jnp.argmax(jnp.where(jnp.isfinite(ll), ll, -jnp.inf))]
 
     q_w = best(jnp.stack([jnp.full_like(grid, grid[0]), grid], axis=1))[1]
@@ -206,17 +213,24 @@ def estimate_noise(time, wheel_speed, vehicle_speed):
 
 
 @jax.jit
-def smooth_creep(time, wheel_speed, vehicle_speed, torque, inertia, wheel_radius, axle_load):
+def smooth_creep(time, wheel_speed, vehicle_speed, torque, inertia, wheel_radius, axle_load, valid=None):
     """:class:`CreepEstimate` of a recording from its four raw signals (each (n,), SI units; the
     vehicle's ``J`` [kg·m²], nominal ``r`` [m] and axle load [kg] for ``μ̂``). Pure and jitted;
-    vmap over recordings of one length."""
+    vmap over recordings of one length.
+
+    ``valid`` (n,), optional: 1 for a recorded sample, 0 for padding after the last one (time
+    repeated: zero steps), so that recordings of different lengths share one compiled program.
+    Padding takes no part in the noise levels, the likelihood or the updates, so the estimate of
+    the recorded samples is the unpadded one (to rounding); the padded rows repeat the last state.
+    """
     time, wheel_speed, vehicle_speed, torque = (
         jnp.asarray(a, jnp.result_type(float)) for a in (time, wheel_speed, vehicle_speed, torque)
     )
-    r, q = estimate_noise(time, wheel_speed, vehicle_speed)
+    r, q = estimate_noise(time, wheel_speed, vehicle_speed, valid)
     dts = jnp.diff(time)
     y = jnp.stack([wheel_speed, vehicle_speed], axis=1)
-    stored, _ = _filter(y, dts, r, q)
+    real = jnp.ones(y.shape[0], y.dtype) if valid is None else jnp.asarray(valid, y.dtype)
+    stored, _ = _filter(y, dts, r, q, real)
     xm, (var_v, var_w, cov) = _smooth(stored, dts)
     v, a, w, wd = xm.T
     speed = jnp.maximum(jnp.abs(v), SPEED_FLOOR)
@@ -238,9 +252,9 @@ def smooth_creep(time, wheel_speed, vehicle_speed, torque, inertia, wheel_radius
     )
 
 
-def smooth_recording(recording) -> CreepEstimate:
+def smooth_recording(recording, valid=None) -> CreepEstimate:
     """:func:`smooth_creep` of a recording (anything with ``columns`` holding the four raw signals
-    and a ``vehicle``)."""
+    and a ``vehicle``); ``valid`` as there."""
     c, veh = recording.columns, recording.vehicle
     return smooth_creep(
         c["time"],
@@ -250,4 +264,5 @@ def smooth_recording(recording) -> CreepEstimate:
         veh.wheelset_inertia_kgm2,
         veh.wheel_radius_m,
         veh.axle_load_kg,
+        valid,
     )

@@ -28,6 +28,7 @@ import numpy as np
 
 from ..models import kinematics
 from .creep_state import smooth_recording
+from .length_buckets import bucket_length
 from .observer import observe_adhesion
 
 if TYPE_CHECKING:
@@ -66,7 +67,29 @@ class PolachDataset(NamedTuple):
     residual_scale: Optional[jax.Array] = None
 
 
+#: Fields with one value per sample; ``k_eps`` is one per dataset, ``weight`` the padding's mask.
+SAMPLE_FIELDS = ("creep", "slip", "adhesion", "vehicle_speed", "slip_sd", "creep_sd")
+
 CREEP_OPTIONS = ("smoothed", "raw")
+RAW_SIGNALS = ("time", "vehicle_speed", "wheel_speed", "traction_torque")
+
+
+class Signals(NamedTuple):
+    """What :func:`to_dataset` reads of a recording with the raw signals: ``columns`` (a dict
+    holding :data:`RAW_SIGNALS`) and ``vehicle`` (anything with the vehicle's numbers)."""
+
+    columns: dict
+    vehicle: object
+
+
+def padded_signals(columns, length: int) -> tuple[dict, np.ndarray]:
+    """``(columns, valid)``: the :data:`RAW_SIGNALS` of ``columns`` padded to ``length`` rows by
+    repeating the last row (time too: zero steps) and the (length,) mask of the real rows (1/0)."""
+    n = len(columns["time"])
+    padded = {c: np.pad(np.asarray(columns[c]), (0, length - n), mode="edge") for c in RAW_SIGNALS}
+    valid = np.zeros(length)
+    valid[:n] = 1.0
+    return padded, valid
 
 
 def to_dataset(
@@ -75,6 +98,8 @@ def to_dataset(
     creep: str = "smoothed",
     *,
     k_eps: float | None = None,
+    pad: bool = True,
+    valid=None,
 ) -> PolachDataset:
     """The fitting dataset (creep s, slip w, mu_hat, v, k_eps; with ``creep="smoothed"`` also
     ``slip_sd``, ``creep_sd``) of a recording (or a simulation result).
@@ -91,13 +116,29 @@ def to_dataset(
     (:func:`jadhesion.data.observer.observe_adhesion`, ``observer_variant``) runs on the raw
     signals and creep comes from the wheel and vehicle speeds. ``k_eps``: the vehicle's gradient
     constant when already known (default ``recording.vehicle.k_eps()``).
+
+    ``pad`` (default): the raw signals go through the observer and the smoother padded to their
+    length bucket (:func:`jadhesion.data.length_buckets.bucket_length`; the last row repeated) and
+    the dataset is cut back to the recording's rows: the same values bit for bit, one compiled
+    program per bucket instead of one per length. ``valid``: the columns are padded already; their
+    (n,) mask of real rows (1/0, padding only at the end), and the dataset keeps the padded length.
     """
     if creep not in CREEP_OPTIONS:
         raise ValueError(f"creep must be one of {CREEP_OPTIONS}, got {creep!r}")
+    raw_signals = adhesion_source(recording) == "observer"
+    time = recording.columns["time"] if raw_signals else None
+    if pad and valid is None and raw_signals and not isinstance(time, jax.core.Tracer):
+        n = len(time)
+        if bucket_length(n) > n:
+            columns, valid = padded_signals(recording.columns, bucket_length(n))
+            data = to_dataset(
+                Signals(columns, recording.vehicle), observer_variant, creep, k_eps=k_eps, valid=valid
+            )
+            return cut(data, n)
     raw = _raw_dataset(recording, observer_variant, k_eps)
-    if creep == "raw" or not all(c in recording.columns for c in RAW_SIGNALS):
+    if creep == "raw" or not raw_signals:
         return raw
-    est = smooth_recording(recording)
+    est = smooth_recording(recording, valid)
     return raw._replace(
         creep=est.creep,
         slip=est.slip,
@@ -107,7 +148,16 @@ def to_dataset(
     )
 
 
-RAW_SIGNALS = ("time", "vehicle_speed", "wheel_speed", "traction_torque")
+def cut(data: PolachDataset, n: int) -> PolachDataset:
+    """The first ``n`` rows of a dataset, sliced on the host (no program per length); NumPy fields
+    stay NumPy, JAX ones JAX."""
+
+    def first(a):
+        return a[:n] if isinstance(a, np.ndarray) else jnp.asarray(np.asarray(a)[:n])
+
+    return data._replace(
+        **{f: first(getattr(data, f)) for f in SAMPLE_FIELDS if getattr(data, f) is not None}
+    )
 
 
 def adhesion_source(recording) -> str:

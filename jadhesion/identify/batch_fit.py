@@ -1,8 +1,8 @@
 """Many datasets, one compiled program per method and length bucket: padding and masks.
 
-A dataset of ``n`` samples is padded to its *bucket* length (:func:`bucket_length`: 128 for
-``n ≤ 128``, the next power of two up to :data:`FINE_BUCKETS_FROM` samples, then the next
-eighth of an octave) by repeating its last sample, with a ``weight`` mask
+A dataset of ``n`` samples is padded to its *bucket* length
+(:func:`jadhesion.data.length_buckets.bucket_length`: 128 for ``n ≤ 128``, the next power of two
+up to 16 384 samples, then the next eighth of an octave) by repeating its last sample, with a ``weight`` mask
 (1 for its samples, 0 for the padding; :class:`jadhesion.data.dataset.PolachDataset`). The Polach
 objective honours the mask (:func:`jadhesion.identify.polach_residuals.polach_residual` multiplies the
 residual by it, the MAE divides by the number of valid samples, the LM's seeding subsample strides
@@ -30,40 +30,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..data.dataset import PolachDataset
+from ..data.dataset import SAMPLE_FIELDS, PolachDataset
+from ..data.length_buckets import bucket_length
 
 # No module-level import of the fits (:mod:`.polach_fit` pulls in optimistix/equinox): the
 # command line's warm start, which calls a kept program, must not import them.
-
-#: The bucket of short datasets: :data:`.polach_fit.SEED_SAMPLES` (a test keeps them equal).
-SHORT_BUCKET = 128
-#: The smallest bucket above :data:`SHORT_BUCKET` (buckets then double).
-MIN_LONG_BUCKET = 256
-#: Above this many samples buckets step by an eighth of an octave instead of doubling: a fit of
-#: a long recording costs its length (a 1-hour recording at 100 Hz, 360 000 rows, would waste 31 %
-#: of its work padded to 2¹⁹; it wastes 0.2 % padded to 11·2¹⁵), while short ones share few
-#: programs (their compilation, not their padding, is what costs).
-FINE_BUCKETS_FROM = 16384
-#: Buckets per octave above :data:`FINE_BUCKETS_FROM` (padding then < 1/8 of the samples).
-STEPS_PER_OCTAVE = 8
-#: Fields with one value per sample (padded); ``k_eps`` is one per dataset.
-SAMPLE_FIELDS = ("creep", "slip", "adhesion", "vehicle_speed", "slip_sd", "creep_sd")
-
-
-def bucket_length(n: int) -> int:
-    """The padded length of a dataset of ``n`` samples: :data:`.polach_fit.SEED_SAMPLES` (128) up
-    to 128 samples (LM then seeds on all of them, as unpadded); the next power of two
-    ≥ :data:`MIN_LONG_BUCKET` up to :data:`FINE_BUCKETS_FROM` (one program for every length in
-    ``(2^(k-1), 2^k]``); above, the next multiple of ``2^(k-1) / STEPS_PER_OCTAVE`` (padding less
-    than 1/8 of the samples, :data:`STEPS_PER_OCTAVE` programs per octave)."""
-    n = int(n)
-    if n <= SHORT_BUCKET:
-        return SHORT_BUCKET
-    octave = 1 << (n - 1).bit_length()
-    if n <= FINE_BUCKETS_FROM:
-        return max(MIN_LONG_BUCKET, octave)
-    step = octave // 2 // STEPS_PER_OCTAVE
-    return -(-n // step) * step
 
 
 def pad_dataset(data: PolachDataset, length: int | None = None) -> PolachDataset:
