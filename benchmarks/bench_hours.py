@@ -31,7 +31,7 @@ import sys
 import time
 from pathlib import Path
 
-from .bench_startup import _commit
+from .provenance import commit
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "benchmarks" / "results" / "bench_hours.json"
@@ -172,7 +172,7 @@ def main(argv=None) -> int:
         return 0
 
     args.work.mkdir(parents=True, exist_ok=True)
-    args.commit = _commit()  # before this run writes its result file (a tracked file)
+    args.commit = commit()  # before this run writes its result file (a tracked file)
     env = {
         **os.environ,
         "PYTHONPATH": os.pathsep.join(p for p in (str(ROOT), os.environ.get("PYTHONPATH")) if p),

@@ -35,7 +35,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from .bench_startup import _commit
+from .provenance import commit
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "benchmarks" / "results" / "bench_multifile.json"
@@ -138,7 +138,7 @@ def main(argv=None) -> int:
 
     med = {k: statistics.median(v) for k, v in times.items()}
     result = {
-        "commit": _commit(),
+        "commit": commit(),
         "settings": {
             "method": args.method,
             "model": args.model,

@@ -52,7 +52,7 @@ from jadhesion.identify import fit_polach  # noqa: E402
 from validation.foreign_generator import generate  # noqa: E402
 
 from .bench_hours import _simulate  # noqa: E402
-from .bench_startup import _commit  # noqa: E402
+from .provenance import commit  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "benchmarks" / "results" / "bench_smoother.json"
@@ -197,10 +197,10 @@ def main(argv=None) -> int:
     parser.add_argument("--skip-agreement", action="store_true")
     parser.add_argument("--out", type=Path, default=OUT)
     args = parser.parse_args(argv)
-    commit = _commit()
+    this_commit = commit()  # before this run writes its result file (a tracked file)
     ref, ref_commit = reference_module(args.reference)
     doc = {
-        "commit": commit,
+        "commit": this_commit,
         "reference": {"rev": args.reference, "commit": ref_commit},
         "settings": {
             "rows": args.rows,
