@@ -17,8 +17,10 @@ that the padded fit equals the unpadded one: the population methods (improved TL
 give bit-identical parameters (their moves depend on the data only through comparisons of MAEs,
 which the padding changes by at most an ulp), LM agrees to round-off (≈1e-12 relative; its
 normal equations sum over a different length). :func:`fit_datasets_vmapped` instead stacks each
-bucket and runs :func:`.polach_fit.fit_polach_batch` (one vmapped program per bucket): faster per
-fit for many files, but its rounding depends on the batch (see the tests for the agreement).
+bucket and runs :func:`.polach_fit.fit_polach_batch` (one vmapped program per bucket). Its
+rounding depends on the batch (see the tests for the agreement), and on CPU it is the slower of
+the two with LM's errors-in-variables residual (``benchmarks/bench_multifile.py``: 4.8 against 18
+fits/s at 1 000–2 000 samples).
 """
 
 from __future__ import annotations

@@ -48,10 +48,14 @@ def box_lm_queue(
         )
         new_index = next_index + jnp.cumsum(ending) - 1
         index = jnp.where(ending, jnp.where(new_index < n_problems, new_index, n_problems), index)
-        fresh = jax.vmap(init)(starts[jnp.minimum(index, n_problems - 1)])
-        states = jax.tree.map(
-            lambda f, s: jnp.where(ending.reshape((-1,) + (1,) * (f.ndim - 1)), f, s), fresh, states
-        )
+
+        def refill(states):  # a start's residual and Jacobian: only on iterations where a lane ends
+            fresh = jax.vmap(init)(starts[jnp.minimum(index, n_problems - 1)])
+            return jax.tree.map(
+                lambda f, s: jnp.where(ending.reshape((-1,) + (1,) * (f.ndim - 1)), f, s), fresh, states
+            )
+
+        states = jax.lax.cond(jnp.any(ending), refill, lambda states: states, states)
         return states, index, next_index + jnp.sum(ending), out
 
     first = jnp.arange(lanes)
