@@ -377,6 +377,30 @@ def test_box_lm_from_a_plateau_escapes_or_says_it_stalled():
     assert status_of(capped.status) == Status.MAX_STEPS and int(capped.steps) == 3
 
 
+def _bilinear(p, x):
+    """``p0 · p1 · x − 0.5 x``: at ``p = 0`` both Jacobian columns vanish (a flat corner)."""
+    return p[0] * p[1] * x - 0.5 * x
+
+
+def test_probe_is_an_iteration_of_its_own_and_the_queue_runs_it_too():
+    """The flat-face probe is evaluated by the iteration after the stop, in place of an LM trial,
+    so that every iteration linearises once (a ``lax.cond`` would evaluate it on every lane of a
+    vmapped step). From the flat corner ``p = 0`` box LM escapes to ``p0 p1 = 0.5``; the work
+    queue gives box LM's result, steps and status on starts that need the probe and on one that
+    does not."""
+    x = jnp.linspace(0.0, 1.0, 50)
+    box = (jnp.zeros(2), jnp.ones(2))
+    starts = jnp.array([[0.0, 0.0], [0.5, 0.5], [0.0, 0.0]])
+    args = jnp.stack([x, x, 2 * x])
+    queued = box_lm_queue(_bilinear, starts, args, box, lanes=2)
+    for i in range(3):
+        one = box_lm(_bilinear, starts[i], args[i], box)
+        assert status_of(one.status) == Status.CONVERGED
+        assert float(one.params[0] * one.params[1]) == pytest.approx(0.5, abs=1e-8)
+        np.testing.assert_allclose(queued.params[i], one.params, rtol=1e-12)
+        assert int(queued.steps[i]) == int(one.steps) and int(queued.status[i]) == int(one.status)
+
+
 def _cliff(p, p0):
     """A descent direction the cost cannot follow: finite only at ``p0`` (gradient 1 per variable
     there), NaN at every other point."""

@@ -19,8 +19,7 @@ which the padding changes by at most an ulp), LM agrees to round-off (≈1e-12 r
 normal equations sum over a different length). :func:`fit_datasets_vmapped` instead stacks each
 bucket and runs :func:`.polach_fit.fit_polach_batch` (one vmapped program per bucket). Its
 rounding depends on the batch (see the tests for the agreement), and on CPU it is the slower of
-the two with LM's errors-in-variables residual (``benchmarks/bench_multifile.py``: 4.8 against 18
-fits/s at 1 000–2 000 samples).
+the two with LM's errors-in-variables residual (``benchmarks/bench_multifile.py``).
 """
 
 from __future__ import annotations

@@ -15,7 +15,8 @@ Nielsen's rule. It stops after an accepted step with ``C − C' ≤ ftol·C`` an
 ``ftol·C`` (MINPACK's test); when the projected gradient ``‖clip(u − g) − u‖∞ ≤ gtol`` (any of
 these three at a point where variables sit on a face with vanishing Jacobian columns — a plateau,
 e.g. ``μ0 = 0`` — is not a minimum when moving them :data:`PROBE` inwards lowers the cost: the run
-continues from there); and a stop whose undamped Gauss–Newton step still promises more than :data:`GN_GAIN`·C
+continues from there; the probe is evaluated by the next iteration, in place of a trial, and
+counts no step); and a stop whose undamped Gauss–Newton step still promises more than :data:`GN_GAIN`·C
 is ``STALLED`` (the damping, not the problem, made the model flat); when
 ``λ > 10¹⁶`` (no decrease is representable: status ``STALLED``); or at ``max_steps`` (status
 ``MAX_STEPS``). Only the three tests give ``CONVERGED`` (``success`` true).
@@ -56,9 +57,11 @@ DEFAULT_OPTIONS = BoxLMOptions()
 class _BoxState(NamedTuple):
     """Iterate ``u`` (box-scaled); at ``u``: cost ``½‖r‖²``, gradient ``g = Jᵀr``, Gauss–Newton
     matrix ``H = JᵀJ`` and ``max |r|``; running ``max diag H``, damping ``λ`` and its growth factor
-    ``ν``, steps, done (converged or stalled), and ``fresh`` (not yet linearised: the first
-    iteration only evaluates at ``u``). Only these reductions are carried, never ``r`` or ``J``, so
-    a step's Jacobian is reduced where it is made and a lane's state is a few dozen numbers."""
+    ``ν``, steps, done (converged or stalled), ``fresh`` (not yet linearised: the first iteration
+    only evaluates at ``u``) and ``probe`` (a stop on a flat face: the next iteration evaluates the
+    inward probe instead of an LM trial, and counts no step). Only these reductions are carried,
+    never ``r`` or ``J``, so a step's Jacobian is reduced where it is made and a lane's state is a
+    few dozen numbers."""
 
     u: jax.Array
     cost: jax.Array
@@ -72,6 +75,7 @@ class _BoxState(NamedTuple):
     done: jax.Array
     converged: jax.Array
     fresh: jax.Array
+    probe: jax.Array
 
 
 def _reductions(res, lo, width, u, args):
@@ -143,27 +147,42 @@ def _box_lm_stepper(residual, bounds, options, block_rows=None):
             jnp.asarray(False),
             jnp.asarray(False),
             jnp.asarray(True),
+            jnp.asarray(False),
         )
 
+    def flat_face(u, h):
+        """Variables on a face of the box whose Jacobian columns vanish (μ0 = 0 switches the whole
+        curve off; A = 1 with B = 0 makes both invisible): every test passes on such a plateau."""
+        return ((u <= 0.0) | (u >= 1.0)) & (jnp.diag(h) <= jnp.finfo(u.dtype).eps * jnp.max(jnp.diag(h)))
+
     def step(st, args):
-        u, g, h, c, fresh = st.u, st.g, st.h, st.cost, st.fresh
+        """One iteration: an LM trial, or (``st.probe``) the flat-face probe. Either way one
+        linearisation: a ``lax.cond`` for the probe would run both branches under ``vmap`` (the
+        work queue), doubling a batched step's cost."""
+        u, g, h, c, fresh, probing = st.u, st.g, st.h, st.cost, st.fresh, st.probe
         active = ((u <= 0.0) & (g > 0.0)) | ((u >= 1.0) & (g < 0.0))
         free = (~active).astype(u.dtype)
-        dmax = jnp.maximum(st.dmax, jnp.diag(h))
+        dmax = jnp.where(probing, st.dmax, jnp.maximum(st.dmax, jnp.diag(h)))
         damp = jnp.maximum(dmax, 1e-12 * jnp.max(dmax) + jnp.finfo(u.dtype).tiny)
         a = h * free[:, None] * free[None, :] + jnp.diag(jnp.where(active, 1.0, st.lam * damp))
         u_new = jnp.where(fresh, u, jnp.clip(u + solve(a, -g * free), 0.0, 1.0))
+        # Move the flat-face variables jointly PROBE inwards; if that lowers the cost the point is
+        # no minimum, and the run continues from the probe (a descent step the linear model cannot
+        # see). Requested by a stop below, evaluated by the next iteration in place of a trial.
+        u_probe = jnp.where(flat_face(u, h), jnp.abs(u - PROBE), u)
+        c_new, g_new, h_new, rmax_new = linearise(jnp.where(probing, u_probe, u_new), args)
         s = u_new - u
-        c_new, g_new, h_new, rmax_new = linearise(u_new, args)
         predicted = -(g @ s) - 0.5 * (s @ (h @ s))
         rho = (c - c_new) / jnp.where(predicted > 0, predicted, jnp.inf)
-        accept = fresh | ((rho > 1e-4) & jnp.isfinite(c_new))
+        accept = ~probing & (fresh | ((rho > 1e-4) & jnp.isfinite(c_new)))
         small = (c - c_new <= options.ftol * c) & (
             jnp.max(jnp.abs(s)) <= options.xtol * (options.xtol + jnp.max(jnp.abs(u)))
         )
-        pick = lambda new, old: jnp.where(accept, new, old)  # noqa: E731
+        escape = probing & (c_new < c)
+        take = accept | escape
+        pick = lambda new, old: jnp.where(take, new, old)  # noqa: E731
         u, g, h, c, rmax = (
-            pick(u_new, u),
+            pick(jnp.where(probing, u_probe, u_new), u),
             pick(g_new, g),
             pick(h_new, h),
             pick(c_new, c),
@@ -171,29 +190,18 @@ def _box_lm_stepper(residual, bounds, options, block_rows=None):
         )
         stationary = jnp.max(jnp.abs(jnp.clip(u - g, 0.0, 1.0) - u)) <= options.gtol
         lam = jnp.where(
-            fresh,
+            fresh | probing,
             st.lam,
             jnp.where(accept, st.lam * jnp.maximum(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3), st.lam * st.nu),
         )
-        nu = jnp.where(accept, 2.0, 2.0 * st.nu)
+        nu = jnp.where(probing, st.nu, jnp.where(accept, 2.0, 2.0 * st.nu))
         # MINPACK's ftol test: neither the model nor the trial can lower the cost by more than
         # ftol·C, so the iterate is a minimum to that precision even if the trial was rejected
         # (without it, a converged run spends ~10 steps raising λ until it overflows the test).
         flat = (predicted <= options.ftol * c) & (jnp.abs(c - c_new) <= options.ftol * c)
         stopped = (~fresh & ((accept & small) | flat)) | stationary
-        # Variables on a face of the box whose Jacobian columns vanish (μ0 = 0 switches the whole
-        # curve off; A = 1 with B = 0 makes both invisible) pass every test on a plateau. Probe:
-        # move them jointly PROBE inwards; if that lowers the cost the point is no minimum, and
-        # the run continues from the probe (a descent step the linear model cannot see).
-        flat_face = ((u <= 0.0) | (u >= 1.0)) & (jnp.diag(h) <= jnp.finfo(u.dtype).eps * jnp.max(jnp.diag(h)))
-        u_probe = jnp.where(flat_face, jnp.abs(u - PROBE), u)
-        c_p, g_p, h_p, rmax_p = jax.lax.cond(
-            stopped & jnp.any(flat_face), lambda: linearise(u_probe, args), lambda: (c, g, h, rmax)
-        )
-        escape = stopped & (c_p < c)
-        pick = lambda new, old: jnp.where(escape, new, old)  # noqa: E731
-        u, g, h, c, rmax = (pick(u_probe, u), pick(g_p, g), pick(h_p, h), pick(c_p, c), pick(rmax_p, rmax))
-        stopped = stopped & ~escape
+        probe_next = ~probing & stopped & jnp.any(flat_face(u, h))
+        stopped = jnp.where(probing, ~escape, stopped & ~probe_next)
         # A test may pass only because heavy damping (λ·D, D a running maximum of diag H) made
         # the model flat: it is a minimum only if even the undamped Gauss–Newton step promises
         # less than GN_GAIN·C; otherwise the run stopped stalled.
@@ -203,9 +211,11 @@ def _box_lm_stepper(residual, bounds, options, block_rows=None):
         )
         gn_gain = 0.5 * (g * free_g) @ solve(a_gn, g * free_g)
         converged = stopped & (stationary | (gn_gain <= GN_GAIN * c))
-        done = stopped | (lam > 1e16)
-        steps = st.steps + jnp.where(fresh, 0, 1)
-        return _BoxState(u, c, g, h, rmax, dmax, lam, nu, steps, done, converged, jnp.asarray(False))
+        done = stopped | ((lam > 1e16) & ~probe_next)
+        steps = st.steps + jnp.where(fresh | probing, 0, 1)
+        return _BoxState(
+            u, c, g, h, rmax, dmax, lam, nu, steps, done, converged, jnp.asarray(False), probe_next
+        )
 
     def result(st):
         p = lo + width * st.u
@@ -237,6 +247,6 @@ def box_lm(residual, p0, args, bounds, options=DEFAULT_OPTIONS, *, max_steps=100
     p0, bounds, options = _prepare(p0, bounds, options)
     init, step, result = _box_lm_stepper(residual, bounds, options, block_rows)
     final = jax.lax.while_loop(
-        lambda st: ~st.done & (st.steps < max_steps), lambda st: step(st, args), init(p0)
+        lambda st: st.probe | (~st.done & (st.steps < max_steps)), lambda st: step(st, args), init(p0)
     )
     return result(final)

@@ -29,7 +29,7 @@ def box_lm_queue(
     lanes = min(lanes, n_problems)
     take = lambda i: jax.tree.map(lambda a: a[i], args)  # noqa: E731
     init, step, result = _box_lm_stepper(residual, bounds, options, block_rows)
-    finished = lambda st: st.done | (st.steps >= max_steps)  # noqa: E731
+    finished = lambda st: ~st.probe & (st.done | (st.steps >= max_steps))  # noqa: E731
     out0 = jax.vmap(lambda p: result(init(p)))(starts)
 
     def body(carry):
