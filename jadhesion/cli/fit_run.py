@@ -79,7 +79,7 @@ def _load(args, path):
         )
     _, dataset, selection = load_dataset(args, path, to_dataset, recording=recording)
     require_samples(dataset, str(path))
-    release_if_near_limit()  # each length compiles its own observer and smoother (fits: per bucket)
+    release_if_near_limit()  # programs are per length bucket; many buckets still add up
     return dataset, selection
 
 
