@@ -1,14 +1,13 @@
 """Memory maps held by compiled programs, and their release before Linux's per-process limit.
 
 Every program XLA:CPU compiles keeps memory maps (about three per JIT kernel: code, read-only data,
-data) for as long as JAX's caches hold it: about 1 040 for a Polach LM fit, 300 for its trust
-block and 310 for the observer and smoother, each once per length bucket
-(:mod:`jadhesion.data.length_buckets`). Past ``vm.max_map_count`` (65 530 by default) LLVM's
-section allocator aborts the process ("Unable to allocate section memory"): ``jadhesion fit DIR``
-over 24 recordings of distinct lengths added 15 235 maps while the trust block, observer and
-smoother were compiled per length (about 635 a file, so about 100 such files aborted it), and
-3 092 now. Buckets bound the
-count only per bucket, so a loop over recordings still calls :func:`release_if_near_limit`
+data) for as long as JAX's caches hold it: about 1 040 for a Polach LM fit, 300 for its trust block
+and 310 for the observer and smoother, each once per length bucket
+(:mod:`jadhesion.data.length_buckets`). Past ``vm.max_map_count`` (65 530 by default) LLVM's section
+allocator aborts the process ("Unable to allocate section memory"): ``jadhesion fit DIR`` over 24
+recordings of distinct lengths added 15 235 maps while the trust block, observer and smoother were
+compiled per length (about 635 a file, so about 100 such files aborted it), and 3 092 now. Buckets
+bound the count only per bucket, so a loop over recordings still calls :func:`release_if_near_limit`
 between them; the command line does after each file's load (``fit``'s files).
 """
 
