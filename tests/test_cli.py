@@ -8,7 +8,7 @@ import sys
 import numpy as np
 import pytest
 
-from jadhesion import LOCO_22E, polach_adhesion
+from jadhesion import LOCO_22E, adhesion_peak, polach_adhesion
 from jadhesion.cli import main
 from jadhesion.status import Status
 
@@ -74,7 +74,15 @@ def test_fit_json_contract_and_accuracy(env, recording):
             assert c is None or (-1 - 1e-9 <= c <= 1 + 1e-9 and c == pytest.approx(corr[j][i]))
     assert corr[2][2] == pytest.approx(1.0)
     codes = {w["code"] for w in doc["warnings"]}
-    assert codes <= {"at_bound", "weakly_identified", "not_converged", "few_samples"}
+    assert codes <= {"at_bound", "weakly_identified", "not_converged", "few_samples", "peak_extrapolated"}
+    # the curve's peak at the median speed, beside the true curve's peak there
+    truth = json.loads(recording.with_name("dry.truth.json").read_text())["params"]
+    theta = np.array([truth[n] for n in ("kA", "kS", "mu0", "A", "B")])
+    true_peak = adhesion_peak(theta, LOCO_22E.k_eps(), doc["vehicle_speed"])
+    for name, value in zip(("mu_max", "creep_opt"), true_peak, strict=True):
+        d = doc["derived"][name]
+        assert d["ci95"][0] < d["value"] < d["ci95"][1]
+        assert d["value"] == pytest.approx(float(value), rel=0.05), name
     assert "not_converged" not in codes and "few_samples" not in codes
     for name, u in doc["uncertainty"].items():  # a parameter on a bound is said so, not given numbers
         on_bound = min(doc["params"][name], 1 - doc["params"][name]) < 1e-6

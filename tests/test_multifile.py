@@ -157,17 +157,23 @@ def test_fit_polach_compiles_one_program_per_bucket():
 
 def test_trust_block_is_computed_padded_and_equals_the_unpadded_one():
     """``fit_report`` computes the covariance on the dataset padded to its bucket (one program per
-    bucket): the same standard errors to round-off and the same HAC bandwidth as on its own
-    samples; padding rows count in neither the degrees of freedom nor the bandwidth."""
+    bucket): the same standard errors to round-off, the same HAC bandwidth and the same peak as on
+    its own samples; padding rows count in neither the degrees of freedom, the bandwidth nor the
+    reference speed."""
     data = _uncertain(700, 2)
     fit = fit_polach(data, "lm", jax.random.key(0))
     report = fit_report(data, fit)
-    cov, lags = trust_numbers(fit.params, scaled(data, fit))  # unpadded, directly
-    assert report["hac_lags"] == int(lags)
+    numbers = trust_numbers(fit.params, scaled(data, fit))  # unpadded, directly
+    cov = numbers.cov
+    assert report["hac_lags"] == int(numbers.lags)
     for i, name in enumerate(PARAM_NAMES):
         se = report["uncertainty"][name]["stderr"]
         if se is not None and np.isfinite(se):
             assert se == pytest.approx(float(np.sqrt(cov[i, i])), rel=1e-9), name
+    # the peak: the median speed and largest creep of the real rows only, the same peak
+    assert report["vehicle_speed"] == pytest.approx(float(numbers.speed), rel=1e-12)
+    for j, name in enumerate(("mu_max", "creep_opt")):
+        assert report["derived"][name]["value"] == pytest.approx(float(numbers.peak[j]), rel=1e-9)
     before = trust_numbers._cache_size()
     fit_report(_uncertain(800, 3), fit_polach(_uncertain(800, 3), "lm", jax.random.key(0)))
     assert trust_numbers._cache_size() == before  # 800 rows: the same 1024-row program

@@ -4,14 +4,15 @@ Three programs, each exported once (``jax.export``) and kept in the program cach
 (:func:`jadhesion.config.program_cache_dir`, :mod:`jadhesion.programs`) under its shapes, options
 and code: ``polach_dataset`` (observer, kinematics and Kalman/RTS creep smoother of a recording's
 raw signals padded to their length bucket: :func:`to_dataset`), ``polach_fit`` (the fit of a padded
-dataset: :func:`fit_polach`) and ``polach_trust`` (the Jacobian of LM's residual over every row and
-the HAC covariance: :func:`trust_numbers`). Each is a drop-in for its library function with the same
-results, bit for bit. A process that finds them deserialises and calls them, with the compiled
-executables from the persistent compilation cache: it traces and lowers nothing, and imports no
-optimistix or equinox (the fit's LM is the projected LM of :mod:`jadhesion.identify.box_lm`). On a
-miss the library function is exported, kept and called (so its compilation lands in the compilation
-cache under the key a later process looks up). The vehicle's gradient constant ``k_eps`` — about a
-second of eager JAX operations in a new process — is remembered as the value it computed.
+dataset: :func:`fit_polach`) and ``polach_trust`` (the Jacobian of LM's residual over every row,
+the HAC covariance and the curve's peak with its gradient: :func:`trust_numbers`). Each is a
+drop-in for its library function with the same results, bit for bit. A process that finds them
+deserialises and calls them, with the compiled executables from the persistent compilation cache:
+it traces and lowers nothing, and imports no optimistix or equinox (the fit's LM is the projected
+LM of :mod:`jadhesion.identify.box_lm`). On a miss the library function is exported, kept and
+called (so its compilation lands in the compilation cache under the key a later process looks up).
+The vehicle's gradient constant ``k_eps`` — about a second of eager JAX operations in a new process
+— is remembered as the value it computed.
 
 ``JADHESION_PROGRAMS=0`` in the environment turns all of this off: the library is called and
 traced as before (for comparison and as a way out).
@@ -109,8 +110,8 @@ def to_dataset(recording, observer_variant: str = "paper", creep: str = "smoothe
 
 
 @functools.cache
-def _result_type(fields: tuple):
-    return collections.namedtuple("PolachFit", fields)
+def _result_type(fields: tuple, name: str = "PolachFit"):
+    return collections.namedtuple(name, fields)
 
 
 def _polach_program(method, pop_size, max_iter, target):
@@ -130,10 +131,11 @@ def _polach_program(method, pop_size, max_iter, target):
 
 
 def _trust_program():
-    """The function kept as program ``polach_trust``: ``(params, dataset) -> (cov, lags)``."""
+    """The function kept as program ``polach_trust``: ``(params, dataset) -> dict`` of
+    :class:`~jadhesion.identify.trust.TrustNumbers`' fields."""
     from ..identify.trust import trust_numbers  # on a miss only, as above
 
-    return trust_numbers
+    return lambda params, data: trust_numbers(params, data)._asdict()
 
 
 def _kept(name, make_fn, args, static, sources=None):
@@ -185,9 +187,10 @@ def fit_polach(dataset, method: str, key, *, pop_size: int = 50, max_iter: int =
 
 
 def trust_numbers(params, dataset):
-    """:func:`jadhesion.identify.trust.trust_numbers` (covariance and HAC bandwidth of a fit)
-    through a kept program; the same numbers bit for bit."""
+    """:func:`jadhesion.identify.trust.trust_numbers` (covariance and HAC bandwidth of a fit, the
+    curve's peak and its gradient) through a kept program; a named tuple with
+    :class:`~jadhesion.identify.trust.TrustNumbers`' fields (in alphabetical order), the same
+    numbers bit for bit."""
     args = (jnp.asarray(params), dataset)
-    if not _enabled():
-        return _trust_program()(*args)
-    return tuple(_kept("polach_trust", _trust_program, args, {}))
+    out = _trust_program()(*args) if not _enabled() else _kept("polach_trust", _trust_program, args, {})
+    return _result_type(tuple(out), "TrustNumbers")(**out)

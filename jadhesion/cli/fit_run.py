@@ -110,8 +110,20 @@ def _describe(doc) -> str:
         f"standard errors: Newey–West (HAC, {doc['hac_lags']} lags), robust to the "
         "observer's coloured residuals"
     )
+    lines.append(
+        f"peak of the curve at {doc['vehicle_speed']:.3g} m/s (median speed): " + _peak_text(doc["derived"])
+    )
     lines += [f"warning [{w['code']}]: {w['message']}" for w in doc["warnings"]]
     return "\n".join(lines)
+
+
+def _peak_text(derived) -> str:
+    parts = []
+    for name in ("mu_max", "creep_opt"):
+        d = derived[name]
+        ci = "" if d["ci95"] is None else f" [{d['ci95'][0]:.4g}, {d['ci95'][1]:.4g}]"
+        parts.append(f"{name} {d['value']:.4g}{ci}")
+    return ", ".join(parts)
 
 
 def _polach_doc(args, dataset, fit, seconds) -> dict:
@@ -158,9 +170,10 @@ def _plot(args, path, dataset, doc, many: bool) -> None:
     out = Path(args.plot)
     out.mkdir(parents=True, exist_ok=True)
     theta = np.array([doc["params"][n] for n in PARAM_NAMES])
-    fit_figure(dataset, theta, title=f"{path.name}: {args.method}").savefig(
-        out / (f"{path.stem}.fit.png" if many else "fit.png"), dpi=110
-    )
+    peak = doc.get("derived")  # Polach fits only
+    fit_figure(
+        dataset, theta, title=f"{path.name}: {args.method}", peak=peak, speed=doc.get("vehicle_speed")
+    ).savefig(out / (f"{path.stem}.fit.png" if many else "fit.png"), dpi=110)
 
 
 # ---- output -----------------------------------------------------------------------------------

@@ -40,6 +40,7 @@ from .likelihood import (
     prediction,
 )
 from .observer_view import ObserverTerms
+from .peak import reference_speed
 from .polach_residuals import residual_scale
 
 QUANTILES = (0.05, 0.5, 0.95)
@@ -62,7 +63,7 @@ class PosteriorResult(NamedTuple):
     derived_samples: dict  # name -> (m,) samples of mu_max and creep_opt
     diagnostics: Diagnostics
     likelihood: str
-    vehicle_speed: float  # speed [m/s] at which the derived quantities are evaluated
+    vehicle_speed: float  # speed [m/s] at which the derived quantities are evaluated (median |v|)
 
     def theta(self) -> np.ndarray:
         """Samples of the five Polach parameters, (n_samples, 5)."""
@@ -196,7 +197,7 @@ def sample_posterior(
         chain = np.concatenate([chain[..., :5], np.exp(chain[..., 5:6]), chain[..., 6:]], axis=-1)
     samples = chain.reshape(-1, chain.shape[-1])
 
-    speed = float(np.median(np.asarray(data.vehicle_speed)))
+    speed = float(reference_speed(jnp.asarray(data.vehicle_speed)))
     idx = np.linspace(0, samples.shape[0] - 1, min(max_derived, samples.shape[0])).astype(int)
     mu_max, creep_opt = _peaks(jnp.asarray(samples[idx, :5]), jnp.asarray(data.k_eps, float), speed)
     derived_samples = {"mu_max": np.asarray(mu_max), "creep_opt": np.asarray(creep_opt)}

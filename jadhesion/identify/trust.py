@@ -3,11 +3,13 @@
 :func:`fit_report` takes a dataset (rows in time order) and a :class:`.polach_fit.PolachFit` and
 returns the JSON-ready block of ``jadhesion fit``: ``uncertainty`` {param: {``stderr``, ``ci95``}},
 ``correlation`` (5 × 5, order kA, kS, mu0, A, B), ``warnings`` [{``code``, ``params``,
-``message``}] and ``hac_lags``. Standard errors are the HAC sandwich of :mod:`.uncertainty` (the
-observer colours the noise) of LM's residual :data:`.polach_fit.LM_RESIDUAL` on the dataset with
-the fit's noise scale (:func:`.polach_fit.scaled`: for an LM fit the standardised robust residual
-it minimised, an M-estimator's sandwich; for a population method's fit the errors-in-variables
-residual); ``ci95 = θ ± 1.96·stderr`` clipped to the box [0, 1].
+``message``}], ``hac_lags``, and the curve's peak with its intervals, ``derived`` {``mu_max``,
+``creep_opt``: {``value``, ``stderr``, ``ci95``}} at ``vehicle_speed`` [m/s] (:mod:`.peak`).
+Standard errors are the HAC sandwich of :mod:`.uncertainty` (the observer colours the noise) of
+LM's residual :data:`.polach_fit.LM_RESIDUAL` on the dataset with the fit's noise scale
+(:func:`.polach_fit.scaled`: for an LM fit the standardised robust residual it minimised, an
+M-estimator's sandwich; for a population method's fit the errors-in-variables residual); ``ci95 = θ
+± 1.96·stderr`` clipped to the box [0, 1].
 
 Warning codes:
 
@@ -24,16 +26,22 @@ Warning codes:
   ``μ ≈ μ0 (1 − (1 − A)·B·|w|)``, so only ``(1 − A)·B`` is determined.
 * ``not_converged`` — the solver's status is not ``converged``.
 * ``few_samples`` — fewer than :data:`.polach_fit.RECOMMENDED_SAMPLES` samples.
+* ``peak_extrapolated`` — the recording's creep never reaches the fitted peak, or the curve has
+  none below creep 1 (:mod:`.peak`).
 """
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import jax
+import jax.numpy as jnp
 import numpy as np
 
 from ..models.polach import PARAM_NAMES
 from ..status import status_of
 from .batch_fit import bucketed, valid_samples
+from .peak import peak_numbers, peak_report, reference_speed
 from .polach_fit import LM_RESIDUAL, RECOMMENDED_SAMPLES, scaled
 from .uncertainty import Z95, correlation, covariance
 
@@ -53,13 +61,31 @@ def held_fixed(params):
     return (params <= BOUND_TOL) | (params >= 1 - BOUND_TOL)
 
 
+class TrustNumbers(NamedTuple):
+    """The array work of a trust block (one compiled program)."""
+
+    cov: jax.Array  # (5, 5) covariance of the parameters
+    lags: jax.Array  # HAC bandwidth [samples]
+    speed: jax.Array  # reference speed of the peak [m/s] (:func:`.peak.reference_speed`)
+    peak: jax.Array  # (mu_max, creep_opt) at ``speed``
+    peak_jacobian: jax.Array  # (2, 5)
+    max_creep: jax.Array  # largest |creep| of the samples [-]
+
+
 @jax.jit
-def trust_numbers(params, data):
-    """``(cov, lags)`` of :func:`.uncertainty.covariance` for LM's residual at ``params`` (its
-    Jacobian over every row, one compiled program)."""
+def trust_numbers(params, data) -> TrustNumbers:
+    """:class:`TrustNumbers` of a fit at ``params``: the covariance and bandwidth of
+    :func:`.uncertainty.covariance` for LM's residual (its Jacobian over every row) and the peak
+    of the curve with its gradient (:func:`.peak.peak_numbers`)."""
     r = LM_RESIDUAL(params, data)
     jac = jax.jacfwd(LM_RESIDUAL)(params, data)
-    return covariance(jac, r, weight=data.weight)  # bound parameters stay free (module docstring)
+    cov, lags = covariance(jac, r, weight=data.weight)  # bound parameters stay free (module docstring)
+    speed = reference_speed(data.vehicle_speed, data.weight)
+    peak, peak_jacobian = peak_numbers(params, data.k_eps, speed)
+    creep = (
+        jnp.abs(data.creep) if data.weight is None else jnp.where(data.weight > 0, jnp.abs(data.creep), 0.0)
+    )
+    return TrustNumbers(cov, lags, speed, peak, peak_jacobian, jnp.max(creep))
 
 
 def fit_report(data, fit, numbers=None) -> dict:
@@ -70,8 +96,8 @@ def fit_report(data, fit, numbers=None) -> dict:
     round-off)."""
     theta = np.asarray(fit.params, float)
     fixed = held_fixed(theta)
-    cov, lags = trust_numbers(fit.params, scaled(bucketed(data), fit)) if numbers is None else numbers
-    cov = np.asarray(cov)
+    numbers = trust_numbers(fit.params, scaled(bucketed(data), fit)) if numbers is None else numbers
+    cov = np.asarray(numbers.cov)
     sd = np.sqrt(np.diag(cov))
     uncertainty, warnings = {}, []
     for i, name in enumerate(PARAM_NAMES):
@@ -126,10 +152,16 @@ def fit_report(data, fit, numbers=None) -> dict:
                 (f"{n} samples (< {RECOMMENDED_SAMPLES} recommended): errors and intervals are rough"),
             )
         )
+    speed = float(numbers.speed)
+    derived, peak_warnings = peak_report(
+        numbers.peak, numbers.peak_jacobian, cov, speed, float(numbers.max_creep)
+    )
     corr = correlation(cov)
     return {
         "uncertainty": uncertainty,
         "correlation": [[float(c) if np.isfinite(c) else None for c in row] for row in corr],
-        "warnings": warnings,
-        "hac_lags": int(lags),
+        "warnings": warnings + peak_warnings,
+        "hac_lags": int(numbers.lags),
+        "derived": derived,
+        "vehicle_speed": speed,
     }

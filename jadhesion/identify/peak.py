@@ -1,0 +1,102 @@
+"""The peak of a fitted Polach curve, μ_max and creep_opt, with delta-method intervals.
+
+What a traction controller needs from a fit is where the curve peaks: the largest adhesion
+``mu_max`` [-] and the creepage ``creep_opt`` [-] at which it is reached
+(:func:`jadhesion.models.polach.adhesion_peak`), at a reference speed, the median ``|v|`` of the
+fitted samples (:func:`reference_speed`; friction falls with the slip velocity ``w = s·v``, so the
+peak depends on the speed). Their uncertainty follows from the fit's covariance ``Σ`` (the HAC
+sandwich of :mod:`.trust`) by the delta method, ``Var g(θ) ≈ ∇g Σ ∇gᵀ``, with the gradient of the
+peak search itself (its parabolic refinement is differentiable). ``mu_max``'s 95 % interval is
+``± 1.96 sd`` (floored at 0); ``creep_opt``, a positive scale, gets its interval on the log scale,
+``creep_opt · exp(± 1.96 sd_log)`` (``stderr`` = ``creep_opt · sd_log``).
+
+Two warnings (code ``peak_extrapolated``): the recording's creep never reaches ``creep_opt`` (the
+peak is extrapolated from the rising branch: the interval is the model's, not the data's), or the
+curve has no peak below creep :data:`S_MAX` (``mu_max`` is its value there; ``creep_opt`` has no
+interval).
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..models.polach import adhesion_peak
+from .uncertainty import Z95
+
+#: The creep range [-] searched for the peak (:func:`adhesion_peak`'s defaults).
+S_MIN, S_MAX = 1e-5, 1.0
+#: A creep_opt within this factor of an end of the range counts as on it (no interior peak).
+EDGE = 1.05
+DERIVED = ("mu_max", "creep_opt")
+
+
+def reference_speed(vehicle_speed, weight=None):
+    """Median ``|v|`` [m/s] of the samples (those with ``weight`` > 0 when a padding mask is
+    given): the speed at which :func:`peak_numbers` evaluates the peak."""
+    speed = jnp.abs(vehicle_speed)
+    if weight is not None:
+        speed = jnp.where(weight > 0, speed, jnp.nan)
+    return jnp.nanmedian(speed)
+
+
+def peak_numbers(theta, k_eps, speed):
+    """``(peak, jacobian)``: ``(mu_max, creep_opt)`` (2,) of ``theta`` (5,) at ``speed`` [m/s] and
+    their gradient (2, 5). Pure and traceable."""
+
+    def peak(th):
+        return jnp.stack(adhesion_peak(th, k_eps, speed, s_min=S_MIN, s_max=S_MAX))
+
+    return peak(theta), jax.jacfwd(peak)(theta)
+
+
+def _variance(grad, cov):
+    """``grad Σ gradᵀ``, with ``inf`` where a parameter the quantity depends on has an unbounded
+    variance (a singular direction of the fit)."""
+    used = np.abs(grad) > 0
+    sub = cov[np.ix_(used, used)]
+    if not np.all(np.isfinite(sub)):
+        return np.inf
+    with np.errstate(over="ignore", invalid="ignore"):
+        var = grad[used] @ sub @ grad[used]
+    return float(max(var, 0.0)) if np.isfinite(var) else np.inf
+
+
+def peak_report(peak, jacobian, cov, speed, max_creep) -> tuple[dict, list]:
+    """``(derived, warnings)`` of a fit: ``derived`` {``mu_max``, ``creep_opt``: {``value``,
+    ``stderr``, ``ci95``}} from :func:`peak_numbers`' ``peak`` and ``jacobian``, the fit's ``cov``
+    (5, 5), the reference ``speed`` [m/s] and the largest ``|creep|`` of the fitted samples;
+    ``warnings`` as in :mod:`.trust` (module docstring)."""
+    mu_max, creep_opt = (float(x) for x in np.asarray(peak))
+    jac, cov = np.asarray(jacobian, float), np.nan_to_num(np.asarray(cov, float), nan=0.0)
+    sd_mu = np.sqrt(_variance(jac[0], cov))
+    edge = creep_opt >= S_MAX / EDGE or creep_opt <= S_MIN * EDGE
+    derived = {"mu_max": _entry(mu_max, sd_mu, (max(mu_max - Z95 * sd_mu, 0.0), mu_max + Z95 * sd_mu))}
+    if edge:
+        derived["creep_opt"] = {"value": creep_opt, "stderr": None, "ci95": None}
+    else:
+        sd_log = np.sqrt(_variance(jac[1] / creep_opt, cov))
+        ci = (creep_opt * np.exp(-Z95 * sd_log), creep_opt * np.exp(Z95 * sd_log))
+        derived["creep_opt"] = _entry(creep_opt, creep_opt * sd_log, ci)
+    warnings = []
+    if edge:
+        message = (
+            f"the fitted curve has no peak at creep {S_MIN:g}–{S_MAX:g} at {speed:.3g} m/s: "
+            f"mu_max is its value at creep {creep_opt:.3g}, creep_opt has no interval"
+        )
+        warnings.append({"code": "peak_extrapolated", "params": list(DERIVED), "message": message})
+    elif max_creep < creep_opt:
+        message = (
+            f"the recording's creep stays below the fitted curve's peak (at most {max_creep:.3g} "
+            f"against creep_opt {creep_opt:.3g} at {speed:.3g} m/s): mu_max and creep_opt are "
+            "extrapolated from the rising branch"
+        )
+        warnings.append({"code": "peak_extrapolated", "params": list(DERIVED), "message": message})
+    return derived, warnings
+
+
+def _entry(value, sd, ci):
+    if not np.isfinite(sd):
+        return {"value": value, "stderr": float("inf"), "ci95": None}
+    return {"value": value, "stderr": float(sd), "ci95": [float(ci[0]), float(ci[1])]}
