@@ -17,7 +17,10 @@ and stderr of every parameter; per set: coverage of the 90 % and 95 % intervals 
 (clipped to the box; a parameter fixed on a bound has no interval and counts as a miss unless the
 truth is that bound), ``z = (estimate − truth)/stderr`` mean and sd (calibrated: 0 and 1; a mean far
 from 0 is bias, an sd above 1 intervals too narrow), the initial slope ``(kA + kS)/2`` within 25 %
-of the truth, median |μ0 error|.
+of the truth, median |μ0 error|; and for the curve's peak (μ_max and creep_opt at the fit's
+reference speed, :mod:`jadhesion.identify.peak`) the coverage of the report's 90 % and 95 %
+intervals against the true curve's peak at that speed (the generator's own ``k_eps``), and the
+median and mean relative error.
 
 Runs before 2026-11-24 (``coverage_fit.json`` at 8d588e4, ``coverage_fit_robust.json``,
 ``coverage_fit_truncated.json``) fitted every sample (:func:`jadhesion.data.dataset.to_dataset`),
@@ -55,9 +58,10 @@ from jadhesion.data.selected import selected_dataset  # noqa: E402
 from jadhesion.data.sensors import CLEAN, REALISTIC  # noqa: E402
 from jadhesion.data.simulator import simulate_many  # noqa: E402
 from jadhesion.identify.batch_fit import fit_datasets  # noqa: E402
+from jadhesion.identify.peak import DERIVED  # noqa: E402
 from jadhesion.identify.polach_fit import fit_polach_batch  # noqa: E402
 from jadhesion.identify.trust import fit_report  # noqa: E402
-from jadhesion.models.polach import PARAM_NAMES  # noqa: E402
+from jadhesion.models.polach import PARAM_NAMES, adhesion_peak  # noqa: E402
 from validation.foreign_generator import generate, write  # noqa: E402
 
 CREEPS = ("smoothed", "raw")
@@ -99,15 +103,19 @@ def _fits(datasets):
     return [r.fit for r in fit_datasets(datasets, "lm", jax.random.key(0))]
 
 
-def score(recordings, truths):
-    """Per creep option: per-recording estimates, stderrs and hac lags of one set."""
+def score(recordings, truths, k_eps=None, creeps=CREEPS):
+    """Per creep option: per-recording estimates, stderrs and hac lags of one set, and the report's
+    peak (``derived``) beside the true curve's peak at the same speed (``k_eps``: the generator's
+    true gradient constants, default the dataset's)."""
     out = {}
-    for creep in CREEPS:
+    for creep in creeps:
         datasets = [selected_dataset(r, PHASE, creep=creep)[0] for r in recordings]
         fits = _fits(datasets)
         rows = []
-        for d, f, t in zip(datasets, fits, truths, strict=True):
+        for i, (d, f, t) in enumerate(zip(datasets, fits, truths, strict=True)):
             rep = fit_report(d, f)
+            true_k = d.k_eps if k_eps is None else k_eps[i]
+            peak = adhesion_peak(jnp.asarray(t, float), true_k, rep["vehicle_speed"])
             rows.append(
                 {
                     "truth": [float(x) for x in t],
@@ -115,6 +123,10 @@ def score(recordings, truths):
                     "stderr": [rep["uncertainty"][p]["stderr"] for p in PARAM_NAMES],
                     "hac_lags": rep["hac_lags"],
                     "converged": bool(int(f.status) == 0),
+                    "vehicle_speed": rep["vehicle_speed"],
+                    "derived": rep["derived"],
+                    "derived_truth": dict(zip(DERIVED, (float(x) for x in peak), strict=True)),
+                    "peak_extrapolated": any(w["code"] == "peak_extrapolated" for w in rep["warnings"]),
                 }
             )
         out[creep] = rows
@@ -126,6 +138,17 @@ def _covered(est, se, truth, z):
         return abs(est - truth) <= 1e-6
     lo, hi = max(est - z * se, 0.0), min(est + z * se, 1.0)
     return lo <= truth <= hi
+
+
+def _derived_covered(entry, truth, z, name):
+    """Whether the report's ``z`` interval of a derived quantity holds ``truth`` (``creep_opt`` on
+    the log scale, as :mod:`jadhesion.identify.peak` builds it; no interval counts as a miss)."""
+    value, se = entry["value"], entry["stderr"]
+    if se is None or not np.isfinite(se):
+        return False
+    if name == "creep_opt":
+        return value * np.exp(-z * se / value) <= truth <= value * np.exp(z * se / value)
+    return max(value - z * se, 0.0) <= truth <= value + z * se
 
 
 def summarise(rows):
@@ -153,6 +176,18 @@ def summarise(rows):
         out[f"{p}_z_mean"] = float(zs.mean()) if zs.size else None
         out[f"{p}_z_sd"] = float(zs.std()) if zs.size else None
         out[f"{p}_on_bound"] = int(sum(s is None for s in se))
+    for name in DERIVED:
+        have = [r for r in rows if "derived" in r]
+        if not have:
+            continue
+        for lv, z in Z.items():
+            hits = [_derived_covered(r["derived"][name], r["derived_truth"][name], z, name) for r in have]
+            out[f"{name}_coverage{lv}"] = float(np.mean(hits))
+        rel = [r["derived"][name]["value"] / r["derived_truth"][name] - 1 for r in have]
+        out[f"{name}_rel_error_median"] = float(np.median(np.abs(rel)))
+        out[f"{name}_rel_error_mean"] = float(np.mean(rel))
+    if any("derived" in r for r in rows):
+        out["peak_extrapolated"] = int(sum(r.get("peak_extrapolated", False) for r in rows))
     return out
 
 
@@ -214,6 +249,7 @@ def main(argv=None):
     p.add_argument("--foreign-duration", type=float, default=30.0)
     p.add_argument("--save", default=str(RESULTS / "coverage_fit.json"))
     p.add_argument("--figure", default=str(RESULTS / "coverage_fit.png"))
+    p.add_argument("--creeps", default=",".join(CREEPS), help="creep options to fit")
     p.add_argument("--replot", action="store_true")
     args = p.parse_args(argv)
     if args.replot:
@@ -222,8 +258,8 @@ def main(argv=None):
     doc = {"commit": commit(), "settings": vars(args), "results": {}, "summary": {}}
     start = time.perf_counter()
 
-    def record(key, recordings, truths, noise_sd):
-        scored = score(recordings, truths)
+    def record(key, recordings, truths, noise_sd, k_eps=None):
+        scored = score(recordings, truths, k_eps, tuple(args.creeps.split(",")))
         for creep, rows in scored.items():
             doc["results"][f"{key}/{creep}"] = rows
             doc["summary"][f"{key}/{creep}"] = {"noise_sd": noise_sd, **summarise(rows)}
@@ -240,7 +276,8 @@ def main(argv=None):
         for preset in filter(None, args.foreign_sensors.split(",")):
             pairs = list(foreign_starts(preset, args.per, tmp, args.foreign_rate, args.foreign_duration))
             truths = [[fr.truth["params"][k] for k in PARAM_NAMES] for _, fr in pairs]
-            record(f"foreign/start/{preset}", [r for r, _ in pairs], truths, FOREIGN_SD[preset])
+            k_eps = [fr.truth["vehicle"]["k_eps"] for _, fr in pairs]
+            record(f"foreign/start/{preset}", [r for r, _ in pairs], truths, FOREIGN_SD[preset], k_eps)
     figure(doc["summary"], args.figure)
 
 
