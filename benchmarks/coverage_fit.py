@@ -29,7 +29,7 @@ standstill and coasting included, which ``jadhesion fit`` never does.
 conditioning on parameters at a bound (commit 26731cc). The JSON records the git commit, every
 setting and ``os.getloadavg()``; the figure plots, per
 creep option, the median relative error of the slope and of μ0 and the 90 % coverage of kS and μ0
-against the speed-sensor noise sd.
+against the speed-sensor noise sd (and of μ_max where the run recorded the peak).
 """
 
 from __future__ import annotations
@@ -212,7 +212,8 @@ def figure(summary, path):
             axes[0].plot(xs, mean("slope_rel_error_median"), marker + ls, label=label)
             axes[1].plot(xs, mean("mu0_abs_error_median"), marker + ls, label=label)
             axes[3].plot(xs, mean("slope_within25"), marker + ls, label=label)
-            for i, p in enumerate(CHECKED):
+            shown = CHECKED + tuple(n for n in DERIVED[:1] if f"{n}_coverage90" in pts[0][1])
+            for i, p in enumerate(shown):
                 axes[2].plot(
                     xs,
                     mean(f"{p}_coverage90"),
