@@ -274,6 +274,8 @@ def test_many_files_equal_one_at_a_time(files, capsys, tmp_path, method):
             "evaluations",
             "hac_lags",
             "creep",
+            "derived",
+            "vehicle_speed",
         ):
             assert doc[key] == single[key], key
     with open(tmp_path / "t.csv", newline="") as fh:
@@ -295,11 +297,17 @@ def test_many_files_equal_one_at_a_time(files, capsys, tmp_path, method):
         "stderr_mu0",
         "stderr_A",
         "stderr_B",
+        "vehicle_speed",
+        "mu_max",
+        "stderr_mu_max",
+        "creep_opt",
+        "stderr_creep_opt",
     ]
     for row, doc in zip(rows, fits, strict=True):
         assert float(row["kS"]) == doc["params"]["kS"] and float(row["mae"]) == doc["mae"]
         s = doc["uncertainty"]["mu0"]["stderr"]
         assert row["stderr_mu0"] == ("" if s is None else repr(s))
+        assert float(row["mu_max"]) == doc["derived"]["mu_max"]["value"]
 
 
 def test_many_kiencke_fits_equal_one_at_a_time(files, capsys):

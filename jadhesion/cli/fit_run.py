@@ -181,7 +181,9 @@ def _plot(args, path, dataset, doc, many: bool) -> None:
 
 def table_rows(paths, docs) -> list[dict]:
     """``--out``'s rows: file, method, the parameters, mae, status, converged and (Polach) one
-    ``stderr_<param>`` per parameter (empty: on a bound; ``inf``: undetermined)."""
+    ``stderr_<param>`` per parameter (empty: on a bound; ``inf``: undetermined), the reference
+    ``vehicle_speed`` and the peak, ``mu_max`` and ``creep_opt`` with their ``stderr_`` (empty:
+    no interval)."""
     rows = []
     for path, doc in zip(paths, docs, strict=True):
         row = {
@@ -194,6 +196,11 @@ def table_rows(paths, docs) -> list[dict]:
         }
         for name, u in doc.get("uncertainty", {}).items():
             row[f"stderr_{name}"] = "" if u["stderr"] is None else u["stderr"]
+        if "derived" in doc:
+            row["vehicle_speed"] = doc["vehicle_speed"]
+            for name, d in doc["derived"].items():
+                row[name] = d["value"]
+                row[f"stderr_{name}"] = "" if d["stderr"] is None else d["stderr"]
         rows.append(row)
     return rows
 
@@ -228,6 +235,7 @@ def _print_many(args, paths, docs) -> None:
             "file": p.name,
             **{k: (f"{v:.5g}" if isinstance(v, float) else v) for k, v in d["params"].items()},
             "MAE": f"{d['mae']:.5g}",
+            **({"mu_max": f"{d['derived']['mu_max']['value']:.4g}"} if "derived" in d else {}),
             "status": d["status"],
             "warnings": ",".join(sorted({w["code"] for w in d.get("warnings", [])})) or "-",
         }
