@@ -20,6 +20,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..identify.peak import reference_speed
 from ..identify.polach_fit import fit_polach_batch
 from ..models.polach import adhesion_peak, polach_adhesion
 
@@ -64,7 +65,7 @@ def _local_chunk(method, options, data, theta_true, index, seed, noise_scale, cr
     def prepare(i, ns, cm):
         d = jax.tree.map(lambda a: a[i], data)
         obs, covered = observe(d, theta_true, ns, cm)
-        return obs, covered, jnp.mean(d.vehicle_speed), d.k_eps
+        return obs, covered, reference_speed(d.vehicle_speed, d.weight), d.k_eps  # as fit reports its peak
 
     obs, covered, speed, k_eps = jax.vmap(prepare)(index, noise_scale, creep_max)
     keys = jax.vmap(lambda s: fit_key(s, method))(seed)
