@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from jadhesion.data.vehicle import LOCO_22E
-from jadhesion.identify.peak import S_MAX, peak_numbers, peak_report, reference_speed
+from jadhesion.identify.peak import MU_BOX_MAX, S_MAX, peak_numbers, peak_report, reference_speed
 from jadhesion.models.polach import adhesion_peak
 
 K_EPS = LOCO_22E.k_eps()
@@ -81,3 +81,16 @@ def test_reference_speed_is_the_median_speed_of_the_real_rows():
     v = jnp.array([-1.0, 2.0, -3.0, 4.0, 100.0, 100.0])
     assert float(reference_speed(v)) == pytest.approx(3.5)
     assert float(reference_speed(v, jnp.array([1, 1, 1, 1, 0, 0]))) == pytest.approx(2.5)
+
+
+def test_box_bound_on_mu_max_holds_and_caps_a_huge_interval():
+    """No curve of the unit box exceeds 1 + 1/π (dense creep grid at the box's corners and 2 000
+    random points), and a fit whose μ_max is barely determined gets an interval capped there, not
+    one reaching 10¹⁵¹ (seen on a recording fitted against the wrong vehicle)."""
+    corners = jnp.array(np.array(np.meshgrid(*[[0.0, 1.0]] * 5)).reshape(5, -1).T)
+    inside = jax.random.uniform(jax.random.key(1), (2000, 5))
+    peaks = jax.vmap(lambda th: adhesion_peak(th, K_EPS, 0.5)[0])(jnp.concatenate([corners, inside]))
+    assert float(jnp.max(peaks)) < MU_BOX_MAX
+    peak, jac = peak_numbers(DRY, K_EPS, 2.0)
+    derived, _ = peak_report(peak, jac, 1e6 * np.eye(5), 2.0, max_creep=1.0)
+    assert derived["mu_max"]["ci95"] == [0.0, MU_BOX_MAX]

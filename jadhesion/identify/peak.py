@@ -7,8 +7,9 @@ fitted samples (:func:`reference_speed`; friction falls with the slip velocity `
 peak depends on the speed). Their uncertainty follows from the fit's covariance ``Σ`` (the HAC
 sandwich of :mod:`.trust`) by the delta method, ``Var g(θ) ≈ ∇g Σ ∇gᵀ``, with the gradient of the
 peak search itself (its parabolic refinement is differentiable). ``mu_max``'s 95 % interval is
-``± 1.96 sd`` (floored at 0); ``creep_opt``, a positive scale, gets its interval on the log scale,
-``creep_opt · exp(± 1.96 sd_log)`` (``stderr`` = ``creep_opt · sd_log``).
+``± 1.96 sd`` within [0, :data:`MU_BOX_MAX`] (the largest adhesion of any curve in the box);
+``creep_opt``, a positive scale, gets its interval on the log scale, ``creep_opt · exp(± 1.96
+sd_log)`` within the searched range (``stderr`` = ``creep_opt · sd_log``).
 
 Two warnings (code ``peak_extrapolated``): the recording's creep never reaches ``creep_opt`` (the
 peak is extrapolated from the rising branch: the interval is the model's, not the data's), or the
@@ -30,6 +31,9 @@ S_MIN, S_MAX = 1e-5, 1.0
 #: A creep_opt within this factor of an end of the range counts as on it (no interior peak).
 EDGE = 1.05
 DERIVED = ("mu_max", "creep_opt")
+#: Largest adhesion of any Polach curve in the unit box: μ ≤ μ0 ≤ 1 and
+#: ``kA ε/(1 + (kA ε)²) + atan(kS ε) < 1/2 + π/2``, so ``μ_adh < 1 + 1/π``.
+MU_BOX_MAX = 1.0 + 1.0 / np.pi
 
 
 def reference_speed(vehicle_speed, weight=None):
@@ -72,12 +76,20 @@ def peak_report(peak, jacobian, cov, speed, max_creep) -> tuple[dict, list]:
     jac, cov = np.asarray(jacobian, float), np.nan_to_num(np.asarray(cov, float), nan=0.0)
     sd_mu = np.sqrt(_variance(jac[0], cov))
     edge = creep_opt >= S_MAX / EDGE or creep_opt <= S_MIN * EDGE
-    derived = {"mu_max": _entry(mu_max, sd_mu, (max(mu_max - Z95 * sd_mu, 0.0), mu_max + Z95 * sd_mu))}
+    derived = {
+        "mu_max": _entry(
+            mu_max, sd_mu, (max(mu_max - Z95 * sd_mu, 0.0), min(mu_max + Z95 * sd_mu, MU_BOX_MAX))
+        )
+    }
     if edge:
         derived["creep_opt"] = {"value": creep_opt, "stderr": None, "ci95": None}
     else:
         sd_log = np.sqrt(_variance(jac[1] / creep_opt, cov))
-        ci = (creep_opt * np.exp(-Z95 * sd_log), creep_opt * np.exp(Z95 * sd_log))
+        log_c = np.log(creep_opt)  # the interval stays in the searched range [S_MIN, S_MAX]
+        ci = (
+            np.exp(max(log_c - Z95 * sd_log, np.log(S_MIN))),
+            np.exp(min(log_c + Z95 * sd_log, np.log(S_MAX))),
+        )
         derived["creep_opt"] = _entry(creep_opt, creep_opt * sd_log, ci)
     warnings = []
     if edge:
