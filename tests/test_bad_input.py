@@ -71,6 +71,16 @@ FILES = {
         None,
         ["creep_too_few.csv", "samples"],
     ),
+    "zero_creep.csv": (  # vehicle speed taken from this wheel: no creep to identify
+        csv(*(",".join([*r.split(",")[:2], r.split(",")[1], r.split(",")[3]]) for r in ROWS)),
+        None,
+        ["zero_creep.csv", "creep", "exactly 0", "vehicle_speed"],
+    ),
+    "weak_drive.csv": (  # every moving sample below the coasting drive: say what to check
+        csv(*(",".join([*r.split(",")[:3], "1000"]) for r in ROWS)),
+        None,
+        ["weak_drive.csv", "coasting", "traction_torque", "axle_load_kg"],
+    ),
     "creep_bad_adhesion.csv": (
         csv(*[f"{0.01 * (i + 1)},0.6,{'x' if i == 4 else 0.2}" for i in range(20)], header=CREEP_HEADER),
         None,

@@ -190,7 +190,9 @@ def find_stretches(time):
     return tuple((int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True)), gaps
 
 
-def _creep(cols, v):
+def raw_creep(cols, v):
+    """Creep [-] of each sample as recorded: ``creepage``, or the slip velocity (``slip_velocity``,
+    else ``wheel_speed − vehicle_speed``) over ``max(|v|, MIN_SPEED)``; zeros without either."""
     if "creepage" in cols:
         return np.asarray(cols["creepage"])
     if "slip_velocity" in cols:
@@ -233,7 +235,7 @@ def select(recording, phase: str = "traction") -> Selection:
         drive = direction * cols["adhesion"]
     else:
         drive = np.ones(n)
-    creep = direction * _creep(cols, v)
+    creep = direction * raw_creep(cols, v)
     moving = np.abs(v) >= MIN_SPEED
     against = np.zeros(n, bool)
     if "wheel_speed" in cols:

@@ -9,10 +9,19 @@ result is exactly :func:`jadhesion.data.dataset.to_dataset` of the recording.
 from __future__ import annotations
 
 import jax.numpy as jnp
+import numpy as np
 
 from ..errors import RecordingError
 from .dataset import PolachDataset, to_dataset
-from .segments import MIN_STRETCH_SAMPLES, Selection, select, slice_recording
+from .segments import (
+    MIN_DRIVE_MU,
+    MIN_SPEED,
+    MIN_STRETCH_SAMPLES,
+    Selection,
+    raw_creep,
+    select,
+    slice_recording,
+)
 
 
 def _concatenate(parts) -> PolachDataset:
@@ -28,12 +37,53 @@ def _concatenate(parts) -> PolachDataset:
     return PolachDataset(**fields)
 
 
+def _weak_drive_hint(recording) -> str:
+    """Where every moving sample counts as coasting: the largest drive, and what to check (a torque
+    in kN·m read as N·m, or at the motor, or a wrong vehicle, all look like coasting)."""
+    cols = recording.columns
+    if "traction_torque" not in cols:
+        return ""
+    moving = np.abs(np.asarray(cols["vehicle_speed"], float)) >= MIN_SPEED
+    if not moving.any():
+        return ""
+    veh = recording.vehicle
+    drive = float(np.max(np.abs(cols["traction_torque"][moving]))) / (veh.axle_weight_n * veh.wheel_radius_m)
+    if drive >= MIN_DRIVE_MU:
+        return ""
+    return (
+        f"; the largest torque is {drive:.3g} of the axle weight × wheel radius (coasting below "
+        f"{MIN_DRIVE_MU:g}): check traction_torque's unit (N·m at the wheelset) and axle_load_kg, "
+        "wheel_radius_m"
+    )
+
+
 def no_samples_message(recording, selection: Selection) -> str:
-    """One line: the phase selected nothing, and what the samples were."""
+    """One line: the phase selected nothing, what the samples were, and where no moving sample
+    has a drive, what to check."""
     counts = ", ".join(f"{k} {v}" for k, v in sorted(selection.counts().items()))
     return (
         f"{recording.path}: --phase {selection.phase} selects no samples ({counts}); try "
-        f"another --phase or --start/--end"
+        f"another --phase or --start/--end{_weak_drive_hint(recording)}"
+    )
+
+
+def zero_creep_message(recording, selection: Selection) -> str | None:
+    """One line when the recorded creep is exactly 0 on every selected sample (nothing to
+    identify; typically a vehicle speed computed from this wheel's own speed), else ``None``."""
+    cols = recording.columns
+    v = np.asarray(cols["vehicle_speed"], float)
+    if np.any(raw_creep(cols, v)[selection.mask] != 0.0):
+        return None
+    source = (
+        "creepage"
+        if "creepage" in cols
+        else "slip_velocity"
+        if "slip_velocity" in cols
+        else ("wheel_speed − vehicle_speed")
+    )
+    return (
+        f"{recording.path}: the creep ({source}) is exactly 0 on all {selection.used} selected "
+        "samples: nothing to identify (is vehicle_speed computed from this wheel's own speed?)"
     )
 
 
@@ -63,11 +113,14 @@ def selected_dataset(
     :func:`~jadhesion.data.dataset.to_dataset`; the CLI passes its cached drop-in).
 
     Raises:
-        RecordingError: no sample selected (the line gives the counts by reason).
+        RecordingError: no sample selected (the line gives the counts by reason), or the creep
+            is exactly 0 on every selected sample (:func:`zero_creep_message`).
     """
     selection = select(recording, phase)
     if selection.used == 0:
         raise RecordingError(no_samples_message(recording, selection))
+    if (message := zero_creep_message(recording, selection)) is not None:
+        raise RecordingError(message)
     if selection.mask.size < MIN_STRETCH_SAMPLES:  # too short for the smoother: the raw
         creep = "raw"  # difference (the fit names its minimum)
     if selection.complete:
