@@ -7,7 +7,7 @@ import pytest
 from logger_data import write_logger_file
 
 from jadhesion.cli import main
-from jadhesion.data.inspection import identifiability, sampling
+from jadhesion.data.inspection import MU_IMPLAUSIBLE, identifiability, implausible_adhesion, sampling
 
 
 @pytest.fixture(scope="module")
@@ -69,3 +69,18 @@ def test_inspect_bad_plot_dir(logger_file, tmp_path, capsys):
     assert main(["inspect", str(logger_file), "--plot", str(tmp_path / "f")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--plot" in err
+
+
+def test_implausible_adhesion_is_named_at_the_95th_percentile():
+    """μ̂ of a wheel–rail contact stays below 0.6: a recording whose μ̂ is mostly above
+    :data:`MU_IMPLAUSIBLE` is mis-scaled (torque unit or place, axle load, radius) and says so; a
+    few noisy samples above it do not."""
+    mu = np.full(1000, 0.35)
+    assert implausible_adhesion(mu) is None
+    mu[:40] = 1.5  # 4 % of the samples: observer noise spikes, not a scale error
+    assert implausible_adhesion(mu) is None
+    note = implausible_adhesion(-2.5 * np.full(1000, 0.4))  # braking counts by magnitude
+    assert note["code"] == "implausible_adhesion" and "axle_load_kg" in note["message"]
+    s = np.linspace(0.001, 0.3, 1000)
+    codes = [n["code"] for n in identifiability(s, s * 3.0, (MU_IMPLAUSIBLE + 0.4) * s / (0.01 + s))]
+    assert "implausible_adhesion" in codes

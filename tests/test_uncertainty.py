@@ -124,6 +124,21 @@ def test_a_parameter_on_a_bound_stays_free_for_the_others():
             assert u["stderr"] is None and u["ci95"] is None
         elif np.isfinite(free[i]):
             assert u["stderr"] == pytest.approx(free[i], rel=1e-9)
+    assert "implausible_adhesion" not in [w["code"] for w in report["warnings"]]
+
+
+def test_a_mis_scaled_recording_is_said_to_be_one():
+    """μ̂ three times too large (a sidecar axle load a third of the true one) converges to a
+    saturated curve; the trust block says the recording is mis-scaled, not only that the
+    parameters sit on their bounds."""
+    data = to_dataset(simulate_many("dry", [3], n_samples=400)[0])
+    data = data._replace(adhesion=3.0 * data.adhesion)
+    fit = jax.tree.map(
+        lambda a: a[0],
+        fit_polach_batch(jax.tree.map(lambda a: a[None], data), "lm", jax.random.split(jax.random.key(0), 1)),
+    )
+    codes = [w["code"] for w in fit_report(data, fit)["warnings"]]
+    assert "implausible_adhesion" in codes, codes
 
 
 @pytest.mark.parametrize("rho", [0.0, 0.5, 0.9])

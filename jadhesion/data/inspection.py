@@ -11,7 +11,10 @@ few noisy samples do not count):
   the largest-creep bin: "μ0 weakly identified" (only the rising branch is seen);
 * smallest creep above :data:`CREEP_FOR_SLOPE` (0.005): the initial slope (``kA``) weakly
   identified;
-* fewer than :data:`FEW_SAMPLES` samples selected: the standard errors will be rough.
+* fewer than :data:`FEW_SAMPLES` samples selected: the standard errors will be rough;
+* μ̂ above :data:`MU_IMPLAUSIBLE` at its 95th percentile (:func:`implausible_adhesion`): no
+  wheel–rail contact transmits that (dry rail peaks near 0.4–0.5, sanded near 0.6), so the torque's
+  unit or place (wheelset, not motor) or the vehicle's axle load or wheel radius is wrong.
 """
 
 from __future__ import annotations
@@ -24,6 +27,8 @@ SLIP_FOR_AB = 0.5
 CREEP_FOR_SLOPE = 0.005
 CREEP_BINS = 8
 FEW_SAMPLES = 200
+#: A 95th percentile of |μ̂| above this is no wheel–rail adhesion (:func:`implausible_adhesion`).
+MU_IMPLAUSIBLE = 0.8
 
 
 def sampling(time) -> dict:
@@ -48,6 +53,23 @@ def _range(x) -> list | None:
     return [float(x.min()), float(x.max())] if x.size else None
 
 
+def implausible_adhesion(adhesion) -> dict | None:
+    """``{code: "implausible_adhesion", message}`` when the 95th percentile of ``|adhesion|`` (μ̂
+    of the selected samples) exceeds :data:`MU_IMPLAUSIBLE`, else ``None``."""
+    mu = np.abs(np.asarray(adhesion, dtype=np.float64))
+    if mu.size == 0:
+        return None
+    p95 = float(np.percentile(mu, 95))
+    if not p95 > MU_IMPLAUSIBLE:
+        return None
+    return {
+        "code": "implausible_adhesion",
+        "message": f"μ̂ reaches {p95:.3g} (95th percentile), beyond any wheel–rail adhesion "
+        f"(> {MU_IMPLAUSIBLE:g}): check traction_torque's unit and that it is the wheelset's, not "
+        "the motor's, and the vehicle's axle_load_kg and wheel_radius_m (sidecar)",
+    }
+
+
 def identifiability(creep, slip, adhesion) -> list:
     """Remarks ``{code, message}`` on what the selected samples can identify (module docstring)."""
     creep, slip, mu = (np.abs(np.asarray(a, dtype=np.float64)) for a in (creep, slip, adhesion))
@@ -62,6 +84,8 @@ def identifiability(creep, slip, adhesion) -> list:
         )
     if creep.size == 0:
         return notes
+    if (note := implausible_adhesion(mu)) is not None:
+        notes.append(note)
     w_hi = float(np.percentile(slip, 99))
     if w_hi < SLIP_FOR_AB:
         notes.append(

@@ -28,6 +28,8 @@ Warning codes:
 * ``few_samples`` — fewer than :data:`.polach_fit.RECOMMENDED_SAMPLES` samples.
 * ``peak_extrapolated`` — the recording's creep never reaches the fitted peak, or the curve has
   none below creep 1 (:mod:`.peak`).
+* ``implausible_adhesion`` — μ̂ beyond any wheel–rail adhesion
+  (:func:`jadhesion.data.inspection.implausible_adhesion`): the fit is of a mis-scaled recording.
 """
 
 from __future__ import annotations
@@ -38,6 +40,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..data.inspection import implausible_adhesion
 from ..models.polach import PARAM_NAMES
 from ..status import status_of
 from .batch_fit import bucketed, valid_samples
@@ -152,6 +155,11 @@ def fit_report(data, fit, numbers=None) -> dict:
                 (f"{n} samples (< {RECOMMENDED_SAMPLES} recommended): errors and intervals are rough"),
             )
         )
+    mu = np.asarray(data.adhesion)
+    if (
+        note := implausible_adhesion(mu if data.weight is None else mu[np.asarray(data.weight) > 0])
+    ) is not None:
+        warnings.append(_warning(note["code"], [], note["message"]))
     speed = float(numbers.speed)
     derived, peak_warnings = peak_report(
         numbers.peak, numbers.peak_jacobian, cov, speed, float(numbers.max_creep)
