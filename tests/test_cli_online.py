@@ -92,12 +92,50 @@ def test_bad_options_exit_2_and_write_nothing(capsys, sweep_csv, tmp_path, argv,
 
 
 def test_no_informative_sample_is_a_clear_error(capsys, tmp_path):
-    path = save_recording(
-        {"creepage": np.full(50, 0.01), "vehicle_speed": np.zeros(50), "adhesion": np.full(50, 0.3)},
-        path=tmp_path / "still.csv",
-    )
-    code, _, err = _run(capsys, "online", path)
-    assert code == 2 and "informative samples" in err
+    still = {"creepage": np.full(50, 0.01), "vehicle_speed": np.zeros(50), "adhesion": np.full(50, 0.3)}
+    code, _, err = _run(capsys, "online", save_recording(still, path=tmp_path / "still.csv"))
+    assert code == 2 and "selects no samples (standstill 50)" in err
+    still["vehicle_speed"][-5:] = 1.5  # five moving samples: selected, too few to track
+    code, _, err = _run(capsys, "online", save_recording(still, path=tmp_path / "five.csv"))
+    assert code == 2 and "only 5 informative samples" in err
+
+
+@pytest.fixture(scope="module")
+def raw_recording(tmp_path_factory):
+    sim = simulate("dry", seed=3, n_samples=600)
+    cols = {k: np.array(sim.columns[k]) for k in ("time", "vehicle_speed", "wheel_speed", "traction_torque")}
+    return cols, sim.vehicle, tmp_path_factory.mktemp("online_raw")
+
+
+def test_takes_the_recording_options_of_the_other_commands(capsys, raw_recording):
+    """DESIGN §3: every command that reads a recording takes --column (and --start/--end, --phase):
+    a logger's names and units give the track of the canonical file, and a window tracks only its
+    samples."""
+    cols, vehicle, tmp = raw_recording
+    _, plain, _ = _run(capsys, "online", save_recording(cols, vehicle, tmp / "plain.csv"))
+    logger = {"t_ms": cols["time"] * 1e3, "v_kmh": cols["vehicle_speed"] * 3.6}
+    logger |= {"vw": cols["wheel_speed"], "M_kNm": cols["traction_torque"] / 1e3}
+    path = save_recording(logger, vehicle, tmp / "logger.csv")
+    maps = ["time=t_ms[ms]", "vehicle_speed=v_kmh[km/h]", "wheel_speed=vw", "traction_torque=M_kNm[kN*m]"]
+    code, doc, err = _run(capsys, "online", path, *[a for m in maps for a in ("--column", m)])
+    assert code == 0, err
+    np.testing.assert_allclose(doc["final"]["p2"], plain["final"]["p2"], rtol=1e-6)
+    t_mid = float(cols["time"][300])
+    code, doc, err = _run(capsys, "online", tmp / "plain.csv", "--start", t_mid)
+    assert code == 0 and doc["n_samples"] == 300 and doc["track"]["time"][0] >= t_mid
+
+
+def test_running_backwards_is_tracked_as_traction(capsys, raw_recording):
+    """Speeds and torque negated (the same test run in the other direction): creep and μ̂ are
+    oriented by the direction of travel, so the track is the same one."""
+    cols, vehicle, tmp = raw_recording
+    _, plain, _ = _run(capsys, "online", save_recording(cols, vehicle, tmp / "plain.csv"))
+    back = {k: (v if k == "time" else -v) for k, v in cols.items()}
+    code, doc, err = _run(capsys, "online", save_recording(back, vehicle, tmp / "back.csv"))
+    assert code == 0, err
+    assert doc["n_used"] == plain["n_used"] > 500
+    for field in ("p1", "p2", "mu_max"):
+        np.testing.assert_allclose(doc["final"][field], plain["final"][field], rtol=1e-8)
 
 
 def test_argument_choices_match_the_algorithm_registry():

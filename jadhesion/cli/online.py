@@ -1,11 +1,15 @@
 """``jadhesion online FILE``: paper 000's online Kiencke identification on a recording.
 
-Raw signals go through the adhesion observer (:func:`jadhesion.data.dataset.to_dataset`); a fitting
-dataset with ``adhesion`` is used as it is. Kiencke's ``p1, p2`` and the optimum (``creep_opt`` =
-λ_m, ``mu_max`` = μ_m) are tracked sample by sample with the forgetting factor η
-(:func:`jadhesion.identify.online.track_dataset`, the code path of ``reproduce online``). ``a_s`` is
-estimated from the data (the initial slope of Kiencke's curve fitted offline by global LM) unless
-``--a-s`` is given. Standstill and coasting samples are skipped (the estimate is held).
+Raw signals go through the adhesion observer and the creep smoother, per stretch between gaps
+(:func:`jadhesion.data.selected.tracking_dataset`); a fitting dataset with ``adhesion`` is used as
+it is. The recording options (``--column``, ``--axle``, ``--start/--end``, ``--phase``) are the
+other commands'; braking (``--phase braking``) and running backwards are tracked as traction.
+Kiencke's ``p1, p2`` and the optimum (``creep_opt`` = λ_m, ``mu_max`` = μ_m) are tracked sample by
+sample with the forgetting factor η (:func:`jadhesion.identify.online.track_dataset`, the code path
+of ``reproduce online``). ``a_s`` is estimated from the data (the initial slope of Kiencke's curve
+fitted offline by global LM) unless ``--a-s`` is given. Samples outside ``--phase`` (standstill,
+coasting, direction changes…) and those the tracker finds uninformative are skipped (the estimate
+is held).
 
 This module defines the arguments only; :mod:`.online_run` does the work.
 """
@@ -13,6 +17,7 @@ This module defines the arguments only; :mod:`.online_run` does the work.
 from __future__ import annotations
 
 from . import COMMANDS
+from .recording_options import add_recording_options
 
 #: The identifiers of :data:`jadhesion.identify.online.ALGORITHMS` (a test keeps the two equal).
 ALGORITHM_NAMES = ("1", "2", "rls")
@@ -37,4 +42,5 @@ def register(sub) -> None:
     p.add_argument("--seed", type=int, default=0, help="seed of the a_s estimate's LM (default 0)")
     p.add_argument("--plot", metavar="DIR", default=None, help="write FILE-stem_online.png into DIR")
     p.add_argument("--json", action="store_true", help="one JSON document on stdout")
+    add_recording_options(p)
     p.set_defaults(handler="jadhesion.cli.online_run:run")

@@ -8,12 +8,12 @@ from pathlib import Path
 import jax
 import numpy as np
 
-from ..data.dataset import to_dataset
-from ..data.recording import load_recording
+from ..data.selected import tracking_dataset
 from ..identify.online import track_dataset
 from ..plots.online import recording_figure
 from ..status import status_of
 from .common import UserError, emit_json, table
+from .loading import load_from_args
 
 TRACK_FIELDS = ("p1", "p2", "mu_max", "creep_opt", "eta")
 
@@ -26,15 +26,15 @@ def _finite(v):
 def run(args) -> int:
     if args.a_s is not None and not (math.isfinite(args.a_s) and args.a_s > 0):
         raise UserError(f"online: --a-s must be a positive number, got {args.a_s}")
-    recording = load_recording(args.file)
-    data = to_dataset(recording)
+    recording = load_from_args(args, args.file)
+    data, selection = tracking_dataset(recording, args.phase)
     out = track_dataset(data, args.algorithm, args.a_s, jax.random.key(args.seed))
     used = np.asarray(out.used)
     status = status_of(out.status)
     if status.name == "NOT_RUN":
         raise UserError(
-            f"{args.file}: only {int(used.sum())} informative samples (|v| >= 0.1 m/s, "
-            "|adhesion| >= 0.02); online identification needs at least 10"
+            f"{args.file}: only {int(used.sum())} informative samples of --phase {args.phase} "
+            "(|v| >= 0.1 m/s, |adhesion| >= 0.02); online identification needs at least 10"
         )
     cols = recording.columns
     time = np.asarray(cols["time"]) if "time" in cols else np.arange(used.size, dtype=float)
@@ -49,6 +49,7 @@ def run(args) -> int:
         "converged": status.converged,
         "n_samples": int(used.size),
         "n_used": int(used.sum()),
+        "selection": selection.document(),
         "track": {"time": time, **{f: np.asarray(getattr(tr, f)) for f in TRACK_FIELDS}, "used": used},
     }
     if out.slope_fit is not None:

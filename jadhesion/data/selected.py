@@ -30,7 +30,7 @@ def _concatenate(parts) -> PolachDataset:
     for name in PolachDataset._fields:
         if name == "k_eps":
             fields[name] = first.k_eps
-        elif getattr(first, name) is None:
+        elif any(getattr(p, name) is None for p in parts):  # e.g. a short stretch's raw creep
             fields[name] = None
         else:
             fields[name] = jnp.concatenate([getattr(p, name) for p in parts])
@@ -48,7 +48,7 @@ def _weak_drive_hint(recording) -> str:
         return ""
     veh = recording.vehicle
     drive = float(np.max(np.abs(cols["traction_torque"][moving]))) / (veh.axle_weight_n * veh.wheel_radius_m)
-    if drive >= MIN_DRIVE_MU:
+    if not 0.0 < drive < MIN_DRIVE_MU:  # no torque at all is plain coasting
         return ""
     return (
         f"; the largest torque is {drive:.3g} of the axle weight × wheel radius (coasting below "
@@ -91,12 +91,47 @@ def per_stretch_dataset(
     recording, selection: Selection, observer_variant: str = "paper", creep: str = "raw", *, build=to_dataset
 ) -> PolachDataset:
     """The dataset of every sample (none masked), the observer run on each stretch alone (default
-    ``creep="raw"``: any stretch length); for inspection and figures."""
+    ``creep="raw"``; a stretch shorter than ``MIN_STRETCH_SAMPLES`` always raw); for inspection,
+    figures and :func:`tracking_dataset`."""
     parts = [
-        build(slice_recording(recording, slice(a, b)), observer_variant, creep)
+        build(
+            slice_recording(recording, slice(a, b)),
+            observer_variant,
+            creep if b - a >= MIN_STRETCH_SAMPLES else "raw",  # too short for the smoother
+        )
         for a, b in selection.stretches
     ]
     return parts[0] if len(parts) == 1 else _concatenate(parts)
+
+
+def tracking_dataset(recording, phase: str = "traction", creep: str = "smoothed", *, build=to_dataset):
+    """``(PolachDataset, Selection)`` for a sample-by-sample tracker: every sample in time order
+    (the observer and smoother per stretch, :func:`per_stretch_dataset`), ``weight`` 1 on the
+    samples of ``phase`` and 0 elsewhere (the tracker holds its estimate there), and creep, slip
+    and μ̂ oriented so that the drive is positive: braking and running backwards read as traction
+    (``sign(v)`` × +1 for traction, −1 for braking).
+
+    Raises:
+        RecordingError: as :func:`selected_dataset`.
+    """
+    selection = select(recording, phase)
+    if selection.used == 0:
+        raise RecordingError(no_samples_message(recording, selection))
+    if (message := zero_creep_message(recording, selection)) is not None:
+        raise RecordingError(message)
+    data = per_stretch_dataset(recording, selection, creep=creep, build=build)
+    v = np.asarray(recording.columns["vehicle_speed"], float)
+    drive = np.where(selection.labels == "braking", -1.0, 1.0)
+    orient = jnp.asarray(np.where(selection.mask, np.where(v < 0, -1.0, 1.0) * drive, 0.0))
+    return (
+        data._replace(
+            creep=orient * data.creep,
+            slip=orient * data.slip,
+            adhesion=orient * data.adhesion,
+            weight=jnp.asarray(selection.mask, dtype=data.adhesion.dtype),
+        ),
+        selection,
+    )
 
 
 def selected_dataset(
