@@ -157,3 +157,28 @@ def test_cli_bad_input_exits_2_one_line_nothing_written(tmp_path, capsys):
         out, err = capsys.readouterr()
         assert out == "" and err.count("\n") == 1 and expected in err and str(path) in err
     assert set(tmp_path.iterdir()) == before
+
+
+@pytest.mark.parametrize("style", ["semicolon", "tab"])
+def test_european_and_tab_separated_text_reads_as_its_comma_twin(csv, tmp_path, style):
+    """A spreadsheet in a European locale writes ``;`` between fields and decimal commas; some
+    loggers write tabs. Both read as the comma-separated file, value for value, with a note; a bad
+    cell still names its line."""
+    text = csv.read_text()
+    if style == "semicolon":
+        text = text.replace(",", ";").replace(".", ",")
+    else:
+        text = text.replace(",", "\t")
+    path = _sidecar(csv, tmp_path / f"{style}.csv")
+    path.write_text(text)
+    rec, ref = load_recording(path), load_recording(csv)
+    for k, v in ref.columns.items():
+        np.testing.assert_array_equal(rec.columns[k], v)
+    assert any(f"{style}-separated" in n for n in rec.notes)
+    lines = text.splitlines()
+    lines[40] = lines[40].replace(
+        ";" if style == "semicolon" else "\t", "\tfast" if style == "tab" else ";fast", 1
+    )
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(RecordingError, match="line 41"):
+        load_recording(path)

@@ -39,6 +39,29 @@ def _read_text(path: Path, name: str, *, kind: str = "file") -> str:
     return text
 
 
+def header_line(text: str) -> str:
+    """The first line that is neither blank nor a ``#`` comment ('' when there is none)."""
+    for line in text.splitlines():
+        if line.strip() and not line.lstrip().startswith("#"):
+            return line
+    return ""
+
+
+def normalise_delimiter(text: str) -> tuple[str, tuple]:
+    """``(text, notes)``: a semicolon-separated file (European spreadsheets and loggers, with
+    decimal commas) or a tab-separated one rewritten as comma-separated with decimal points, so
+    every reader and every error's line number stay as they are. Sniffed from the header line:
+    more ``;`` (or tabs) than commas. Comma-separated text comes back unchanged."""
+    header = header_line(text)
+    commas = header.count(",")
+    if header.count(";") > commas:
+        note = "read as semicolon-separated, commas as decimal points"
+        return text.replace(",", ".").replace(";", ","), (note,)
+    if header.count("\t") > commas:
+        return text.replace("\t", ","), ("read as tab-separated",)
+    return text, ()
+
+
 def _parse_rows(text: str, name: str):
     """Header, data rows and their 1-based line numbers; skips blank and ``#`` lines."""
     header, rows, lines = None, [], []

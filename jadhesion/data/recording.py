@@ -39,7 +39,7 @@ import numpy as np
 
 from ..atomic import atomic_write
 from .formats import is_binary, read_columns
-from .readers import _fast_parse, _parse_rows, _read_text
+from .readers import _fast_parse, _parse_rows, _read_text, normalise_delimiter
 from .sidecar import _load_sidecar
 from .units import ColumnSpec, parse_column_map, to_si
 from .validate import (
@@ -147,8 +147,8 @@ def load_recording(path, *, columns=(), axle=None, max_speed: float = MAX_SPEED)
         header, parsed, read_notes = read_columns(path, name)
         fast, lines = True, None
     else:
-        text = _read_text(path, name)
-        fast, read_notes = _fast_parse(text), ()
+        text, delimiter_notes = normalise_delimiter(_read_text(path, name))
+        fast, read_notes = _fast_parse(text), tuple(f"{name}: {n}" for n in delimiter_notes)
         if fast is None:
             header, rows, lines = _parse_rows(text, name)
             cells = np.array(rows, dtype=str)
