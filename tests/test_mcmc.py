@@ -208,6 +208,31 @@ def test_wrapper_samples_a_known_gaussian():
     assert stats.kstest(z, "norm", args=(0, 1.2)).pvalue < 0.01  # the KS check has power
 
 
+def test_a_chain_extended_to_fifty_autocorrelation_times_is_one_long_run():
+    """``max_steps``: a chain started far too short is extended in rounds until it holds 50 τ_max
+    kept steps, without a warning; the rounds continue emcee's state, so the result is bit for bit
+    the fixed-length run of the same total from the same seed. A cap below the need stops there
+    and warns."""
+    prec = np.linalg.inv(np.array([[1.0, 0.9], [0.9, 1.0]]))
+    log_prob = lambda x: -0.5 * np.einsum("wi,ij,wj->w", x, prec, x)  # noqa: E731
+    p0 = 1e-3 * np.random.default_rng(1).standard_normal((16, 2))
+    seen = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ChainTooShortWarning)
+        chain, diag = run_ensemble(
+            log_prob, p0, 200, 4, burn=100, max_steps=20_000, callback=lambda d, t: seen.append((d, t))
+        )
+    assert diag.steps > 200 and chain.shape[0] >= 50 * np.max(diag.tau) and not diag.warnings
+    assert seen[-1] == (diag.steps, diag.steps) and len({t for _, t in seen}) > 1  # the bar grew
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ChainTooShortWarning)
+        fixed, _ = run_ensemble(log_prob, p0, diag.steps, 4, burn=100)
+    np.testing.assert_array_equal(chain, fixed)
+    with pytest.warns(ChainTooShortWarning):
+        _, capped = run_ensemble(log_prob, p0, 200, 4, burn=100, max_steps=400)
+    assert capped.steps == 400 and capped.warnings
+
+
 def test_seed_reproducible_and_short_chain_warns(data):
     theta0 = np.asarray(lm_optimum(data))
     with pytest.warns(ChainTooShortWarning):

@@ -43,7 +43,13 @@ def register(sub) -> None:
     p = sub.add_parser("posterior", help=COMMANDS["posterior"])
     p.add_argument("file", help="recording or creepage CSV")
     p.add_argument("--walkers", type=int, default=32, help="ensemble size (default 32)")
-    p.add_argument("--steps", type=int, default=5000, help="steps per walker, burn-in included")
+    p.add_argument(
+        "--steps",
+        type=int,
+        default=None,
+        help="steps per walker, burn-in included (default: 5000, extended up to 20000 until the "
+        "chain holds 50 autocorrelation times)",
+    )
     p.add_argument(
         "--likelihood",
         choices=("auto", "gauss", "student", "laplace", "ar1", "observer"),

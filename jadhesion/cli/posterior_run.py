@@ -20,6 +20,10 @@ from ..plots.posterior import corner_plot, predictive_plot
 from .common import Progress, UserError, emit_json, table
 from .loading import load_dataset
 
+#: Without ``--steps``: the chain's first length, and the most it is extended to while it holds
+#: fewer than 50 autocorrelation times (:func:`jadhesion.identify.ensemble.run_ensemble`).
+DEFAULT_STEPS, AUTO_MAX_STEPS = 5000, 20000
+
 
 def tail_check(data, theta, kappa: float) -> dict:
     """The standardised residuals' tails at ``theta``: ``z = (E[mu_adh] − mu_hat) / √(σ² + Var[mu_adh])``
@@ -96,7 +100,7 @@ def run(args) -> int:
 
     if args.walkers < 12 or args.walkers % 2:
         raise UserError(f"--walkers must be an even number >= 12, got {args.walkers}")
-    if args.steps < 50:
+    if args.steps is not None and args.steps < 50:
         raise UserError(f"--steps must be at least 50, got {args.steps}")
     recording, data, selection = load_dataset(args, args.file)
     require_samples(data, args.file)
@@ -123,20 +127,22 @@ def run(args) -> int:
         theta0 = fit_polach(data, "lm", jax.random.key(args.seed)).params
     spread = np.asarray(initial_spread(theta0, data, obs=obs)) * np.sqrt(1.0 / tempering["weight"])
     theta0 = np.asarray(theta0)
-    progress = Progress(args.steps, "posterior", "steps", enabled=not args.json or sys.stderr.isatty())
+    steps, max_steps = (DEFAULT_STEPS, AUTO_MAX_STEPS) if args.steps is None else (args.steps, None)
+    progress = Progress(steps, "posterior", "steps", enabled=not args.json or sys.stderr.isatty())
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ChainTooShortWarning)  # reported in diagnostics instead
         result = sample_posterior(
             data,
             theta0,
             walkers=args.walkers,
-            steps=args.steps,
+            steps=steps,
+            max_steps=max_steps,
             likelihood=likelihood,
             seed=args.seed,
             spread=spread,
             obs=obs,
             weight=tempering["weight"],
-            callback=lambda i: progress.update(i - progress.done),
+            callback=progress,
         )
     for message in result.diagnostics.warnings:
         sys.stderr.write(f"jadhesion: warning: {message}\n")
@@ -156,7 +162,8 @@ def run(args) -> int:
     print(table(rows, ["quantity", "median", "q05", "q95"]))
     d = doc["diagnostics"]
     print(
-        f"acceptance {d['acceptance']:.2f}, tau max {max(d['tau'].values()):.0f} steps, "
+        f"{d['steps']} steps (burn-in {d['burn']}), acceptance {d['acceptance']:.2f}, "
+        f"tau max {max(d['tau'].values()):.0f} steps, "
         f"ESS min {min(d['ess'].values()):.0f}, {d['n_samples']} samples, {d['seconds']:.1f} s"
     )
     return 0

@@ -2,8 +2,10 @@
 
 ``run_ensemble(log_prob, p0, steps, seed)`` runs the affine-invariant stretch move with
 ``vectorize=True`` (``log_prob`` maps a (W, d) array of walkers to W values in one call), discards
-burn-in, thins, and measures the integrated autocorrelation time τ per coordinate. A chain shorter
-than ``MIN_TAU_MULTIPLE`` τ triggers :class:`ChainTooShortWarning` (also listed in the diagnostics).
+burn-in, thins, and measures the integrated autocorrelation time τ per coordinate. With
+``max_steps`` the chain is extended in rounds until it holds ``MIN_TAU_MULTIPLE`` τ_max kept
+steps or reaches ``max_steps``. A chain still shorter than ``MIN_TAU_MULTIPLE`` τ triggers
+:class:`ChainTooShortWarning` (also listed in the diagnostics).
 """
 
 from __future__ import annotations
@@ -53,14 +55,18 @@ def run_ensemble(
     *,
     burn: int = 0,
     thin: int = 1,
-    callback: Optional[Callable[[int], None]] = None,
+    max_steps: Optional[int] = None,
+    callback: Optional[Callable[[int, int], None]] = None,
     callback_every: int = 100,
 ):
     """Run emcee from walkers ``p0`` (W, d); returns ``(chain, diagnostics)`` with ``chain`` of shape
     (kept steps, W, d) after discarding ``burn`` steps and keeping every ``thin``-th.
 
     ``seed`` (an int or a NumPy Generator) fixes emcee's random state, so runs are reproducible.
-    ``callback(i)`` is called every ``callback_every`` steps and at the end (progress display).
+    ``max_steps`` (> ``steps``): extend the chain while it is shorter than ``MIN_TAU_MULTIPLE``
+    τ_max, each round to 1.2× the length that the current τ asks for (at least 1.25× the chain),
+    up to ``max_steps`` in all. ``callback(done, total)`` is called every ``callback_every`` steps
+    and at the end of each round (progress display; ``total`` grows when the chain is extended).
     """
     if not 0 <= burn < steps:
         raise ValueError(f"burn must be in [0, steps), got burn={burn}, steps={steps}")
@@ -69,20 +75,25 @@ def run_ensemble(
     sampler = emcee.EnsembleSampler(walkers, dim, log_prob, vectorize=True)
     sampler.random_state = np.random.RandomState(int(rng.integers(2**32))).get_state()
     start = time.perf_counter()
-    for i, _ in enumerate(sampler.sample(p0, iterations=steps), start=1):
-        if callback is not None and (i % callback_every == 0 or i == steps):
-            callback(i)
+    done, total, state = 0, steps, p0
+    while True:
+        for _ in sampler.sample(state, iterations=total - done):
+            done += 1
+            if callback is not None and (done % callback_every == 0 or done == total):
+                callback(done, total)
+        chain = sampler.get_chain(discard=burn, thin=thin)
+        # tol=0: emcee logs nothing; the chain-length check is ours (ChainTooShortWarning).
+        tau = integrated_time(chain)
+        need = int(math.ceil(MIN_TAU_MULTIPLE * np.max(tau) * thin + burn))
+        if max_steps is None or done >= max_steps or done >= need:
+            break
+        total, state = min(max_steps, max(int(1.2 * need), int(1.25 * done))), sampler.get_last_sample()
     seconds = time.perf_counter() - start
-
-    chain = sampler.get_chain(discard=burn, thin=thin)
-    # tol=0: emcee logs nothing; the chain-length check is ours (ChainTooShortWarning).
-    tau = integrated_time(chain)
     messages = []
     if chain.shape[0] < MIN_TAU_MULTIPLE * np.max(tau):
         messages.append(
             f"chain of {chain.shape[0]} kept steps is shorter than {MIN_TAU_MULTIPLE} "
-            f"autocorrelation times (tau_max = {np.max(tau):.1f} steps): run at least "
-            f"{int(math.ceil(MIN_TAU_MULTIPLE * np.max(tau) * thin + burn))} steps"
+            f"autocorrelation times (tau_max = {np.max(tau):.1f} steps): run at least {need} steps"
         )
         warnings.warn(messages[-1], ChainTooShortWarning, stacklevel=3)
     n = chain.shape[0] * walkers
@@ -91,7 +102,7 @@ def run_ensemble(
         tau,
         n / tau,
         n,
-        steps,
+        done,
         burn,
         thin,
         seconds,

@@ -146,7 +146,8 @@ def sample_posterior(
     fixed_scale: Optional[float] = None,
     spread=1e-3,
     max_derived: int = 4000,
-    callback: Optional[Callable[[int], None]] = None,
+    max_steps: Optional[int] = None,
+    callback: Optional[Callable[[int, int], None]] = None,
     callback_every: int = 100,
     obs: Optional[ObserverTerms] = None,
     weight: float = 1.0,
@@ -168,13 +169,16 @@ def sample_posterior(
         spread: initial ball radius as a fraction of the box width, scalar or (5,) — e.g.
             :func:`jadhesion.identify.laplace.initial_spread` to start near the posterior's width.
         max_derived: at most this many (evenly spaced) samples feed ``mu_max`` / ``creep_opt``.
-        callback: called with the number of steps done every ``callback_every`` steps (progress).
+        max_steps: extend the chain until it holds 50 autocorrelation times, up to this many
+            steps in all (:func:`.ensemble.run_ensemble`); ``None``: exactly ``steps``.
+        callback: ``callback(done, total)`` every ``callback_every`` steps (progress).
         obs: :class:`ObserverTerms` of the recording (``"observer"`` only).
         weight: the log-likelihood's tempering 1/κ (1: none): with κ the residuals' colour factor
             (:func:`jadhesion.identify.uncertainty.colour_factor`) the posterior counts n/κ
             effective samples instead of n correlated ones.
 
-    Emits :class:`ChainTooShortWarning` when ``steps − burn < 50 τ_max``.
+    Emits :class:`ChainTooShortWarning` when the chain run (``steps``, or up to ``max_steps``)
+    keeps fewer than 50 τ_max steps after ``burn``.
     """
     bounds = (np.zeros(5), np.ones(5)) if bounds is None else tuple(np.asarray(b, float) for b in bounds)
     burn = steps // 4 if burn is None else burn
@@ -190,7 +194,15 @@ def sample_posterior(
     log_prob(p0[: walkers // 2])  # compile both shapes here, outside the timed loop
     compile_seconds = time.perf_counter() - t0
     chain, diagnostics = run_ensemble(
-        log_prob, p0, steps, rng, burn=burn, thin=thin, callback=callback, callback_every=callback_every
+        log_prob,
+        p0,
+        steps,
+        rng,
+        burn=burn,
+        thin=thin,
+        max_steps=max_steps,
+        callback=callback,
+        callback_every=callback_every,
     )
     diagnostics = diagnostics._replace(compile_seconds=compile_seconds)
     if fixed_scale is None:
