@@ -105,7 +105,7 @@ def assert_one_line_exit_2(code, out, err, words):
 
 
 @pytest.mark.parametrize("name", sorted(FILES))
-@pytest.mark.parametrize("command", ["fit", "posterior"])
+@pytest.mark.parametrize("command", ["fit", "posterior", "online"])
 def test_malformed_file(tmp_path, capsys, name, command):
     text, sidecar, words = FILES[name]
     path = tmp_path / name
@@ -113,18 +113,29 @@ def test_malformed_file(tmp_path, capsys, name, command):
     if sidecar is not None:
         path.with_suffix(".json").write_text(sidecar)
     before = set(tmp_path.iterdir())
-    if command == "posterior" and name in ("three_rows.csv", "creep_too_few.csv"):
-        words = [name]  # posterior states its own minimum
+    if command in ("posterior", "online") and name in ("three_rows.csv", "creep_too_few.csv"):
+        words = [name]  # posterior and online state their own minimum
     code, out, err = run_main(capsys, [command, path, "--json"])
     assert_one_line_exit_2(code, out, err, words)
     assert set(tmp_path.iterdir()) == before
 
 
-def test_diagnose_malformed_file(tmp_path, capsys):
-    path = tmp_path / "text_cell.csv"
-    path.write_text(FILES["text_cell.csv"][0])
+@pytest.mark.parametrize(
+    "name, text, words",
+    [
+        ("text_cell.csv", FILES["text_cell.csv"][0], ["text_cell.csv", "vehicle_speed"]),
+        (  # long enough for the diagnosis's own minimum, but no creep at all
+            "zero_creep.csv",
+            csv(*(",".join([*r.split(",")[:2], r.split(",")[1], r.split(",")[3]]) for r in good_rows(80))),
+            ["zero_creep.csv", "exactly 0"],
+        ),
+    ],
+)
+def test_diagnose_malformed_file(tmp_path, capsys, name, text, words):
+    path = tmp_path / name
+    path.write_text(text)
     code, out, err = run_main(capsys, ["diagnose", path, "--json", "--report", tmp_path / "rep"])
-    assert_one_line_exit_2(code, out, err, ["text_cell.csv", "vehicle_speed"])
+    assert_one_line_exit_2(code, out, err, words)
     assert not (tmp_path / "rep").exists()
 
 

@@ -16,6 +16,7 @@ import time
 from argparse import Namespace
 
 from ..data.segments import select
+from ..data.selected import zero_creep_message
 from ..diagnose import diagnose
 from ..diagnose.null import N_REPLICAS
 from .common import UserError, emit_json, table
@@ -40,6 +41,8 @@ def diagnose_file(
             f"{path}: --phase {phase} leaves {int(mask.sum())} samples ({selection.summary()}); "
             "diagnosis needs at least 50"
         )
+    if (message := zero_creep_message(recording, mask)) is not None:
+        raise UserError(message)
     result = diagnose(recording.columns, recording.vehicle, str(path), replicas, seed, mask)
     result["selection"] = {
         **selection.document(),

@@ -67,12 +67,13 @@ def no_samples_message(recording, selection: Selection) -> str:
     )
 
 
-def zero_creep_message(recording, selection: Selection) -> str | None:
-    """One line when the recorded creep is exactly 0 on every selected sample (nothing to
-    identify; typically a vehicle speed computed from this wheel's own speed), else ``None``."""
+def zero_creep_message(recording, mask) -> str | None:
+    """One line when the recorded creep is exactly 0 on every sample of ``mask`` (bool (n,), the
+    samples used: nothing to identify; typically a vehicle speed computed from this wheel's own
+    speed), else ``None``."""
     cols = recording.columns
     v = np.asarray(cols["vehicle_speed"], float)
-    if np.any(raw_creep(cols, v)[selection.mask] != 0.0):
+    if np.any(raw_creep(cols, v)[mask] != 0.0):
         return None
     source = (
         "creepage"
@@ -82,7 +83,7 @@ def zero_creep_message(recording, selection: Selection) -> str | None:
         else ("wheel_speed − vehicle_speed")
     )
     return (
-        f"{recording.path}: the creep ({source}) is exactly 0 on all {selection.used} selected "
+        f"{recording.path}: the creep ({source}) is exactly 0 on all {int(np.sum(mask))} selected "
         "samples: nothing to identify (is vehicle_speed computed from this wheel's own speed?)"
     )
 
@@ -117,7 +118,7 @@ def tracking_dataset(recording, phase: str = "traction", creep: str = "smoothed"
     selection = select(recording, phase)
     if selection.used == 0:
         raise RecordingError(no_samples_message(recording, selection))
-    if (message := zero_creep_message(recording, selection)) is not None:
+    if (message := zero_creep_message(recording, selection.mask)) is not None:
         raise RecordingError(message)
     data = per_stretch_dataset(recording, selection, creep=creep, build=build)
     v = np.asarray(recording.columns["vehicle_speed"], float)
@@ -154,7 +155,7 @@ def selected_dataset(
     selection = select(recording, phase)
     if selection.used == 0:
         raise RecordingError(no_samples_message(recording, selection))
-    if (message := zero_creep_message(recording, selection)) is not None:
+    if (message := zero_creep_message(recording, selection.mask)) is not None:
         raise RecordingError(message)
     if selection.mask.size < MIN_STRETCH_SAMPLES:  # too short for the smoother: the raw
         creep = "raw"  # difference (the fit names its minimum)
