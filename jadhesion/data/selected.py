@@ -75,13 +75,7 @@ def zero_creep_message(recording, mask) -> str | None:
     v = np.asarray(cols["vehicle_speed"], float)
     if np.any(raw_creep(cols, v)[mask] != 0.0):
         return None
-    source = (
-        "creepage"
-        if "creepage" in cols
-        else "slip_velocity"
-        if "slip_velocity" in cols
-        else ("wheel_speed − vehicle_speed")
-    )
+    source = next((c for c in ("creepage", "slip_velocity") if c in cols), "wheel_speed − vehicle_speed")
     return (
         f"{recording.path}: the creep ({source}) is exactly 0 on all {int(np.sum(mask))} selected "
         "samples: nothing to identify (is vehicle_speed computed from this wheel's own speed?)"
@@ -109,8 +103,8 @@ def tracking_dataset(recording, phase: str = "traction", creep: str = "smoothed"
     """``(PolachDataset, Selection)`` for a sample-by-sample tracker: every sample in time order
     (the observer and smoother per stretch, :func:`per_stretch_dataset`), ``weight`` 1 on the
     samples of ``phase`` and 0 elsewhere (the tracker holds its estimate there), and creep, slip
-    and μ̂ oriented so that the drive is positive: braking and running backwards read as traction
-    (``sign(v)`` × +1 for traction, −1 for braking).
+    and μ̂ oriented by the direction of travel and, on braking samples, the drive's sign: braking
+    and running backwards read as traction (``sign(v)`` × −1 on braking samples, else × +1).
 
     Raises:
         RecordingError: as :func:`selected_dataset`.
@@ -122,8 +116,8 @@ def tracking_dataset(recording, phase: str = "traction", creep: str = "smoothed"
         raise RecordingError(message)
     data = per_stretch_dataset(recording, selection, creep=creep, build=build)
     v = np.asarray(recording.columns["vehicle_speed"], float)
-    drive = np.where(selection.labels == "braking", -1.0, 1.0)
-    orient = jnp.asarray(np.where(selection.mask, np.where(v < 0, -1.0, 1.0) * drive, 0.0))
+    braking = np.where(selection.labels == "braking", -1.0, 1.0)
+    orient = jnp.asarray(np.where(v < 0, -1.0, 1.0) * braking)
     return (
         data._replace(
             creep=orient * data.creep,
