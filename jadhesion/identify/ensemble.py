@@ -84,7 +84,8 @@ def run_ensemble(
         chain = sampler.get_chain(discard=burn, thin=thin)
         # tol=0: emcee logs nothing; the chain-length check is ours (ChainTooShortWarning).
         tau = integrated_time(chain)
-        need = int(math.ceil(MIN_TAU_MULTIPLE * np.max(tau) * thin + burn))
+        tau_max = np.max(tau)  # NaN for a coordinate that never moved: nothing to extend for
+        need = int(math.ceil(MIN_TAU_MULTIPLE * tau_max * thin + burn)) if np.isfinite(tau_max) else done
         if max_steps is None or done >= max_steps or done >= need:
             break
         total, state = min(max_steps, max(int(1.2 * need), int(1.25 * done))), sampler.get_last_sample()
