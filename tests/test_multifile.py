@@ -353,3 +353,27 @@ def test_a_bad_file_fails_the_call_before_any_fit(files, capsys, tmp_path):
     assert code == 2 and "holds no recording" in err
     code, out, err = _fit(capsys, files[0], "--out", tmp_path / "t.txt")
     assert code == 2 and "--out" in err and out == ""
+
+
+def test_keep_going_fits_the_usable_files_and_lists_the_others(files, capsys, tmp_path):
+    """``--keep-going``: a folder of logger files with one broken file is fitted, each good file
+    exactly as alone, the broken one listed with its one-line reason (stderr and ``skipped``) and
+    left out of ``--out``; with no usable file the call still exits 2 and writes nothing."""
+    bad = tmp_path / "bad.csv"
+    bad.write_text("creepage,vehicle_speed,adhesion\n0.01,0.6,0.3\n0.02,fast,0.3\n")
+    out_csv = tmp_path / "out.csv"
+    code, out, err = _fit(capsys, files[0], bad, files[1], "--method", "lm", "--keep-going", "--json")
+    assert code == 0
+    doc = json.loads(out)
+    assert [f["file"] for f in doc["fits"]] == [str(files[0]), str(files[1])]
+    assert [s["file"] for s in doc["skipped"]] == [str(bad)] and "row" in doc["skipped"][0]["error"]
+    assert err.strip().splitlines() == [f"jadhesion: skipped: {doc['skipped'][0]['error']}"]
+    code, alone, _ = _fit(capsys, files[1], "--method", "lm", "--json")
+    assert json.loads(alone)["params"] == doc["fits"][1]["params"]
+    code, out, _ = _fit(capsys, files[0], bad, "--method", "lm", "--keep-going", "--out", out_csv)
+    assert code == 0 and "1 file(s) skipped" in out
+    with out_csv.open() as fh:
+        assert [r["file"] for r in csv.DictReader(fh)] == [str(files[0])]
+    out_csv.unlink()
+    code, out, err = _fit(capsys, bad, tmp_path / "missing.csv", "--keep-going", "--out", out_csv)
+    assert code == 2 and out == "" and "none of the 2 files" in err and not out_csv.exists()

@@ -72,5 +72,12 @@ def register(sub) -> None:
         help="also write a CSV table, one row per file: file, method, params, mae, "
         "status, converged, stderr per parameter",
     )
+    p.add_argument(
+        "--keep-going",
+        action="store_true",
+        help="several files: fit those that can be used and list each one that cannot, with its "
+        'reason (stderr, and "skipped" in --json), instead of stopping at the first; exit 2 only '
+        "when none can",
+    )
     add_recording_options(p)
     p.set_defaults(handler="jadhesion.cli.fit_run:run")

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import csv
 import io
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -248,12 +249,33 @@ def _print_many(args, paths, docs) -> None:
     print(table(rows, list(rows[0])))
 
 
+def _load_all(args, paths) -> tuple[list, list, list]:
+    """``(paths, loaded, skipped)``: :func:`_load` of each file. Without ``--keep-going`` the first
+    file that cannot be used stops the call (its one-line error); with it, each such file is
+    reported on stderr and in ``skipped`` [{``file``, ``error``}], and the call stops only when
+    none can be used."""
+    kept, loaded, skipped = [], [], []
+    for path in paths:
+        try:
+            loaded.append(_load(args, path))
+        except UserError as error:
+            if not args.keep_going:
+                raise
+            skipped.append({"file": str(path), "error": str(error)})
+            sys.stderr.write(f"jadhesion: skipped: {error}\n")
+            continue
+        kept.append(path)
+    if not loaded:
+        raise UserError(f"fit: none of the {len(paths)} files can be used (each is listed above)")
+    return kept, loaded, skipped
+
+
 def run(args) -> int:
     """Fit one or many recordings and print (or ``--json``, ``--out``) the results with their
     trust blocks."""
     _check_flags(args)
     paths, many = expand_files(args.file)
-    loaded = [_load(args, p) for p in paths]  # every file checked before any fit
+    paths, loaded, skipped = _load_all(args, paths)  # every file checked before any fit
     datasets = [d for d, _ in loaded]
     docs = _fit_all(args, datasets)
     for doc, (_, selection) in zip(docs, loaded, strict=True):
@@ -265,11 +287,12 @@ def run(args) -> int:
     if args.out is not None:
         write_table(args.out, table_rows(paths, docs))
     if args.json:
-        emit_json(
-            {"fits": [{"file": str(p), **d} for p, d in zip(paths, docs, strict=True)]} if many else docs[0]
-        )
+        fits = [{"file": str(p), **d} for p, d in zip(paths, docs, strict=True)]
+        emit_json({"fits": fits, **({"skipped": skipped} if args.keep_going else {})} if many else docs[0])
     elif many:
         _print_many(args, paths, docs)
+        if skipped:
+            print(f"{len(skipped)} file(s) skipped, each with its reason on stderr")
     else:
         print(loaded[0][1].summary())
         _print_one(args, docs[0])
