@@ -25,12 +25,10 @@ def fit_figure(data, theta, title="", peak=None, speed=None):
     if peak is not None:
         _peak_marker(top, peak, speed)
     top.set_xscale("symlog", linthresh=1e-2)  # linear below 1 cm/s, where the curve rises
-    top.set(
-        xlabel="slip velocity w [m/s] (linear below 0.01, log above)",
-        ylabel="adhesion coefficient",
-        title=title,
-    )
-    legend = top.legend(loc="lower right")
+    top.set(xlabel="slip velocity w [m/s] (linear below 0.01, log above)", ylabel="adhesion coefficient")
+    fig.suptitle(title)
+    # above the axes, never over the data: a wide sweep fills the lower right too
+    legend = top.legend(loc="lower left", bbox_to_anchor=(0.0, 1.0), ncols=3, frameon=False, fontsize="small")
     for handle in legend.legend_handles:  # the sample dots large enough to see; the peak as drawn
         if getattr(handle, "get_marker", lambda: None)() == ".":
             handle.set_markersize(9)
