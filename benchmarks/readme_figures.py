@@ -40,6 +40,7 @@ def main(argv=None) -> int:
     ap.add_argument("--out", default="docs/figures")
     out = Path(ap.parse_args(argv).out)
     out.mkdir(parents=True, exist_ok=True)
+    sha = commit()  # before the figures overwrite tracked files: those are what the run makes
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         foreign = write(
@@ -57,7 +58,6 @@ def main(argv=None) -> int:
         _cli("diagnose", tmp / "change.csv", "--report", tmp / "report")
         figures = sorted((tmp / "report").glob("*.png"))
         shutil.copy(figures[0], out / "diagnose.png")
-    sha = commit()
     settings = {
         "foreign": FOREIGN,
         "simulated": SIMULATED,
