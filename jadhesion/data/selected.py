@@ -82,6 +82,21 @@ def zero_creep_message(recording, mask) -> str | None:
     )
 
 
+def usable_selection(recording, phase: str) -> Selection:
+    """:func:`.segments.select` of ``phase``, refused when it holds nothing to identify.
+
+    Raises:
+        RecordingError: no sample selected (:func:`no_samples_message`), or the creep is exactly
+            0 on every selected sample (:func:`zero_creep_message`).
+    """
+    selection = select(recording, phase)
+    if selection.used == 0:
+        raise RecordingError(no_samples_message(recording, selection))
+    if (message := zero_creep_message(recording, selection.mask)) is not None:
+        raise RecordingError(message)
+    return selection
+
+
 def per_stretch_dataset(
     recording, selection: Selection, observer_variant: str = "paper", creep: str = "raw", *, build=to_dataset
 ) -> PolachDataset:
@@ -107,13 +122,9 @@ def tracking_dataset(recording, phase: str = "traction", creep: str = "smoothed"
     and running backwards read as traction (``sign(v)`` × −1 on braking samples, else × +1).
 
     Raises:
-        RecordingError: as :func:`selected_dataset`.
+        RecordingError: as :func:`usable_selection`.
     """
-    selection = select(recording, phase)
-    if selection.used == 0:
-        raise RecordingError(no_samples_message(recording, selection))
-    if (message := zero_creep_message(recording, selection.mask)) is not None:
-        raise RecordingError(message)
+    selection = usable_selection(recording, phase)
     data = per_stretch_dataset(recording, selection, creep=creep, build=build)
     v = np.asarray(recording.columns["vehicle_speed"], float)
     braking = np.where(selection.labels == "braking", -1.0, 1.0)
@@ -143,14 +154,9 @@ def selected_dataset(
     :func:`~jadhesion.data.dataset.to_dataset`; the CLI passes its cached drop-in).
 
     Raises:
-        RecordingError: no sample selected (the line gives the counts by reason), or the creep
-            is exactly 0 on every selected sample (:func:`zero_creep_message`).
+        RecordingError: as :func:`usable_selection`.
     """
-    selection = select(recording, phase)
-    if selection.used == 0:
-        raise RecordingError(no_samples_message(recording, selection))
-    if (message := zero_creep_message(recording, selection.mask)) is not None:
-        raise RecordingError(message)
+    selection = usable_selection(recording, phase)
     if selection.mask.size < MIN_STRETCH_SAMPLES:  # too short for the smoother: the raw
         creep = "raw"  # difference (the fit names its minimum)
     if selection.complete:
