@@ -91,10 +91,10 @@ def run_ensemble(
         total, state = min(max_steps, max(int(1.2 * need), int(1.25 * done))), sampler.get_last_sample()
     seconds = time.perf_counter() - start
     messages = []
-    if chain.shape[0] < MIN_TAU_MULTIPLE * np.max(tau):
+    if chain.shape[0] < MIN_TAU_MULTIPLE * tau_max:
         messages.append(
             f"chain of {chain.shape[0]} kept steps is shorter than {MIN_TAU_MULTIPLE} "
-            f"autocorrelation times (tau_max = {np.max(tau):.1f} steps): run at least {need} steps"
+            f"autocorrelation times (tau_max = {tau_max:.1f} steps): run at least {need} steps"
         )
         warnings.warn(messages[-1], ChainTooShortWarning, stacklevel=3)
     n = chain.shape[0] * walkers

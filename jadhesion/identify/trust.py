@@ -156,9 +156,8 @@ def fit_report(data, fit, numbers=None) -> dict:
             )
         )
     mu = np.asarray(data.adhesion)
-    if (
-        note := implausible_adhesion(mu if data.weight is None else mu[np.asarray(data.weight) > 0])
-    ) is not None:
+    real = mu if data.weight is None else mu[np.asarray(data.weight) > 0]  # not the padding
+    if (note := implausible_adhesion(real)) is not None:
         warnings.append(_warning(note["code"], [], note["message"]))
     speed = float(numbers.speed)
     derived, peak_warnings = peak_report(
