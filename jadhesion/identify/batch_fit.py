@@ -65,11 +65,16 @@ def bucketed(data: PolachDataset) -> PolachDataset:
     return data if data.weight is not None else pad_dataset(data)
 
 
-def valid_samples(data: PolachDataset) -> int:
-    """Samples that count: all of them, or the mask's ones."""
+def valid_mask(data: PolachDataset) -> np.ndarray:
+    """(n,) bool: the samples that count — all of them, or the mask's ones (not the padding)."""
     if data.weight is None:
-        return int(data.adhesion.shape[-1])
-    return int(np.sum(np.asarray(data.weight) > 0))
+        return np.ones(data.adhesion.shape[-1], bool)
+    return np.asarray(data.weight) > 0
+
+
+def valid_samples(data: PolachDataset) -> int:
+    """Number of samples that count (:func:`valid_mask`)."""
+    return int(np.sum(valid_mask(data)))
 
 
 class Fitted(NamedTuple):

@@ -43,7 +43,7 @@ import numpy as np
 from ..data.inspection import implausible_adhesion
 from ..models.polach import PARAM_NAMES
 from ..status import status_of
-from .batch_fit import bucketed, valid_samples
+from .batch_fit import bucketed, valid_mask, valid_samples
 from .peak import peak_numbers, peak_report, reference_speed
 from .polach_fit import LM_RESIDUAL, RECOMMENDED_SAMPLES, scaled
 from .uncertainty import Z95, correlation, covariance
@@ -155,9 +155,7 @@ def fit_report(data, fit, numbers=None) -> dict:
                 (f"{n} samples (< {RECOMMENDED_SAMPLES} recommended): errors and intervals are rough"),
             )
         )
-    mu = np.asarray(data.adhesion)
-    real = mu if data.weight is None else mu[np.asarray(data.weight) > 0]  # not the padding
-    if (note := implausible_adhesion(real)) is not None:
+    if (note := implausible_adhesion(np.asarray(data.adhesion)[valid_mask(data)])) is not None:
         warnings.append(_warning(note["code"], [], note["message"]))
     speed = float(numbers.speed)
     derived, peak_warnings = peak_report(
