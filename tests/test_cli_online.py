@@ -14,6 +14,7 @@ from jadhesion.data.recording import save_recording
 from jadhesion.data.simulator import simulate
 from jadhesion.experiments import online as ex
 from jadhesion.identify import online as ol
+from jadhesion.models.kiencke import kiencke_adhesion
 
 TRUE = (80.0, 100.0, 35.0)  # p1, p2, a_s
 KEYS = {"algorithm", "a_s", "final", "track", "status"}
@@ -140,3 +141,27 @@ def test_running_backwards_is_tracked_as_traction(capsys, raw_recording):
 
 def test_argument_choices_match_the_algorithm_registry():
     assert ALGORITHM_NAMES == tuple(ol.ALGORITHMS)
+
+
+def test_a_stuck_snr_step_is_warned_and_algorithm_2_tracks_the_change(capsys, tmp_path):
+    """Algorithm 1's SNR step after a macro-slip excursion (creep to 0.8 over 1 s): with η held at
+    η_max = 1, H stops changing, the SNR matrix stays inside its interval and the estimate stops
+    following the data, so a later rail change (μ_max 0.36 → 0.30) goes untracked. The command
+    says so (``snr_hold`` from the excursion to the end); Algorithm 2 (no SNR step) tracks the
+    change to within 0.01 (noise 0.004) and gets no warning."""
+    a_s, p2 = 540.0, 156.0
+    rng = np.random.default_rng(0)
+    n = 2000
+    lam = 0.005 + 0.002 * np.sin(np.arange(n) / 15.0) + 0.001 * rng.normal(size=n)
+    lam[600:650] = 0.005 + 0.8 * np.sin(np.linspace(0.0, np.pi, 50))
+    p1 = np.where(np.arange(n) < 1300, a_s / 0.36, a_s / 0.30) - 2.0 * np.sqrt(p2)
+    mu = np.asarray(kiencke_adhesion(lam, p1, p2, a_s)) + 0.004 * rng.normal(size=n)
+    path = tmp_path / "excursion.csv"
+    columns = {"time": np.arange(n) * 0.02, "creepage": lam, "vehicle_speed": np.full(n, 2.0), "adhesion": mu}
+    save_recording(columns, path=path)
+    _, one, _ = _run(capsys, "online", path, "--algorithm", "1", "--a-s", a_s)
+    _, two, _ = _run(capsys, "online", path, "--algorithm", "2", "--a-s", a_s)
+    assert two["warnings"] == [] and two["final"]["mu_max"] == pytest.approx(0.30, abs=0.01)
+    [hold] = one["warnings"]
+    assert hold["code"] == "snr_hold" and hold["to_end"] and 12.0 <= hold["from_s"] <= 13.5
+    assert one["final"]["mu_max"] == pytest.approx(0.36, abs=0.01)  # the change at 26 s unseen

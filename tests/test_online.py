@@ -178,3 +178,11 @@ def test_run_contract_plot_and_verdicts(claims):
     assert verdict["faster tracking, dry->normal"] == "holds"
     assert verdict["faster tracking, normal->wet"] == "DOES NOT HOLD"
     assert verdict["smaller fluctuation, RMS rel. mu_m error, all segments"] == "DOES NOT HOLD"
+
+
+def test_longest_hold_counts_informative_samples_only():
+    """A skipped sample neither breaks a run of SNR hits nor extends it; no hit: (-1, -1, 0)."""
+    hit = np.array([1, 1, 0, 1, 0, 1, 1, 0, 1, 0], bool)
+    used = np.array([1, 1, 1, 1, 0, 1, 1, 1, 1, 1], bool)  # sample 4 skipped: 3, 5, 6 are one run
+    assert ol.longest_hold(hit, used) == (3, 6, 3)
+    assert ol.longest_hold(np.zeros(5, bool), np.ones(5, bool)) == (-1, -1, 0)

@@ -9,7 +9,8 @@ sample with the forgetting factor η (:func:`jadhesion.identify.online.track_dat
 of ``reproduce online``). ``a_s`` is estimated from the data (the initial slope of Kiencke's curve
 fitted offline by global LM) unless ``--a-s`` is given. Samples outside ``--phase`` (standstill,
 coasting, direction changes…) and those the tracker finds uninformative are skipped (the estimate
-is held).
+is held). ``warnings`` reports an ``snr_hold``: the SNR step held η at η_max long enough that the
+estimate stopped following the data (:func:`jadhesion.identify.online.hold_warning`).
 
 This module defines the arguments only; :mod:`.online_run` does the work.
 """

@@ -9,7 +9,7 @@ import jax
 import numpy as np
 
 from ..data.selected import tracking_dataset
-from ..identify.online import track_dataset
+from ..identify.online import hold_warning, track_dataset
 from ..plots.online import recording_figure
 from ..status import status_of
 from .common import UserError, emit_json, table
@@ -51,6 +51,7 @@ def run(args) -> int:
         "n_used": int(used.sum()),
         "selection": selection.document(),
         "track": {"time": time, **{f: np.asarray(getattr(tr, f)) for f in TRACK_FIELDS}, "used": used},
+        "warnings": [w for w in (hold_warning(tr, used, time),) if w is not None],
     }
     if out.slope_fit is not None:
         fit = out.slope_fit
@@ -73,6 +74,7 @@ def run(args) -> int:
             title=f"{Path(args.file).name}: online Kiencke, algorithm "
             f"{args.algorithm}, a_s = {doc['a_s']:.4g}",
             time_label="time [s]" if "time" in cols else "sample",
+            hold=next(((w["from_s"], w["to_s"]) for w in doc["warnings"] if w["code"] == "snr_hold"), None),
         )
         fig.savefig(path, dpi=110)
         doc["plots"] = [str(path)]
@@ -87,6 +89,8 @@ def run(args) -> int:
             f"algorithm {args.algorithm}, a_s {doc['a_s']:.5g} ({doc['a_s_source']}), "
             f"{doc['n_used']}/{doc['n_samples']} samples used, status {doc['status']}"
         )
+        for w in doc["warnings"]:
+            print(f"warning [{w['code']}]: {w['message']}")
         for path in doc.get("plots", []):
             print(f"wrote {path}")
     return 0

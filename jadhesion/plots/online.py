@@ -39,11 +39,13 @@ def figure(bands: dict, truth, a_s=DEFAULT_SLOPE):
     return fig
 
 
-def recording_figure(time, mu_hat, creep, trace, used, title="", time_label="time [s]"):
+def recording_figure(time, mu_hat, creep, trace, used, title="", time_label="time [s]", hold=None):
     """The tracked optimum over a recording: top, observed |μ̂| (grey dots; skipped samples lighter)
     with the tracked peak adhesion μ_m; middle, |creep| (log scale) with the tracked optimum creep λ_m
     (a gap where ``p2 ≤ 0``: no optimum); bottom,
-    the forgetting factor η. ``trace`` is an :class:`~jadhesion.identify.online.OnlineInfo`."""
+    the forgetting factor η. ``trace`` is an :class:`~jadhesion.identify.online.OnlineInfo`;
+    ``hold``: ``(from, to)`` of the SNR step's hold (:func:`~jadhesion.identify.online.hold_warning`),
+    shaded on every panel."""
     time, mu_hat, creep, used = map(np.asarray, (time, mu_hat, creep, used))
     mu_hat, creep = np.abs(mu_hat), np.abs(creep)  # braking: magnitudes (both models are odd)
     fig = Figure(figsize=(9, 8), layout="constrained")
@@ -71,6 +73,11 @@ def recording_figure(time, mu_hat, creep, trace, used, title="", time_label="tim
     axes[1].set_ylim(max(np.quantile(creep[used], 0.005), 1e-4) / 2 if used.any() else 1e-4, 1.5)
     axes[1].set_ylabel("|creep| [-]")
     axes[2].plot(time, np.asarray(trace.eta), color="tab:blue", lw=0.8)
+    if hold is not None:
+        for ax in axes:
+            label = "SNR step holds $\\eta = \\eta_{max}$" if ax is axes[2] else None
+            ax.axvspan(*hold, color="tab:orange", alpha=0.15, lw=0, label=label)
+        axes[2].legend(fontsize=8, loc="lower right")
     axes[2].set_ylabel("forgetting $\\eta$")
     axes[2].set_xlabel(time_label)
     axes[2].grid(alpha=0.3)
