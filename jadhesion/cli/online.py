@@ -10,7 +10,8 @@ of ``reproduce online``). ``a_s`` is estimated from the data (the initial slope 
 fitted offline by global LM) unless ``--a-s`` is given. Samples outside ``--phase`` (standstill,
 coasting, direction changes…) and those the tracker finds uninformative are skipped (the estimate
 is held). ``warnings`` reports an ``snr_hold``: the SNR step held η at η_max long enough that the
-estimate stopped following the data (:func:`jadhesion.identify.online.hold_warning`).
+estimate stopped following the data (:func:`jadhesion.identify.online.hold_warning`);
+``--algorithm 1-guarded`` ends a hold when the data stop agreeing with the estimate.
 
 This module defines the arguments only; :mod:`.online_run` does the work.
 """
@@ -21,7 +22,7 @@ from . import COMMANDS
 from .recording_options import add_recording_options
 
 #: The identifiers of :data:`jadhesion.identify.online.ALGORITHMS` (a test keeps the two equal).
-ALGORITHM_NAMES = ("1", "2", "rls")
+ALGORITHM_NAMES = ("1", "1-guarded", "2", "rls")
 
 
 def register(sub) -> None:
@@ -31,7 +32,9 @@ def register(sub) -> None:
         "--algorithm",
         choices=ALGORITHM_NAMES,
         default="1",
-        help="paper 000's Algorithm 1 (default) or 2, or plain RLS (forgetting 0.98)",
+        help="paper 000's Algorithm 1 (default) or 2; 1-guarded: Algorithm 1 whose SNR step holds the "
+        "forgetting factor only while the prediction error is within 3 noise sd (it cannot lock); "
+        "or plain RLS (forgetting 0.98)",
     )
     p.add_argument(
         "--a-s",

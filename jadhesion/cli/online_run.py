@@ -51,7 +51,7 @@ def run(args) -> int:
         "n_used": int(used.sum()),
         "selection": selection.document(),
         "track": {"time": time, **{f: np.asarray(getattr(tr, f)) for f in TRACK_FIELDS}, "used": used},
-        "warnings": [w for w in (hold_warning(tr, used, time),) if w is not None],
+        "warnings": [w for w in (hold_warning(out, time),) if w is not None],
     }
     if out.slope_fit is not None:
         fit = out.slope_fit

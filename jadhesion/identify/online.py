@@ -20,7 +20,8 @@ One step ``k`` does, in this order:
 3. SNR test (eqs 10–17, only when enabled and ``k > 5``): ``X1 = {I(k), H(k−1), H(k−2)}``,
    ``X2 = {H(k−3), H(k−4), H(k−5)}``, element-wise means and population variances,
    ``S = (X̄1 − X̄2) / (S1 + S2)`` (``S = 0`` where ``S1 + S2 = 0``); when every element of ``S``
-   lies in ``[a, b]``, ``η_k = η_max``;
+   lies in ``[a, b]`` (and ``e ≤ hold_error``: ``inf`` in the paper's algorithms),
+   ``η_k = η_max``;
 4. weight ``w_k = 1 − ω η_k / 2`` (``ω = 1``: the paper's ``(2 − η)/2``; ``ω = 0``: ``w = 1``);
 5. update ``H, f`` and solve for ``x(k)``.
 
@@ -40,6 +41,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax import lax
 
+from ..data.creep_state import difference_sd
 from ..data.dataset import PolachDataset
 from ..models.kiencke import DEFAULT_SLOPE, kiencke_adhesion, kiencke_regressors
 from ..status import Status
@@ -53,6 +55,8 @@ class OnlineParams(NamedTuple):
     weight_slope: ``ω`` in ``w = 1 − ω η/2``. snr: 1.0 enables the SNR (Granger) step.
     snr_lo, snr_hi: (2, 2) interval ``[a, b]`` of eq 17. a_s: Kiencke initial slope [-].
     delta: Tikhonov weight ``δ`` of the solve [same units as H]. x0: initial ``[p1, p2]``.
+    hold_error: the SNR step holds ``η = η_max`` only while ``|μ̂ − μ|`` is at most this [-]
+    (``inf``: always, the paper's).
     """
 
     eta_min: jax.Array
@@ -65,6 +69,7 @@ class OnlineParams(NamedTuple):
     a_s: jax.Array
     delta: jax.Array
     x0: jax.Array
+    hold_error: jax.Array
 
 
 #: Feedback gain (not given by the paper): the knee of a sweep Kp ∈ {0.5 … 64} of Algorithm 1
@@ -95,11 +100,12 @@ def make_params(
     a_s=DEFAULT_SLOPE,
     delta=DEFAULT_DELTA,
     x0=DEFAULT_X0,
+    hold_error=float("inf"),
 ) -> OnlineParams:
     """Build :class:`OnlineParams` with every leaf a float array (default float dtype)."""
     f = lambda v: jnp.asarray(v, dtype=float)  # noqa: E731
     return OnlineParams(
-        f(eta_min), f(eta_max), f(kp), f(weight_slope), f(snr), f(snr_lo), f(snr_hi), f(a_s), f(delta), f(x0)
+        *map(f, (eta_min, eta_max, kp, weight_slope, snr, snr_lo, snr_hi, a_s, delta, x0, hold_error))
     )
 
 
@@ -194,7 +200,7 @@ def step(params: OnlineParams, state: OnlineState, obs):
     info = 2.0 * jnp.outer(u, u)
     s = snr_matrix(info, state.h_hist)
     inside = jnp.all((s >= params.snr_lo) & (s <= params.snr_hi))
-    hit = (params.snr > 0.5) & (state.k >= 5) & inside
+    hit = (params.snr > 0.5) & (state.k >= 5) & inside & (jnp.abs(mu_hat - mu) <= params.hold_error)
     eta = jnp.where(hit, params.eta_max, eta)
     w = 1.0 - params.weight_slope * eta / 2.0
     h = eta * state.h + w * info
@@ -268,24 +274,27 @@ def longest_hold(hit, used) -> tuple[int, int, int]:
     return int(idx[starts[k]]), int(idx[ends[k] - 1]), int(ends[k] - starts[k])
 
 
-def hold_warning(trace: OnlineInfo, used, time) -> dict | None:
-    """The ``snr_hold`` warning when the SNR step (eqs 10–17) held ``η = η_max`` for
-    :data:`HOLD_WARNING_S` or longer of ``time`` [s], else ``None``. With ``η_max = 1`` such a hold
+def hold_warning(tracked, time) -> dict | None:
+    """The ``snr_hold`` warning of a :class:`Tracked` run when the SNR step (eqs 10–17) held
+    ``η = η_max`` for :data:`HOLD_WARNING_S` or longer of ``time`` [s], else ``None`` (also for a
+    guarded step, finite ``hold_error``: its holds end when the data disagree). With ``η_max = 1`` such a hold
     can be absorbing: without forgetting ``H`` stops changing, so the SNR matrix stays inside the
     interval ``[a, b]`` (fixed in units of ``H``, not calibrated on this recording) and the
     estimate stops following the data — a rail change there goes untracked."""
-    first, last, count = longest_hold(trace.snr_hit, used)
+    used = np.asarray(tracked.used, bool)
+    first, last, count = longest_hold(tracked.trace.snr_hit, used)
     time = np.asarray(time, float)
-    if count == 0 or time[last] - time[first] < HOLD_WARNING_S:
+    if np.isfinite(tracked.params.hold_error) or count == 0 or time[last] - time[first] < HOLD_WARNING_S:
         return None
-    to_end = not np.any(np.asarray(used, bool)[last + 1 :])
+    to_end = not np.any(used[last + 1 :])
     span = "to the end" if to_end else f"to t = {time[last]:.4g} s"
     return {
         "code": "snr_hold",
         "params": ["p1", "p2"],
         "message": f"the SNR step held the forgetting factor at eta_max from t = {time[first]:.4g} s "
         f"{span} ({count} samples): the estimate stopped following the data there, and a change "
-        "of rail in that stretch would not be tracked; algorithm 2 and rls have no SNR step",
+        "of rail in that stretch would not be tracked; algorithm 1-guarded ends such a hold, "
+        "2 and rls have no SNR step",
         "from_s": float(time[first]),
         "to_s": float(time[last]),
         "samples": count,
@@ -293,26 +302,54 @@ def hold_warning(trace: OnlineInfo, used, time) -> dict | None:
     }
 
 
-#: The identifiers offered on recordings: the paper's two algorithms and a classic RLS (λ = 0.98).
-ALGORITHMS = {"1": algorithm1_params, "2": algorithm2_params, "rls": rls_params}
+#: Algorithm 1-guarded's hold limit, in the recording's adhesion noise sd (:func:`noise_sd`).
+HOLD_SIGMAS = 3.0
+
+
+def algorithm1_guarded_params(noise_sd, **kw) -> OnlineParams:
+    """Algorithm 1 whose SNR step holds ``η = η_max`` only while the prediction error
+    ``|μ̂ − μ| ≤`` :data:`HOLD_SIGMAS` · ``noise_sd`` [-]: a hold ends when the data stop agreeing
+    with the estimate (a rail change), so it cannot lock (:func:`hold_warning`)."""
+    return algorithm1_params(**{"hold_error": HOLD_SIGMAS * noise_sd, **kw})
+
+
+def noise_sd(mu, used) -> jax.Array:
+    """The white-noise sd [-] of the observed adhesion ``mu`` on the informative samples ``used``
+    (:func:`jadhesion.data.creep_state.difference_sd`: third differences, robust). Not the offline
+    fit's residual: a rail change inflates that, and the guard would then hold through it."""
+    return difference_sd(jnp.asarray(mu)[np.asarray(used, bool)])
+
+
+#: The identifiers offered on recordings: the paper's two algorithms, Algorithm 1 with a guarded
+#: SNR step, and a classic RLS (λ = 0.98).
+ALGORITHMS = {
+    "1": algorithm1_params,
+    "1-guarded": algorithm1_guarded_params,
+    "2": algorithm2_params,
+    "rls": rls_params,
+}
+#: Those whose coefficients need the recording's noise sd (``noise_sd=``).
+NOISE_CALIBRATED = ("1-guarded",)
 
 
 class Tracked(NamedTuple):
     """Online identification of one dataset: ``a_s`` used [-], the trace (K, …), ``used`` (K,)
-    informative-sample flags, the final :class:`Status` code, and the offline fit that gave
-    ``a_s`` (``None`` when ``a_s`` was given)."""
+    informative-sample flags, the final :class:`Status` code, the offline fit that gave ``a_s``
+    (``None`` when ``a_s`` was given), and the coefficients used."""
 
     a_s: jax.Array
     trace: OnlineInfo
     used: jax.Array
     status: jax.Array
     slope_fit: object
+    params: OnlineParams
 
 
 def track_dataset(data: PolachDataset, algorithm: str = "1", a_s=None, key=None) -> Tracked:
     """Paper 000's identification on a dataset (creep λ, observed μ̂), sample by sample.
 
-    ``algorithm``: ``"1"``, ``"2"`` or ``"rls"`` (:data:`ALGORITHMS`, default coefficients).
+    ``algorithm``: a key of :data:`ALGORITHMS` (default coefficients; ``"1-guarded"``'s hold
+    limit from μ̂'s noise on the informative samples, :func:`noise_sd`).
     Samples that are not informative (:func:`.kiencke_fit.informative`: standstill ``|v| < 0.1``
     m/s, coasting ``|μ̂| < 0.02``, non-finite) are skipped. ``a_s`` [-]: when ``None`` it is
     estimated from the data as the initial slope of Kiencke's curve fitted offline with ``p1, p2``
@@ -326,7 +363,8 @@ def track_dataset(data: PolachDataset, algorithm: str = "1", a_s=None, key=None)
     if a_s is None:
         slope_fit = fit_kiencke(data, "lm", key)
         a_s = slope_fit.params[2]
-    params = ALGORITHMS[algorithm](a_s=a_s)
+    extra = {"noise_sd": noise_sd(data.adhesion, used)} if algorithm in NOISE_CALIBRATED else {}
+    params = ALGORITHMS[algorithm](a_s=a_s, **extra)
     state, trace = run(params, data.creep, data.adhesion, used)
     status = jnp.where(jnp.sum(used) < MIN_SAMPLES, Status.NOT_RUN, final_status(state))
-    return Tracked(params.a_s, trace, used, status.astype(jnp.int32), slope_fit)
+    return Tracked(params.a_s, trace, used, status.astype(jnp.int32), slope_fit, params)
