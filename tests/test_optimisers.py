@@ -24,6 +24,7 @@ from jadhesion.identify import (
     run,
     run_until,
 )
+from jadhesion.identify.box_lm import gauss_newton_gain
 from jadhesion.identify.lm import box_lm, box_lm_queue
 from jadhesion.identify.polach_residuals import polach_residual
 from jadhesion.identify.tlbo import remedial_size
@@ -454,3 +455,19 @@ def test_one_method_registry_feeds_every_consumer():
     assert ALGORITHMS == methods.POPULATION and set(ALGORITHMS) == set(methods.NAMES) - {"lm"}
     with pytest.raises(ValueError, match="unknown method"):
         methods.check_method("bfgs")
+
+
+def test_gauss_newton_gain_counts_only_the_feasible_step():
+    """The stall test's promised decrease is that of the Gauss–Newton step clipped to the box. A
+    step past a bound that the iterate sits 0.01 from promises only what the clipped step gains
+    (0.01 − ½·0.01² on a unit quadratic, not ½); an interior step is unchanged, and on a random
+    positive definite model the clipped gain never exceeds the free one."""
+    h = jnp.eye(1)
+    assert float(gauss_newton_gain(jnp.array([0.01]), jnp.array([1.0]), h)) == pytest.approx(0.01 - 0.5e-4)
+    assert float(gauss_newton_gain(jnp.array([0.5]), jnp.array([0.2]), h)) == pytest.approx(0.02)
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        m = rng.normal(size=(6, 4))
+        hh, g, u = jnp.asarray(m.T @ m), jnp.asarray(rng.normal(size=4)), jnp.asarray(rng.uniform(size=4))
+        free = 0.5 * float(g @ jnp.linalg.solve(hh, g))
+        assert float(gauss_newton_gain(u, g, hh)) <= free * (1 + 1e-9)

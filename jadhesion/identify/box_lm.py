@@ -16,8 +16,10 @@ Nielsen's rule. It stops after an accepted step with ``C − C' ≤ ftol·C`` an
 these three at a point where variables sit on a face with vanishing Jacobian columns — a plateau,
 e.g. ``μ0 = 0`` — is not a minimum when moving them :data:`PROBE` inwards lowers the cost: the run
 continues from there; the probe is evaluated by the next iteration, in place of a trial, and
-counts no step); and a stop whose undamped Gauss–Newton step still promises more than :data:`GN_GAIN`·C
-is ``STALLED`` (the damping, not the problem, made the model flat); when
+counts no step); and a stop whose undamped Gauss–Newton step, projected onto the box, still
+promises more than :data:`GN_GAIN`·C is ``STALLED`` (the damping, not the problem, made the model
+flat; unprojected, a step past a bound the optimum sits near promised a gain no feasible point
+has, and converged fits were called stalled); when
 ``λ > 10¹⁶`` (no decrease is representable: status ``STALLED``); or at ``max_steps`` (status
 ``MAX_STEPS``). Only the three tests give ``CONVERGED`` (``success`` true).
 """
@@ -40,6 +42,17 @@ PROBE = 0.01
 #: A stop counts as converged only if the undamped Gauss–Newton step would lower the cost by less
 #: than this share (a 1-σ parameter change moves the cost by ~1/n of it: far above this).
 GN_GAIN = 1e-8
+
+
+def gauss_newton_gain(u, g, h):
+    """Decrease ``−gᵀs − ½ sᵀHs`` of the quadratic model promised by the undamped Gauss–Newton
+    step on the free variables, clipped to the box: ``s = clip(u − H_free⁻¹ g, 0, 1) − u``."""
+    free = (~(((u <= 0.0) & (g > 0.0)) | ((u >= 1.0) & (g < 0.0)))).astype(u.dtype)
+    a = h * free[:, None] * free[None, :] + jnp.diag(
+        jnp.where(free > 0, 1e-12 * jnp.max(jnp.diag(h)) + jnp.finfo(u.dtype).tiny, 1.0)
+    )
+    s = jnp.clip(u - solve(a, g * free), 0.0, 1.0) - u
+    return -(g @ s) - 0.5 * (s @ (h @ s))
 
 
 class BoxLMOptions(NamedTuple):
@@ -203,13 +216,9 @@ def _box_lm_stepper(residual, bounds, options, block_rows=None):
         probe_next = ~probing & stopped & jnp.any(flat_face(u, h))
         stopped = jnp.where(probing, ~escape, stopped & ~probe_next)
         # A test may pass only because heavy damping (λ·D, D a running maximum of diag H) made
-        # the model flat: it is a minimum only if even the undamped Gauss–Newton step promises
-        # less than GN_GAIN·C; otherwise the run stopped stalled.
-        free_g = (~(((u <= 0.0) & (g > 0.0)) | ((u >= 1.0) & (g < 0.0)))).astype(u.dtype)
-        a_gn = h * free_g[:, None] * free_g[None, :] + jnp.diag(
-            jnp.where(free_g > 0, 1e-12 * jnp.max(jnp.diag(h)) + jnp.finfo(u.dtype).tiny, 1.0)
-        )
-        gn_gain = 0.5 * (g * free_g) @ solve(a_gn, g * free_g)
+        # the model flat: it is a minimum only if even the undamped Gauss–Newton step, clipped to
+        # the box, promises less than GN_GAIN·C; otherwise the run stopped stalled.
+        gn_gain = gauss_newton_gain(u, g, h)
         converged = stopped & (stationary | (gn_gain <= GN_GAIN * c))
         done = stopped | ((lam > 1e16) & ~probe_next)
         steps = st.steps + jnp.where(fresh | probing, 0, 1)
