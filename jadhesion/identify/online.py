@@ -255,8 +255,9 @@ def final_status(state: OnlineState):
 
 #: A hold of the SNR step at least this long [s] is reported (:func:`hold_warning`). Algorithm 1
 #: on 17 recordings (our dry, wet and sand, 3 each; the independent generator's 4 steady runs and
-#: 4 starts, mild sensors): the step held to the end on 5 (every dry run from its macro-slip
-#: excursion at 14 s on; 11–41 s), once for 8 s before that, and otherwise for at most 0.1 s.
+#: 4 starts, mild sensors): the step held to the end on 6 (every dry run, from its macro-slip
+#: excursion at 14 s; 3 of the independent 8, for 11–41 s), once for 8 s before the end, and
+#: otherwise for at most 0.1 s.
 HOLD_WARNING_S = 5.0
 
 
@@ -277,10 +278,11 @@ def longest_hold(hit, used) -> tuple[int, int, int]:
 def hold_warning(tracked, time) -> dict | None:
     """The ``snr_hold`` warning of a :class:`Tracked` run when the SNR step (eqs 10–17) held
     ``η = η_max`` for :data:`HOLD_WARNING_S` or longer of ``time`` [s], else ``None`` (also for a
-    guarded step, finite ``hold_error``: its holds end when the data disagree). With ``η_max = 1`` such a hold
-    can be absorbing: without forgetting ``H`` stops changing, so the SNR matrix stays inside the
-    interval ``[a, b]`` (fixed in units of ``H``, not calibrated on this recording) and the
-    estimate stops following the data — a rail change there goes untracked."""
+    guarded step, finite ``hold_error``: its holds end when the data disagree). With
+    ``η_max = 1`` such a hold can be absorbing: without forgetting ``H`` stops changing, so the
+    SNR matrix stays inside the interval ``[a, b]`` (fixed in units of ``H``, not calibrated on
+    this recording) and the estimate stops following the data — a rail change there goes
+    untracked."""
     used = np.asarray(tracked.used, bool)
     first, last, count = longest_hold(tracked.trace.snr_hit, used)
     time = np.asarray(time, float)
