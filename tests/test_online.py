@@ -105,7 +105,8 @@ def test_snr_interval_calibration_reproduces_defaults():
     assert np.all(np.abs(np.asarray(hi) - ol.DEFAULT_SNR_HI) <= round_hi + 4.0 * sd_hi), hi
 
 
-#: The README's 1000-run medians' interquartile ranges (``reproduce online``), Algorithm 1 and 2.
+#: The README's 1000-run medians' interquartile ranges (``reproduce online``), Algorithm 1, 2 and
+#: 1-guarded (its hold ends when the error leaves 3 noise sd: it tracks both changes).
 #: With CLAIM_RUNS = 100 runs the sample median leaves the population IQR only if ≥ 50 of 100 draws
 #: fall below its 25 % quantile (or above its 75 %): a 5.8σ binomial event. So each 100-run median
 #: must lie inside the 1000-run IQR; ``never`` fractions within 3.5 binomial σ of the README's.
@@ -126,12 +127,21 @@ README_IQR = {
         "k_track_change2": (152, 212),
         "fluctuation": (0.001779, 0.002651),
     },
+    "1-guarded": {
+        "k_p1_1pct": (13, 25),
+        "k_p2_1pct": (123, 325),
+        "k_mumax_01pct": (46, 96),
+        "k_track_change1": (43, 48),
+        "k_track_change2": (43, 48),
+        "fluctuation": (0.001014, 0.001595),
+    },
 }
 README_NEVER = {
     ("1", "never_p2_1pct"): 0.12,
     ("2", "never_p2_1pct"): 0.26,
     ("1", "never_track_change2"): 1.0,
     ("2", "never_track_change2"): 0.0,
+    ("1-guarded", "never_track_change2"): 0.0,
 }
 
 
@@ -141,9 +151,9 @@ def claims(tmp_path_factory):
     return ex.run(runs=CLAIM_RUNS, plot_dir=str(plots), progress=None), plots
 
 
-@pytest.mark.parametrize("alg", ["1", "2"])
+@pytest.mark.parametrize("alg", ["1", "2", "1-guarded"])
 def test_online_claims_numbers_match_the_readme(alg, claims):
-    m = claims[0]["algorithms"][alg]
+    m = {**claims[0]["algorithms"], **claims[0]["variants"]}[alg]
     for key, (lo, hi) in README_IQR[alg].items():
         assert m[key] is not None and lo <= m[key] <= hi, (key, m[key], lo, hi)
     for (a, key), p in README_NEVER.items():

@@ -22,6 +22,8 @@ runs never converged — the ``never_*`` fractions say how many):
 The SNR interval (:func:`calibrate_snr`) is the range ``S`` takes on noise-only steps. Finding: ``S``
 mostly measures the size of ``H``, and with ``η`` held at 1, ``H`` grows and ``S`` stays inside the
 interval, so the step can lock ``η = η_max`` and stop tracking (see ``never_track_change2``).
+``variants``: Algorithm 1-guarded (:func:`jadhesion.identify.online.algorithm1_guarded_params`),
+whose hold ends when the prediction error leaves 3 noise sd (each run's own, :func:`run_guarded`).
 """
 
 from __future__ import annotations
@@ -33,6 +35,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..data.creep_state import difference_sd
 from ..identify import online as ol
 from ..models.kiencke import DEFAULT_SLOPE, RAIL_SETS, kiencke_adhesion, kiencke_regressors
 from ..plots.online import figure
@@ -82,6 +85,20 @@ def _batch(params, lam, mu):
 def run_batch(params, sc: Scenario) -> ol.OnlineInfo:
     """One vmapped, jitted call over the noise realisations of ``sc`` (``sc.mu`` (R, K))."""
     return _batch(params, sc.lam, sc.mu)
+
+
+@jax.jit
+def _batch_guarded(lam, mu):
+    def one(m):
+        return ol.identify(ol.algorithm1_guarded_params(difference_sd(m)), lam, m)
+
+    return jax.vmap(one)(mu)
+
+
+def run_guarded(sc: Scenario) -> ol.OnlineInfo:
+    """Algorithm 1-guarded over the realisations of ``sc``, each run's hold limit from its own
+    μ̂ noise (:func:`jadhesion.data.creep_state.difference_sd`, as on a recording)."""
+    return _batch_guarded(sc.lam, sc.mu)
 
 
 def calibrate_snr(key, runs=200, kp=ol.DEFAULT_KP, q=(0.025, 0.975)):
@@ -207,7 +224,7 @@ def run(runs=1000, plot_dir=None, progress: Optional[Callable[[int, int], None]]
         **ablation_params(),
         "rls_0.98": ol.rls_params(0.98),
     }
-    total = len(configs) + 1
+    total = len(configs) + 2
     summaries, bands = {}, {}
     for done, (name, params) in enumerate(configs.items(), 1):
         trace = run_batch(params, sc)
@@ -219,6 +236,9 @@ def run(runs=1000, plot_dir=None, progress: Optional[Callable[[int, int], None]]
             }
         if progress:
             progress(done, total)
+    guarded = summarise(run_metrics(run_guarded(sc), sc.truth))
+    if progress:
+        progress(total - 1, total)
     batch = batch_ls(sc)
     if progress:
         progress(total, total)
@@ -226,6 +246,7 @@ def run(runs=1000, plot_dir=None, progress: Optional[Callable[[int, int], None]]
         "algorithms": {"1": summaries["1"], "2": summaries["2"]},
         "paper": PAPER,
         "ablation": {k: summaries[k] for k in ablation_params()},
+        "variants": {"1-guarded": guarded},
         "baselines": {"rls_0.98": summaries["rls_0.98"], "batch_ls": batch},
         "setup": {
             "runs": runs,

@@ -37,6 +37,7 @@ def format_text(result: dict) -> str:
     for name, m in [
         *(("alg " + k, v) for k, v in result["algorithms"].items()),
         *result["ablation"].items(),
+        *(("alg " + k, v) for k, v in result["variants"].items()),
         ("rls_0.98", result["baselines"]["rls_0.98"]),
     ]:
         row = {"config": name}
