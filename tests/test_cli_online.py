@@ -15,6 +15,7 @@ from jadhesion.data.simulator import simulate
 from jadhesion.experiments import online as ex
 from jadhesion.identify import online as ol
 from jadhesion.models.kiencke import kiencke_adhesion
+from validation.foreign_generator import generate, write
 
 TRUE = (80.0, 100.0, 35.0)  # p1, p2, a_s
 KEYS = {"algorithm", "a_s", "final", "track", "status"}
@@ -149,7 +150,7 @@ def test_a_stuck_snr_step_is_warned_and_the_guarded_step_tracks_the_change(capsy
     following the data, so a later rail change (μ_max 0.36 → 0.30) goes untracked. The command
     says so (``snr_hold`` from the excursion to the end). Algorithm 1-guarded (the hold ends when
     the error leaves 3 noise sd) and Algorithm 2 (no SNR step) track the change to within 0.01
-    (noise 0.004) and get no warning."""
+    (noise 0.004) without that warning."""
     a_s, p2 = 540.0, 156.0
     rng = np.random.default_rng(0)
     n = 2000
@@ -163,7 +164,24 @@ def test_a_stuck_snr_step_is_warned_and_the_guarded_step_tracks_the_change(capsy
     _, one, _ = _run(capsys, "online", path, "--algorithm", "1", "--a-s", a_s)
     for alg in ("1-guarded", "2"):
         _, other, _ = _run(capsys, "online", path, "--algorithm", alg, "--a-s", a_s)
-        assert other["warnings"] == [] and other["final"]["mu_max"] == pytest.approx(0.30, abs=0.01)
-    [hold] = one["warnings"]
+        assert "snr_hold" not in {w["code"] for w in other["warnings"]}
+        assert other["final"]["mu_max"] == pytest.approx(0.30, abs=0.01)
+    [hold] = [w for w in one["warnings"] if w["code"] == "snr_hold"]
     assert hold["code"] == "snr_hold" and hold["to_end"] and 12.0 <= hold["from_s"] <= 13.5
     assert one["final"]["mu_max"] == pytest.approx(0.36, abs=0.01)  # the change at 26 s unseen
+
+
+def test_a_run_that_ends_without_an_optimum_says_so(capsys, tmp_path):
+    """The independent generator's steady run (seed 1, mild sensors) ends in 30 s of low adhesion
+    (≈ 0.04) at creep ≈ 10⁻³, far below any optimum: Algorithm 1 forgets the earlier peak and
+    ends with p2 ≤ 0, a curve without a peak. The command says so (``no_optimum``, creep_opt
+    none) exactly when the final p2 is not positive, for every identifier."""
+    path = write(generate(1, effect="none", sensor="mild"), tmp_path / "steady.csv")
+    for alg in ALGORITHM_NAMES:
+        code, doc, _ = _run(capsys, "online", path, "--algorithm", alg)
+        warned = [w for w in doc["warnings"] if w["code"] == "no_optimum"]
+        assert code == 0 and bool(warned) == (doc["final"]["p2"] <= 0), alg
+        if warned:
+            assert doc["final"]["creep_opt"] is None
+    _, one, _ = _run(capsys, "online", path, "--algorithm", "1")
+    assert one["final"]["p2"] <= 0

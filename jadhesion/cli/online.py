@@ -9,8 +9,10 @@ sample with the forgetting factor η (:func:`jadhesion.identify.online.track_dat
 of ``reproduce online``). ``a_s`` is estimated from the data (the initial slope of Kiencke's curve
 fitted offline by global LM) unless ``--a-s`` is given. Samples outside ``--phase`` (standstill,
 coasting, direction changes…) and those the tracker finds uninformative are skipped (the estimate
-is held). ``warnings`` reports an ``snr_hold``: the SNR step held η at η_max long enough that the
-estimate stopped following the data (:func:`jadhesion.identify.online.hold_warning`);
+is held). ``warnings`` reports a ``no_optimum`` (the run ends with ``p2 ≤ 0``: no peak,
+:func:`jadhesion.identify.online.optimum_warning`) and an ``snr_hold``: the SNR step held η at
+η_max long enough that the estimate stopped following the data
+(:func:`jadhesion.identify.online.hold_warning`);
 ``--algorithm 1-guarded`` ends a hold when the data stop agreeing with the estimate.
 
 This module defines the arguments only; :mod:`.online_run` does the work.

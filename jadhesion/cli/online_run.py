@@ -9,7 +9,7 @@ import jax
 import numpy as np
 
 from ..data.selected import tracking_dataset
-from ..identify.online import hold_warning, track_dataset
+from ..identify.online import hold_warning, optimum_warning, track_dataset
 from ..plots.online import recording_figure
 from ..status import status_of
 from .common import UserError, emit_json, table
@@ -51,7 +51,7 @@ def run(args) -> int:
         "n_used": int(used.sum()),
         "selection": selection.document(),
         "track": {"time": time, **{f: np.asarray(getattr(tr, f)) for f in TRACK_FIELDS}, "used": used},
-        "warnings": [w for w in (hold_warning(out, time),) if w is not None],
+        "warnings": [w for w in (hold_warning(out, time), optimum_warning(out)) if w is not None],
     }
     if out.slope_fit is not None:
         fit = out.slope_fit

@@ -304,6 +304,23 @@ def hold_warning(tracked, time) -> dict | None:
     }
 
 
+def optimum_warning(tracked) -> dict | None:
+    """The ``no_optimum`` warning when a :class:`Tracked` run ends with ``p2 ≤ 0``: Kiencke's
+    curve then has no peak, so the final ``creep_opt`` is none and ``mu_max`` is the ``p2 = 0``
+    value ``a_s / p1`` (the data lately did not reach far enough up the curve to place its peak:
+    creep far below the optimum), else ``None``."""
+    p2 = float(tracked.trace.p2[-1])
+    if p2 > 0:
+        return None
+    return {
+        "code": "no_optimum",
+        "params": ["p2", "mu_max", "creep_opt"],
+        "message": f"the run ends with p2 = {p2:.4g} <= 0: the tracked curve has no peak, so "
+        "creep_opt is none and mu_max is its p2 = 0 value a_s/p1; the last stretch of data does "
+        "not reach far enough up the curve to place the peak",
+    }
+
+
 #: Algorithm 1-guarded's hold limit, in the recording's adhesion noise sd (:func:`noise_sd`).
 HOLD_SIGMAS = 3.0
 
