@@ -34,9 +34,9 @@ def register(sub) -> None:
         "--algorithm",
         choices=ALGORITHM_NAMES,
         default="1",
-        help="paper 000's Algorithm 1 (default) or 2; 1-guarded: Algorithm 1 whose SNR step holds the "
-        "forgetting factor only while the prediction error is within 3 noise sd (it cannot lock); "
-        "or plain RLS (forgetting 0.98)",
+        help="paper 000's Algorithm 1 (default) or 2; 1-guarded: Algorithm 1 whose SNR step holds "
+        "the forgetting factor only while the prediction error is within 3 noise sd, so a larger "
+        "change ends a hold; or plain RLS (forgetting 0.98)",
     )
     p.add_argument(
         "--a-s",

@@ -328,7 +328,8 @@ HOLD_SIGMAS = 3.0
 def algorithm1_guarded_params(noise_sd, **kw) -> OnlineParams:
     """Algorithm 1 whose SNR step holds ``η = η_max`` only while the prediction error
     ``|μ̂ − μ| ≤`` :data:`HOLD_SIGMAS` · ``noise_sd`` [-]: a hold ends when the data stop agreeing
-    with the estimate (a rail change), so it cannot lock (:func:`hold_warning`)."""
+    with the estimate (a rail change that moves μ̂ by more than that), unlike Algorithm 1's, which
+    can hold for good (:func:`hold_warning`)."""
     return algorithm1_params(**{"hold_error": HOLD_SIGMAS * noise_sd, **kw})
 
 
