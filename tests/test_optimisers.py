@@ -25,6 +25,7 @@ from jadhesion.identify import (
     run_until,
 )
 from jadhesion.identify.box_lm import gauss_newton_gain
+from jadhesion.identify.global_lm import global_lm
 from jadhesion.identify.lm import box_lm, box_lm_queue
 from jadhesion.identify.polach_residuals import polach_residual
 from jadhesion.identify.tlbo import remedial_size
@@ -471,3 +472,34 @@ def test_gauss_newton_gain_counts_only_the_feasible_step():
         hh, g, u = jnp.asarray(m.T @ m), jnp.asarray(rng.normal(size=4)), jnp.asarray(rng.uniform(size=4))
         free = 0.5 * float(g @ jnp.linalg.solve(hh, g))
         assert float(gauss_newton_gain(u, g, hh)) <= free * (1 + 1e-9)
+
+
+def test_global_lm_polish_has_its_own_step_cap():
+    """The full-data polish is capped by ``polish_steps``, not by the seeding runs' ``max_steps``
+    (a cap, not the rule): in Rosenbrock's curved valley box LM needs more than 3 steps from the
+    random start, so with a 3-step cap for both the polish ends ``max_steps``, and with its own cap
+    of 200 it reaches (1, 1). ``polach_fit`` gives its polish the larger cap."""
+
+    def rosenbrock(p, _):
+        return jnp.stack([10.0 * (p[1] - p[0] ** 2), 1.0 - p[0]])
+
+    box = (jnp.array([-2.0, -2.0]), jnp.array([2.0, 2.0]))
+    runs = {
+        steps: global_lm(
+            rosenbrock,
+            box,
+            jax.random.key(0),
+            0.0,
+            n_starts=1,
+            pop_size=1,
+            search_iter=0,
+            search_args=0.0,
+            max_steps=3,
+            polish_steps=steps,
+        )[0]
+        for steps in (None, 200)
+    }
+    assert status_of(runs[None].status) is Status.MAX_STEPS
+    assert bool(runs[200].success)
+    np.testing.assert_allclose(runs[200].params, [1.0, 1.0], atol=1e-6)
+    assert polach_fit.LM_POLISH_STEPS > polach_fit.LM_MAX_STEPS

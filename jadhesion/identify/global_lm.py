@@ -40,6 +40,7 @@ def global_lm(
     search_iter=5,
     search_args=None,
     max_steps=100,
+    polish_steps=None,
     options=DEFAULT_OPTIONS,
     block_rows=None,
     polish=True,
@@ -48,8 +49,9 @@ def global_lm(
     runs from its best members; the lowest-SSE answer is returned.
 
     With ``search_args`` (e.g. a subsample of the data) the search *and* the multi-start LM use
-    it, and only the best of them is polished by one :func:`box_lm` on ``args``: the expensive
-    full-data Jacobians are then paid once, not ``n_starts`` times; ``polish`` (a bool, may be
+    it, and only the best of them is polished by one :func:`box_lm` on ``args`` (capped at
+    ``polish_steps``, default ``max_steps``): the expensive full-data Jacobians are then paid
+    once, not ``n_starts`` times; ``polish`` (a bool, may be
     traced) false skips that polish and returns the subsample's best. ``block_rows``: see
     :func:`box_lm` (row-wise residuals only). Returns ``(LMResult,
     population evaluations)``; ``steps`` sums every LM run's steps."""
@@ -57,14 +59,15 @@ def global_lm(
     starts, n_evals = seed_starts(
         residual, bounds, key, sub, n_starts=n_starts, pop_size=pop_size, search_iter=search_iter
     )
-    solve = lambda p, a: box_lm(  # noqa: E731
-        residual, p, a, bounds, options, max_steps=max_steps, block_rows=block_rows
-    )
+
+    def solve(p, a, steps=max_steps):
+        return box_lm(residual, p, a, bounds, options, max_steps=steps, block_rows=block_rows)
+
     out = best_of(jax.vmap(solve, in_axes=(0, None))(starts, sub))
     if search_args is not None:
 
         def polished():
-            final = solve(out.params, args)
+            final = solve(out.params, args, max_steps if polish_steps is None else polish_steps)
             return final._replace(steps=final.steps + out.steps)
 
         out = polished() if polish is True else jax.lax.cond(polish, polished, lambda: out)
