@@ -182,3 +182,18 @@ def test_european_and_tab_separated_text_reads_as_its_comma_twin(csv, tmp_path, 
     path.write_text("\n".join(lines) + "\n")
     with pytest.raises(RecordingError, match="line 41"):
         load_recording(path)
+
+
+@pytest.mark.parametrize("case", ["empty", "text", "truncated_v73"])
+def test_unreadable_mat_is_one_line_naming_the_file(tmp_path, capsys, case):
+    path = tmp_path / f"{case}.mat"
+    if case == "truncated_v73":
+        pytest.importorskip("h5py")
+        whole = write_mat73(logger_columns(stretches_si()), tmp_path / "whole.mat").read_bytes()
+        path.write_bytes(whole[: len(whole) // 2])
+    else:
+        path.write_bytes(b"" if case == "empty" else b"hello, world!\n")
+    assert main(["inspect", str(path)]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and "Traceback" not in err
+    assert f"{path}: not a readable MATLAB .mat file (" in err

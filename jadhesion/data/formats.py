@@ -53,28 +53,37 @@ def _parquet(path: Path, name: str):
     return header, columns, ()
 
 
+def _unreadable_mat(name: str, exc: Exception):
+    reason = (str(exc).splitlines() or [type(exc).__name__])[0]
+    return _fail(name, f"not a readable MATLAB .mat file ({reason})")
+
+
 def _mat_variables(path: Path, name: str) -> dict:
     try:  # optional dependency (extra ``mat``)
         import h5py
     except ImportError:
         h5py = None
     if h5py is not None and h5py.is_hdf5(path):  # MATLAB v7.3
-        with h5py.File(path, "r") as f:
-            return {
-                k: np.asarray(v)
-                for k, v in f.items()
-                if isinstance(v, h5py.Dataset) and not k.startswith("#")
-            }
+        try:
+            with h5py.File(path, "r") as f:
+                return {
+                    k: np.asarray(v)
+                    for k, v in f.items()
+                    if isinstance(v, h5py.Dataset) and not k.startswith("#")
+                }
+        except OSError as exc:  # h5py's error for a truncated or corrupt HDF5 file
+            raise _unreadable_mat(name, exc) from None
     try:
         import scipy.io
+        from scipy.io.matlab import MatReadError
     except ImportError:
         raise _missing(name, "scipy", "mat") from None
     try:
         data = scipy.io.loadmat(path)
     except NotImplementedError:  # v7.3 without h5py
         raise _missing(name, "h5py (MATLAB v7.3 files)", "mat") from None
-    except (ValueError, OSError, TypeError) as exc:
-        raise _fail(name, f"not a readable MATLAB .mat file ({str(exc).splitlines()[0]})") from None
+    except (MatReadError, ValueError, OSError, TypeError) as exc:  # MatReadError: empty or truncated
+        raise _unreadable_mat(name, exc) from None
     return {k: v for k, v in data.items() if not k.startswith("__")}
 
 
