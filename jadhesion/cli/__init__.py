@@ -10,7 +10,9 @@ module (heavy imports at its top) only after parsing, and calls ``function(args)
 a missing command.
 
 Every command takes ``--json``. Bad input raises :class:`UserError` (or a :class:`ValueError`
-subclass from the data layer): one line on stderr, exit code 2, nothing written.
+subclass from the data layer): one line on stderr, exit code 2, nothing written. A reader that
+closes the pipe early (``jadhesion inspect run.csv --json | head -1``) ends the command quietly
+with exit code 1, Python's convention for EPIPE.
 """
 
 from __future__ import annotations
@@ -68,9 +70,18 @@ def main(argv=None) -> int:
     enable_compilation_cache()
     try:
         return int(_handler(args)(args) or 0)
+    except BrokenPipeError:
+        return _closed_pipe()
     except (UserError, OSError) as exc:
         sys.stderr.write(f"jadhesion: error: {exc}\n")
         return 2
+
+
+def _closed_pipe() -> int:
+    """Point stdout at ``os.devnull`` (the interpreter's last flush would fail again) and return
+    exit code 1."""
+    os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+    return 1
 
 
 def leave(code: int):
@@ -82,7 +93,10 @@ def leave(code: int):
     it only tears down JAX's backend and the modules, 0.18–0.26 s of a warm ``fit`` process (A/B
     and ``benchmarks/bench_startup.py``), a third of a bare ``import jax``. Only the console entry
     points call this, never :func:`main` (tests call :func:`main` in their own process)."""
-    sys.stdout.flush()
+    try:
+        sys.stdout.flush()
+    except BrokenPipeError:
+        code = _closed_pipe()
     sys.stderr.flush()
     os._exit(code)
 
