@@ -199,3 +199,12 @@ def test_start_end_window_and_its_errors(tmp_path):
     ]:
         with pytest.raises(RecordingError, match=expected):
             trim(rec, start, end)
+
+
+@pytest.mark.parametrize("unit", ["kN·m", "kN.m", "kN m", "kN⋅m"])
+def test_torque_unit_spellings(tmp_path, unit):
+    """``kN·m`` as our own messages print it, and the other ways loggers spell a newton-metre."""
+    cols = _si_columns(30)
+    path = _logger_twin(cols, tmp_path / "log.csv")
+    rec = load_recording(path, columns=LOGGER_MAP[:3] + [f"traction_torque=M_Rad_kNm[{unit}]"])
+    np.testing.assert_allclose(rec.columns["traction_torque"], cols["traction_torque"], rtol=1e-14)

@@ -8,6 +8,8 @@ A map entry is ``CANONICAL=SOURCE[UNIT]`` (``--column`` on the command line) or,
 * ``wheel_speed``: also ``rpm`` and ``rad/s`` (times the vehicle's nominal wheel radius [m]);
 * ``traction_torque``: ``N*m``, ``kN*m`` (``Nm``, ``kNm`` accepted);
 * ``creepage``, ``adhesion``: ``-`` (dimensionless).
+
+A unit is read without its whitespace, and a middle dot or a point as ``*`` (``kN·m``, ``kN.m``).
 """
 
 from __future__ import annotations
@@ -30,7 +32,13 @@ UNITS = {
     "creepage": {"-": 1.0},
     "adhesion": {"-": 1.0},
 }
+_DOTS = str.maketrans({"·": "*", "⋅": "*", ".": "*"})
 _SPEC = re.compile(r"^\s*([^=\s]+)\s*=\s*([^\[\]]*?)\s*(?:\[([^\[\]]*)\])?\s*$")
+
+
+def unit_key(unit: str) -> str:
+    """``unit`` as :data:`UNITS` spells it: whitespace removed, ``·``, ``⋅`` and ``.`` as ``*``."""
+    return "".join(unit.split()).translate(_DOTS)
 
 
 class ColumnSpec(NamedTuple):
@@ -53,12 +61,12 @@ def parse_column_spec(text: str, where: str) -> ColumnSpec:
         raise RecordingError(
             f"{where} {text!r}: unknown canonical column {canonical!r}; expected one of {', '.join(UNITS)}"
         )
-    if unit is not None and unit.strip() not in UNITS[canonical]:
+    if unit is not None and unit_key(unit) not in UNITS[canonical]:
         raise RecordingError(
             f"{where} {text!r}: unit {unit!r} is not a unit of {canonical}; "
             f"expected one of {', '.join(UNITS[canonical])}"
         )
-    return ColumnSpec(canonical, source, None if unit is None else unit.strip())
+    return ColumnSpec(canonical, source, None if unit is None else unit_key(unit))
 
 
 def parse_column_map(specs, where: str) -> dict:
