@@ -12,9 +12,10 @@ from jadhesion.cli import main
 from jadhesion.data.recording import save_recording
 from jadhesion.data.scenarios import SCENARIOS
 from jadhesion.data.simulator import simulate
-from jadhesion.data.vehicle import GRAVITY
+from jadhesion.data.vehicle import GRAVITY, LOCO_22E
 from jadhesion.diagnose import EFFECT_NAMES, diagnose, diagnosis, fitting, null, select
 from jadhesion.diagnose import extensions as ext
+from jadhesion.diagnose.explain import explain
 from jadhesion.diagnose.signals import from_columns, torque_builder
 from jadhesion.status import Status
 
@@ -196,6 +197,7 @@ def test_warnings_say_what_was_not_tested():
         "base": {"status": "stalled"},
         "null": {"critical_sse_reduction": 0.3, "noise": {"gamma": 0.0}},
         "candidates": [cand("rail_change", "stalled", 0.9), cand("load_transfer", "max_steps", 0.1)],
+        "generic": {"used": False, "gain": 0.01},
     }
     warnings = {w["code"]: w for w in diagnosis._warnings(result)}
     assert set(warnings) == {"base_not_converged", "candidates_not_tested", "null_at_widest"}
@@ -205,6 +207,41 @@ def test_warnings_say_what_was_not_tested():
     result["base"]["status"] = "converged"
     warnings = diagnosis._warnings(result)
     assert [w["code"] for w in warnings] == ["candidates_not_tested"] and not warnings[0]["above_critical"]
+
+
+def test_a_misfit_no_effect_explains_is_said_not_denied():
+    """When the generic discrepancy still lowers the held-out error (a curve Polach's model cannot
+    take: an outside recording's μ = 2 μ_max x/(1 + x²) gave verdict none, p = 1 for every
+    candidate, and a discrepancy gain of 68 %), the explanation does not say the model explains
+    the recording, and an ``unexplained_misfit`` warning names the gain and the signal; without it
+    the model is said to explain the recording and nothing is warned."""
+    candidate = {
+        "name": "rail_change",
+        "status": "converged",
+        "sse_reduction": 0.86,
+        "gain": 0.66,
+        "p_value": 1.0,
+    }
+    result = {
+        "effects": [],
+        "base": {"status": "converged", "heldout_mae": 0.0085},
+        "extended": {"params": {}, "heldout_mae": 0.0085},
+        "null": {"critical_sse_reduction": 0.88, "noise": {"gamma": 0.7}},
+        "candidates": [candidate],
+        "generic": {"used": True, "gain": 0.685},
+        "strongest_signal": "traction_ratio",
+        "sensitivity": {},
+    }
+    result["warnings"] = diagnosis._warnings(result)
+    assert [w["code"] for w in result["warnings"]] == ["unexplained_misfit"]
+    assert result["warnings"][0]["gain"] == 0.685 and result["warnings"][0]["signal"] == "traction_ratio"
+    text = explain(result, LOCO_22E)
+    assert "does not explain this recording" in text and "explains this recording:" not in text
+    assert "68.5%" in text
+    result["generic"] = {"used": False, "gain": 0.005}
+    result["warnings"] = diagnosis._warnings(result)
+    assert result["warnings"] == []
+    assert explain(result, LOCO_22E).startswith("The Polach model explains this recording:")
 
 
 def test_effects_the_evidence_cannot_separate_form_a_set():

@@ -39,14 +39,18 @@ def explain(result: dict, vehicle: Vehicle) -> str:
         best = (ranked or result["candidates"])[0]
         p = best.get("p_value")
         strong = [n for w in result.get("warnings", []) for n in w.get("above_critical", [])]
-        opening = (
-            "The verdict is open: the fits of "
-            + ", ".join(n.replace("_", " ") for n in strong)
-            + " did not converge, yet lowered the error beyond what clean re-synthesised versions "
-            "of this recording show; among the converged candidates, "
-            if strong
-            else "The Polach model explains this recording: "
-        )
+        misfit = result["generic"]["used"]
+        if strong:
+            opening = (
+                "The verdict is open: the fits of "
+                + ", ".join(n.replace("_", " ") for n in strong)
+                + " did not converge, yet lowered the error beyond what clean re-synthesised "
+                "versions of this recording show; among the converged candidates, "
+            )
+        elif misfit:
+            opening = "The Polach model does not explain this recording, and "
+        else:
+            opening = "The Polach model explains this recording: "
         text = (
             opening + "no catalogue effect lowers the held-out "
             "error beyond the calibrated threshold and beyond what clean re-synthesised "
@@ -54,11 +58,12 @@ def explain(result: dict, vehicle: Vehicle) -> str:
             f"{best['name']}, "
             f"{best['gain']:+.1%}" + ("" if p is None else f", p = {p:.2f}") + ")."
         )
-        if result["generic"]["used"]:
+        if misfit:
             text += (
                 " Residual structure remains that no catalogue effect explains; it follows "
                 f"{result['strongest_signal']} most closely, and a sparse discrepancy term "
-                f"lowers the held-out error by {result['generic']['gain']:.1%}."
+                f"lowers the held-out error by {result['generic']['gain']:.1%}: physics outside "
+                "the catalogue, or an adhesion curve whose shape Polach's model cannot take."
             )
         return text + _blind_spots(result["sensitivity"])
     parts = [effect_sentence(n, extended["params"], vehicle) for n in result["effects"]]
@@ -76,4 +81,10 @@ def explain(result: dict, vehicle: Vehicle) -> str:
             f"{d['name']} (separate with {d['experiment']})" for d in result["indistinguishable"]
         )
         text += f" This recording cannot rule out: {alts}."
+    if result["generic"]["used"]:
+        text += (
+            f" Residual structure remains after it, following {result['strongest_signal']} most "
+            f"closely: a sparse discrepancy term lowers the held-out error by a further "
+            f"{result['generic']['gain']:.1%}."
+        )
     return text + _blind_spots(result["sensitivity"])
