@@ -208,3 +208,86 @@ def test_torque_unit_spellings(tmp_path, unit):
     path = _logger_twin(cols, tmp_path / "log.csv")
     rec = load_recording(path, columns=LOGGER_MAP[:3] + [f"traction_torque=M_Rad_kNm[{unit}]"])
     np.testing.assert_allclose(rec.columns["traction_torque"], cols["traction_torque"], rtol=1e-14)
+
+
+def _renamed(cols, names, path, **extra):
+    """``cols`` (SI) saved under ``names`` (canonical -> header), each in its header's unit."""
+    rpm = 60 / (2 * math.pi * R)
+    scale = {"ms": 1e3, "km/h": 3.6, "kNm": 1e-3, "kN·m": 1e-3, "1/min": rpm, "rpm": rpm}
+    out = {h: cols[c] * scale.get(h.rpartition("[")[2].rstrip("]"), 1.0) for c, h in names.items()}
+    return save_recording(out | extra, LOCO_22E, path)
+
+
+def _assert_si(rec, cols):
+    for name, values in cols.items():
+        np.testing.assert_allclose(rec.columns[name], values, rtol=1e-14, atol=1e-15)
+
+
+def _message(path, columns=()):
+    with pytest.raises(RecordingError) as info:
+        load_recording(path, columns=columns)
+    assert "\n" not in str(info.value)
+    return str(info.value)
+
+
+def test_units_in_headers(tmp_path):
+    """``SOURCE[UNIT]`` or ``SOURCE [UNIT]`` headers: ``--column`` names SOURCE (with the unit, or
+    leaves it to the header's); a canonical header with its unit is read in that unit unmapped."""
+    cols = _si_columns(30)
+    names = ["t [ms]", "v_Lok[km/h]", "n_Rad [1/min]", "M_Rad [kNm]"]
+    path = _renamed(cols, dict(zip(cols, names, strict=True)), tmp_path / "log.csv")
+    mapped = [
+        "time=t[ms]",
+        "vehicle_speed=v_Lok[km/h]",
+        "wheel_speed=n_Rad[rpm]",
+        "traction_torque=M_Rad[kN·m]",
+    ]
+    _assert_si(load_recording(path, columns=mapped), cols)
+    rec = load_recording(
+        path, columns=["time=t", "vehicle_speed=v_Lok", "wheel_speed=n_Rad[rpm]", "traction_torque=M_Rad"]
+    )
+    _assert_si(rec, cols)
+    assert list(rec.sources.values()) == ["t[ms]", "v_Lok[km/h]", "n_Rad[rpm]", "M_Rad[kNm]"]
+    assert _message(path, ["vehicle_speed=v_Lok[m/s]"]).endswith(
+        "--column vehicle_speed=v_Lok[m/s]: no column 'v_Lok' in the file (columns: "
+        "t [ms], v_Lok[km/h], n_Rad [1/min], M_Rad [kNm]); column 'v_Lok[km/h]' is in km/h, not m/s"
+    )
+    assert _message(path, ["wheel_speed=n_Rad"]).endswith(
+        "column 'n_Rad [1/min]': '1/min' is not a unit of wheel_speed; give its unit, "
+        "--column wheel_speed=n_Rad[UNIT]"
+    )
+
+    names = ["time [ms]", "vehicle_speed[km/h]", "wheel_speed [rpm]", "traction_torque [kN·m]"]
+    rec = load_recording(
+        _renamed(
+            cols, dict(zip(cols, names, strict=True)), tmp_path / "own.csv", **{"creepage [%]": cols["time"]}
+        )
+    )
+    _assert_si(rec, cols)
+    assert list(rec.sources.values()) == [
+        "time[ms]",
+        "vehicle_speed[km/h]",
+        "wheel_speed[rpm]",
+        "traction_torque[kN*m]",
+    ]
+    assert any("column 'creepage [%]': '%' is not a unit of creepage" in n for n in rec.notes)
+
+    twice = _renamed(
+        cols, {"time": "t", "vehicle_speed": "v[km/h]"}, tmp_path / "twice.csv", **{"v [km/h]": cols["time"]}
+    )
+    assert _message(twice, ["vehicle_speed=v[km/h]"]).endswith(
+        "twice.csv: --column vehicle_speed=v[km/h]: columns 'v[km/h]' and 'v [km/h]' both match; rename one"
+    )
+
+
+def test_canonical_names_ignore_case(tmp_path):
+    cols = _si_columns(30)
+    names = {c: c.title() for c in cols}
+    rec = load_recording(_renamed(cols, names, tmp_path / "upper.csv"))
+    _assert_si(rec, cols)
+    assert rec.sources == names and rec.notes == ()
+    message = _message(_renamed(cols, names, tmp_path / "two.csv", TIME=cols["time"]))
+    assert "missing column 'time'" in message and message.endswith(
+        "; columns 'Time' and 'TIME' both match 'time' ignoring case and unit: "
+        "map one with --column time=SOURCE"
+    )

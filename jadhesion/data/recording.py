@@ -1,6 +1,8 @@
 """Recordings: load, validate and save the recording CSV and its JSON sidecar (DESIGN §3).
 
-A recording is a CSV file with a header row, SI units, one row a sample. Two layouts are accepted:
+A recording is a CSV file with a header row, SI units, one row a sample. Two layouts are accepted
+(canonical names match ignoring case when no header is spelled exactly so; a header may state its
+unit, ``vehicle_speed [km/h]``: :mod:`.units`):
 
 * **raw signals**: ``time`` [s], ``vehicle_speed`` [m/s], ``wheel_speed`` [m/s, circumferential at the
   nominal radius], ``traction_torque`` [N·m at the wheelset]; the adhesion observer turns them into
@@ -38,10 +40,11 @@ from typing import Optional
 import numpy as np
 
 from ..atomic import atomic_write
+from ..errors import RecordingError
 from .formats import is_binary, read_columns
 from .readers import _fast_parse, _parse_rows, _read_text, normalise_delimiter
 from .sidecar import _load_sidecar
-from .units import ColumnSpec, parse_column_map, to_si
+from .units import UNITS, ColumnSpec, parse_column_map, same_unit, split_unit, to_si
 from .validate import (
     KNOWN_COLUMNS,
     MAX_SPEED,
@@ -92,10 +95,52 @@ class Recording:
         return "adhesion" in self.columns
 
 
+def _both(columns) -> str:
+    """``columns 'a' and 'b' both match`` (``all`` for more)."""
+    listed = ", ".join(map(repr, columns[:-1])) + f" and {columns[-1]!r}"
+    return f"columns {listed} {'both' if len(columns) == 2 else 'all'} match"
+
+
+def _find_column(spec: ColumnSpec, header, name: str) -> tuple[str, ColumnSpec]:
+    """The file's column for ``spec`` and the spec with its unit: the header ``SOURCE``, else the
+    one header ``SOURCE[UNIT]`` or ``SOURCE [UNIT]`` in the spec's unit (or the header's, when the
+    spec gives none; the spec's, when the header's is not a unit of the column)."""
+    if spec.source in header:
+        return spec.source, spec
+    table = UNITS[spec.canonical]
+    found, hints = [], []
+    for column in header:
+        source, unit = split_unit(column)
+        if source != spec.source or unit is None:
+            continue
+        if unit in table and spec.unit is not None and not same_unit(spec.canonical, unit, spec.unit):
+            hints.append(f"column {column!r} is in {unit}, not {spec.unit}")
+        elif unit in table or spec.unit is not None:
+            found.append((column, spec._replace(unit=spec.unit or unit)))
+        else:
+            hints.append(
+                f"column {column!r}: {unit!r} is not a unit of {spec.canonical}; give its unit, "
+                f"--column {spec.canonical}={source}[UNIT]"
+            )
+    where = f"--column {spec.canonical}={spec.text()}"
+    if len(found) > 1:
+        raise _fail(name, f"{where}: {_both([c for c, _ in found])}; rename one")
+    if not found:
+        raise _fail(
+            name,
+            f"{where}: no column {spec.source!r} in the file (columns: {', '.join(header)})"
+            + "".join(f"; {h}" for h in hints),
+        )
+    return found[0]
+
+
 def _column_map(columns, sidecar: dict, sidecar_name: str, header, name: str, axle):
-    """``{canonical: ColumnSpec}``: the sidecar's ``columns`` overridden by ``columns`` (--column);
-    with ``axle`` N, unmapped ``wheel_speed``/``traction_torque`` come from the first present of
-    ``{name}_{N}``, ``{name}_axle{N}``, ``{name}{N}``."""
+    """``(specs, shown, hints)``. ``specs``, ``{canonical: ColumnSpec}``: the sidecar's ``columns``
+    overridden by ``columns`` (--column); with ``axle`` N, unmapped ``wheel_speed``/``traction_torque``
+    from the first present of ``{name}_{N}``, ``{name}_axle{N}``, ``{name}{N}``; then each other
+    canonical column the file names in another case or with its unit (:mod:`.units`). ``shown``:
+    the file's column of each (:func:`_find_column`); ``hints``: why a header like a canonical
+    name was not taken (ambiguous, or a unit not of that column)."""
     specs = parse_column_map(
         [f"{k}={v}" for k, v in (sidecar.get("columns") or {}).items()], f"{sidecar_name}: key 'columns':"
     )
@@ -115,14 +160,29 @@ def _column_map(columns, sidecar: dict, sidecar_name: str, header, name: str, ax
                     f"file (columns: {', '.join(header)}); map it with --column",
                 )
             specs[canonical] = ColumnSpec(canonical, found[0])
-    for spec in specs.values():
-        if spec.source not in header:
-            raise _fail(
-                name,
-                f"--column {spec.canonical}={spec.source}: no column {spec.source!r} "
-                f"in the file (columns: {', '.join(header)})",
+    shown = {}
+    for canonical, spec in specs.items():
+        shown[canonical], specs[canonical] = _find_column(spec, header, name)
+    hints = []
+    for canonical in UNITS:
+        if canonical in specs or canonical in header:
+            continue
+        near = [c for c in header if c not in shown.values() and split_unit(c)[0].lower() == canonical]
+        if len(near) > 1:
+            hints.append(
+                f"{_both(near)} {canonical!r} ignoring case and unit: "
+                f"map one with --column {canonical}=SOURCE"
             )
-    return specs
+            continue
+        source, unit = split_unit(near[0]) if near else (None, None)
+        if near and unit is not None and unit not in UNITS[canonical]:
+            hints.append(
+                f"column {near[0]!r}: {unit!r} is not a unit of {canonical} "
+                f"({', '.join(UNITS[canonical])}); map it with --column {canonical}={source}[UNIT]"
+            )
+        elif near:
+            specs[canonical], shown[canonical] = ColumnSpec(canonical, source, unit), near[0]
+    return specs, shown, hints
 
 
 def load_recording(path, *, columns=(), axle=None, max_speed: float = MAX_SPEED) -> Recording:
@@ -156,17 +216,20 @@ def load_recording(path, *, columns=(), axle=None, max_speed: float = MAX_SPEED)
             header, parsed, lines = fast
     sidecar_path, sidecar, vehicle, notes = _load_sidecar(path)
     notes += read_notes
-    specs = _column_map(columns, sidecar, str(sidecar_path), header, name, axle)
-    by_source = {spec.source: spec for spec in specs.values()}
-    shadowed = [c for c in header if c in specs and c not in by_source]
+    specs, shown, hints = _column_map(columns, sidecar, str(sidecar_path), header, name, axle)
+    by_column = {shown[c]: spec for c, spec in specs.items()}
+    shadowed = [c for c in header if c in specs and c not in by_column]
     if shadowed:
         notes += (
             f"{name}: column{'s' if len(shadowed) > 1 else ''} "
             f"{', '.join(map(repr, shadowed))} replaced by the column map",
         )
-    renamed = [by_source[c].canonical if c in by_source else (None if c in shadowed else c) for c in header]
-    shown = {spec.canonical: spec.source for spec in specs.values()}
-    _check_layout([c for c in renamed if c is not None], name)
+    renamed = [by_column[c].canonical if c in by_column else (None if c in shadowed else c) for c in header]
+    try:
+        _check_layout([c for c in renamed if c is not None], name)
+    except RecordingError as exc:
+        raise RecordingError("; ".join([str(exc), *hints])) from None
+    notes += tuple(f"{name}: {h}" for h in hints)
     required = [c for c in renamed if c in KNOWN_COLUMNS]
     columns = {}
     ignored = []
@@ -202,7 +265,7 @@ def load_recording(path, *, columns=(), axle=None, max_speed: float = MAX_SPEED)
         vehicle=vehicle,
         sidecar=sidecar,
         notes=notes,
-        sources={c: str(specs[c].source) + (f"[{specs[c].unit}]" if specs[c].unit else "") for c in specs},
+        sources={c: spec.text() for c, spec in specs.items()},
     )
 
 

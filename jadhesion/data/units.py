@@ -10,6 +10,11 @@ A map entry is ``CANONICAL=SOURCE[UNIT]`` (``--column`` on the command line) or,
 * ``creepage``, ``adhesion``: ``-`` (dimensionless).
 
 A unit is read without its whitespace, and a middle dot or a point as ``*`` (``kN·m``, ``kN.m``).
+
+A header may state its column's unit, ``SOURCE[UNIT]`` or ``SOURCE [UNIT]`` (:func:`split_unit`):
+the map's ``SOURCE`` then names it (its unit the header's, or the one given when the header's is
+not listed above), and a canonical column named so (``vehicle_speed [km/h]``) is read in that unit
+without a map. Canonical names are matched ignoring case when no header is spelled exactly so.
 """
 
 from __future__ import annotations
@@ -33,6 +38,7 @@ UNITS = {
     "adhesion": {"-": 1.0},
 }
 _DOTS = str.maketrans({"·": "*", "⋅": "*", ".": "*"})
+_HEADER_UNIT = re.compile(r"^(.*?)\s*\[([^\[\]]*)\]$")
 _SPEC = re.compile(r"^\s*([^=\s]+)\s*=\s*([^\[\]]*?)\s*(?:\[([^\[\]]*)\])?\s*$")
 
 
@@ -41,12 +47,31 @@ def unit_key(unit: str) -> str:
     return "".join(unit.split()).translate(_DOTS)
 
 
+def same_unit(canonical: str, a: str, b: str) -> bool:
+    """Whether unit keys ``a`` and ``b`` are one unit of ``canonical`` (``kNm`` and ``kN*m``)."""
+    factor = UNITS[canonical].get(a)
+    return a == b or (factor is not None and factor == UNITS[canonical].get(b))
+
+
+def split_unit(column: str) -> tuple[str, str | None]:
+    """``(name, unit key)`` of a header that states its unit, ``v_Lok[km/h]`` or ``v_Lok [km/h]``;
+    ``(column, None)`` of one that does not."""
+    match = _HEADER_UNIT.match(column.strip())
+    if not match or not match.group(1):
+        return column, None
+    return match.group(1), unit_key(match.group(2))
+
+
 class ColumnSpec(NamedTuple):
     """One map entry: canonical column, the file's column name, its unit (SI when ``None``)."""
 
     canonical: str
     source: str
     unit: str | None = None
+
+    def text(self) -> str:
+        """``SOURCE[UNIT]``, or ``SOURCE`` without a unit."""
+        return f"{self.source}[{self.unit}]" if self.unit else self.source
 
 
 def parse_column_spec(text: str, where: str) -> ColumnSpec:
