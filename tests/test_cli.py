@@ -74,7 +74,14 @@ def test_fit_json_contract_and_accuracy(env, recording):
             assert c is None or (-1 - 1e-9 <= c <= 1 + 1e-9 and c == pytest.approx(corr[j][i]))
     assert corr[2][2] == pytest.approx(1.0)
     codes = {w["code"] for w in doc["warnings"]}
-    assert codes <= {"at_bound", "weakly_identified", "not_converged", "few_samples", "peak_extrapolated"}
+    assert codes <= {
+        "at_bound",
+        "weakly_identified",
+        "undetermined",
+        "not_converged",
+        "few_samples",
+        "peak_extrapolated",
+    }
     # the curve's peak at the median speed, beside the true curve's peak there
     truth = json.loads(recording.with_name("dry.truth.json").read_text())["params"]
     theta = np.array([truth[n] for n in ("kA", "kS", "mu0", "A", "B")])
@@ -86,9 +93,11 @@ def test_fit_json_contract_and_accuracy(env, recording):
     assert "not_converged" not in codes and "few_samples" not in codes
     for name, u in doc["uncertainty"].items():  # a parameter on a bound is said so, not given numbers
         on_bound = min(doc["params"][name], 1 - doc["params"][name]) < 1e-6
-        assert (u["stderr"] is None) == on_bound
+        assert (u["stderr"] is None) == (on_bound or name in _named(doc, "undetermined"))
         if on_bound:
             assert any(name in w["params"] for w in doc["warnings"] if w["code"] == "at_bound")
+        else:  # free: a standard error within the box, or null and named undetermined
+            assert u["stderr"] is None or u["stderr"] <= 1.0
 
 
 def test_fit_human_output_says_whether_it_converged(env, recording, tmp_path):
@@ -231,3 +240,31 @@ def test_fit_warns_few_samples_in_process(tmp_path, capsys):
     doc = json.loads(capsys.readouterr().out)
     assert "few_samples" in {w["code"] for w in doc["warnings"]}
     assert doc["uncertainty"]["mu0"]["ci95"][0] <= 0.36 <= doc["uncertainty"]["mu0"]["ci95"][1]
+
+
+def _named(doc, *codes):
+    return {n for w in doc["warnings"] if w["code"] in codes for n in w["params"]}
+
+
+def _dataset_csv(path, creep, speed, mu):
+    rows = np.column_stack([creep, speed, mu]).tolist()
+    path.write_text("creepage,vehicle_speed,adhesion\n" + "".join(f"{c!r},{v!r},{m!r}\n" for c, v, m in rows))
+    return path
+
+
+def test_fit_of_one_creep_value_gives_no_standard_error_and_names_why(tmp_path, capsys):
+    """Every sample at creep 0.02 and μ̂ 0.3: the data fix one point of the curve, neither its
+    parameters nor its peak. Every standard error is null in JSON and "n/a" in the text, never
+    inf (or the 10¹⁵⁴ an infinite variance once became), and each null is named by a warning."""
+    path = _dataset_csv(tmp_path / "one.csv", np.full(400, 0.02), np.full(400, 10.0), np.full(400, 0.3))
+    assert main(["fit", str(path), "--method", "lm", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    undetermined = _named(doc, "undetermined")
+    for name, u in doc["uncertainty"].items():
+        assert u["stderr"] is None and u["ci95"] is None
+        assert name in undetermined | _named(doc, "at_bound")
+    assert {"mu_max", "creep_opt"} <= undetermined
+    assert all(d["stderr"] is None and d["ci95"] is None for d in doc["derived"].values())
+    assert main(["fit", str(path), "--method", "lm"]) == 0
+    text = capsys.readouterr().out
+    assert "inf" not in text.split() and "n/a" in text.split() and "warning [undetermined]" in text

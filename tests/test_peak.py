@@ -69,12 +69,20 @@ def test_no_interior_peak_and_an_unreached_peak_are_said_so():
     assert [w["code"] for w in warnings] == ["peak_extrapolated"] and "extrapolated" in warnings[0]["message"]
 
 
-def test_an_undetermined_direction_the_peak_depends_on_gives_no_interval():
+@pytest.mark.parametrize("loose", [1, 2])
+def test_an_undetermined_direction_the_peak_depends_on_gives_no_interval(loose):
+    """μ0 (a gradient of about 1) or kS (a gradient well below 1) undetermined: the peak is too,
+    reported null and named, never as a finite 10¹⁵⁴ (an infinite variance once read as the
+    largest double, times a small gradient)."""
     peak, jac = peak_numbers(DRY, K_EPS, 2.0)
     cov = 1e-4 * np.eye(5)
-    cov[2, :] = cov[:, 2] = np.inf  # μ0 undetermined: the peak's height is too
-    derived, _ = peak_report(peak, jac, cov, 2.0, max_creep=1.0)
-    assert derived["mu_max"]["stderr"] == float("inf") and derived["mu_max"]["ci95"] is None
+    cov[loose, :] = cov[:, loose] = np.inf
+    derived, warnings = peak_report(peak, jac, cov, 2.0, max_creep=1.0)
+    assert derived["mu_max"]["stderr"] is None and derived["mu_max"]["ci95"] is None
+    undetermined = [w for w in warnings if w["code"] == "undetermined"]
+    assert len(undetermined) == 1 and "mu_max" in undetermined[0]["params"]
+    for name, d in derived.items():
+        assert (d["stderr"] is None) == (name in undetermined[0]["params"])
 
 
 def test_reference_speed_is_the_median_speed_of_the_real_rows():
@@ -85,12 +93,19 @@ def test_reference_speed_is_the_median_speed_of_the_real_rows():
 
 def test_box_bound_on_mu_max_holds_and_caps_a_huge_interval():
     """No curve of the unit box exceeds 1 + 1/π (dense creep grid at the box's corners and 2 000
-    random points), and a fit whose μ_max is barely determined gets an interval capped there, not
-    one reaching 10¹⁵¹ (seen on a recording fitted against the wrong vehicle)."""
+    random points); a fit whose μ_max is barely determined (sd 0.8) gets an interval capped there,
+    and one whose sd exceeds the whole box (seen at 10¹⁵¹ on a recording fitted against the wrong
+    vehicle) gets none: the data do not determine it."""
     corners = jnp.array(np.array(np.meshgrid(*[[0.0, 1.0]] * 5)).reshape(5, -1).T)
     inside = jax.random.uniform(jax.random.key(1), (2000, 5))
     peaks = jax.vmap(lambda th: adhesion_peak(th, K_EPS, 0.5)[0])(jnp.concatenate([corners, inside]))
     assert float(jnp.max(peaks)) < MU_BOX_MAX
     peak, jac = peak_numbers(DRY, K_EPS, 2.0)
-    derived, _ = peak_report(peak, jac, 1e6 * np.eye(5), 2.0, max_creep=1.0)
+    grad = np.asarray(jac[0])
+    derived, warnings = peak_report(peak, jac, 0.8**2 / (grad @ grad) * np.eye(5), 2.0, max_creep=1.0)
+    assert derived["mu_max"]["stderr"] == pytest.approx(0.8)
     assert derived["mu_max"]["ci95"] == [0.0, MU_BOX_MAX]
+    assert "mu_max" not in [n for w in warnings if w["code"] == "undetermined" for n in w["params"]]
+    derived, warnings = peak_report(peak, jac, 1e6 * np.eye(5), 2.0, max_creep=1.0)
+    assert derived["mu_max"] == {"value": float(peak[0]), "stderr": None, "ci95": None}
+    assert "mu_max" in [n for w in warnings if w["code"] == "undetermined" for n in w["params"]]

@@ -95,14 +95,16 @@ def _describe(doc) -> str:
     else:
         lines.append("converged")
     rows = []
+    on_bound = {n for w in doc["warnings"] if w["code"] == "at_bound" for n in w["params"]}
     for name, value in doc["params"].items():
         u = doc["uncertainty"][name]
         ci = u["ci95"]
+        no_stderr = "on bound" if name in on_bound else "n/a"  # else not determined (undetermined)
         rows.append(
             {
                 "parameter": name,
                 "value": value,
-                "stderr": "on bound" if u["stderr"] is None else u["stderr"],
+                "stderr": no_stderr if u["stderr"] is None else u["stderr"],
                 "95% interval": "-" if ci is None else f"[{ci[0]:.4g}, {ci[1]:.4g}]",
             }
         )
@@ -182,7 +184,7 @@ def _plot(args, path, dataset, doc, many: bool) -> None:
 
 def table_rows(paths, docs) -> list[dict]:
     """``--out``'s rows: file, method, the parameters, mae, status, converged and (Polach) one
-    ``stderr_<param>`` per parameter (empty: on a bound; ``inf``: undetermined), the reference
+    ``stderr_<param>`` per parameter (empty: on a bound or not determined), the reference
     ``vehicle_speed`` and the peak, ``mu_max`` and ``creep_opt`` with their ``stderr_`` (empty:
     no interval)."""
     rows = []

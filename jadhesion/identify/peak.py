@@ -9,7 +9,11 @@ sandwich of :mod:`.trust`) by the delta method, ``Var g(θ) ≈ ∇g Σ ∇gᵀ`
 peak search itself (its parabolic refinement is differentiable). ``mu_max``'s 95 % interval is
 ``± 1.96 sd`` within [0, :data:`MU_BOX_MAX`] (the largest adhesion of any curve in the box);
 ``creep_opt``, a positive scale, gets its interval on the log scale, ``creep_opt · exp(± 1.96
-sd_log)`` within the searched range (``stderr`` = ``creep_opt · sd_log``).
+sd_log)`` within the searched range (``stderr`` = ``creep_opt · sd_log``). A standard error the
+data do not determine (:func:`.uncertainty.determined`: infinite, where the peak depends on a
+singular direction of the fit, or wider than its box, [0, :data:`MU_BOX_MAX`] for ``mu_max``,
+``ln(S_MAX/S_MIN)`` for ``creep_opt``'s ``sd_log``) is ``null`` with no interval, and the quantity is
+named in an ``undetermined`` warning.
 
 Two warnings (code ``peak_extrapolated``): the recording's creep never reaches ``creep_opt`` (the
 peak is extrapolated from the rising branch: the interval is the model's, not the data's), or the
@@ -24,7 +28,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..models.polach import adhesion_peak
-from .uncertainty import Z95
+from .uncertainty import Z95, determined, undetermined_warning
 
 #: The creep range [-] searched for the peak (:func:`adhesion_peak`'s defaults).
 S_MIN, S_MAX = 1e-5, 1.0
@@ -34,6 +38,8 @@ DERIVED = ("mu_max", "creep_opt")
 #: Largest adhesion of any Polach curve in the unit box: μ ≤ μ0 ≤ 1 and
 #: ``kA ε/(1 + (kA ε)²) + atan(kS ε) < 1/2 + π/2``, so ``μ_adh < 1 + 1/π``.
 MU_BOX_MAX = 1.0 + 1.0 / np.pi
+#: Width of the searched creep range on the log scale, creep_opt's box for ``sd_log``.
+LOG_WIDTH = float(np.log(S_MAX / S_MIN))
 
 
 def reference_speed(vehicle_speed, weight=None):
@@ -71,16 +77,16 @@ def peak_report(peak, jacobian, cov, speed, max_creep) -> tuple[dict, list]:
     """``(derived, warnings)`` of a fit: ``derived`` {``mu_max``, ``creep_opt``: {``value``,
     ``stderr``, ``ci95``}} from :func:`peak_numbers`' ``peak`` and ``jacobian``, the fit's ``cov``
     (5, 5), the reference ``speed`` [m/s] and the largest ``|creep|`` of the fitted samples;
-    ``warnings`` as in :mod:`.trust` (module docstring)."""
+    ``warnings`` as in :mod:`.trust` (module docstring), with ``undetermined`` for a quantity whose
+    standard error is not determined."""
     mu_max, creep_opt = (float(x) for x in np.asarray(peak))
-    jac, cov = np.asarray(jacobian, float), np.nan_to_num(np.asarray(cov, float), nan=0.0)
+    jac, cov = np.asarray(jacobian, float), np.asarray(cov, float)
+    cov = np.where(np.isnan(cov), 0.0, cov)  # a fixed parameter (nan) adds nothing; inf stays inf
     sd_mu = np.sqrt(_variance(jac[0], cov))
     edge = creep_opt >= S_MAX / EDGE or creep_opt <= S_MIN * EDGE
-    derived = {
-        "mu_max": _entry(
-            mu_max, sd_mu, (max(mu_max - Z95 * sd_mu, 0.0), min(mu_max + Z95 * sd_mu, MU_BOX_MAX))
-        )
-    }
+    ci_mu = (max(mu_max - Z95 * sd_mu, 0.0), min(mu_max + Z95 * sd_mu, MU_BOX_MAX))
+    derived = {"mu_max": _entry(mu_max, sd_mu, ci_mu, determined(sd_mu, MU_BOX_MAX))}
+    undetermined = [] if derived["mu_max"]["stderr"] is not None else ["mu_max"]
     if edge:
         derived["creep_opt"] = {"value": creep_opt, "stderr": None, "ci95": None}
     else:
@@ -90,8 +96,9 @@ def peak_report(peak, jacobian, cov, speed, max_creep) -> tuple[dict, list]:
             np.exp(max(log_c - Z95 * sd_log, np.log(S_MIN))),
             np.exp(min(log_c + Z95 * sd_log, np.log(S_MAX))),
         )
-        derived["creep_opt"] = _entry(creep_opt, creep_opt * sd_log, ci)
-    warnings = []
+        derived["creep_opt"] = _entry(creep_opt, creep_opt * sd_log, ci, determined(sd_log, LOG_WIDTH))
+        undetermined += [] if derived["creep_opt"]["stderr"] is not None else ["creep_opt"]
+    warnings = [undetermined_warning(undetermined)] if undetermined else []
     if edge:
         message = (
             f"the fitted curve has no peak at creep {S_MIN:g}–{S_MAX:g} at {speed:.3g} m/s: "
@@ -108,7 +115,7 @@ def peak_report(peak, jacobian, cov, speed, max_creep) -> tuple[dict, list]:
     return derived, warnings
 
 
-def _entry(value, sd, ci):
-    if not np.isfinite(sd):
-        return {"value": value, "stderr": float("inf"), "ci95": None}
+def _entry(value, sd, ci, ok):
+    if not ok:  # not determined: no number that would pretend otherwise
+        return {"value": value, "stderr": None, "ci95": None}
     return {"value": value, "stderr": float(sd), "ci95": [float(ci[0]), float(ci[1])]}

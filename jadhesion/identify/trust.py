@@ -24,6 +24,10 @@ Warning codes:
   box, or whose variance is infinite (a singular direction), named with the combination the data
   do determine where one is known: with A and B both weak, at small slip ``w``
   ``μ ≈ μ0 (1 − (1 − A)·B·|w|)``, so only ``(1 − A)·B`` is determined.
+* ``undetermined`` — a parameter or peak quantity whose standard error the data do not determine
+  (:func:`.uncertainty.determined`: infinite, or wider than the whole box): its ``stderr`` and
+  ``ci95`` are ``null``. Together with ``at_bound`` (and ``peak_extrapolated`` for a curve without
+  a peak) every ``null`` standard error is named by a warning.
 * ``not_converged`` — the solver's status is not ``converged``.
 * ``few_samples`` — fewer than :data:`.polach_fit.RECOMMENDED_SAMPLES` samples.
 * ``peak_extrapolated`` — the recording's creep never reaches the fitted peak, or the curve has
@@ -46,7 +50,7 @@ from ..status import status_of
 from .batch_fit import bucketed, valid_mask, valid_samples
 from .peak import peak_numbers, peak_report, reference_speed
 from .polach_fit import LM_RESIDUAL, RECOMMENDED_SAMPLES, scaled
-from .uncertainty import Z95, correlation, covariance
+from .uncertainty import Z95, correlation, covariance, determined, undetermined_warning
 
 #: Distance from a face of the unit box at which a parameter counts as on its bound.
 BOUND_TOL = 1e-6
@@ -102,10 +106,11 @@ def fit_report(data, fit, numbers=None) -> dict:
     numbers = trust_numbers(fit.params, scaled(bucketed(data), fit)) if numbers is None else numbers
     cov = np.asarray(numbers.cov)
     sd = np.sqrt(np.diag(cov))
-    uncertainty, warnings = {}, []
+    uncertainty, warnings, undetermined = {}, [], []
     for i, name in enumerate(PARAM_NAMES):
-        if fixed[i] or not np.isfinite(sd[i]):
-            uncertainty[name] = {"stderr": None if fixed[i] else float("inf"), "ci95": None}
+        if fixed[i] or not determined(sd[i]):
+            uncertainty[name] = {"stderr": None, "ci95": None}
+            undetermined += [] if fixed[i] else [name]
             continue
         lo, hi = theta[i] - Z95 * sd[i], theta[i] + Z95 * sd[i]
         uncertainty[name] = {"stderr": float(sd[i]), "ci95": [float(max(lo, 0.0)), float(min(hi, 1.0))]}
@@ -125,18 +130,21 @@ def fit_report(data, fit, numbers=None) -> dict:
     weak = [n for i, n in enumerate(PARAM_NAMES) if not fixed[i] and not (2 * Z95 * sd[i] <= WEAK_WIDTH)]
     if weak:
         w_max = float(np.max(np.abs(np.asarray(data.slip))))
-        if {"A", "B"} <= set(weak):
-            message = (
+        ab = {"A", "B"} <= set(weak)
+        rest = [n for n in weak if not ab or n not in ("A", "B")]
+        parts = []
+        if rest:
+            parts.append(
+                f"{', '.join(rest)}: 95 % interval wider than {WEAK_WIDTH} of the box or "
+                "undetermined (singular direction); the data do not pin "
+                f"{'it' if len(rest) == 1 else 'them'} down"
+            )
+        if ab:
+            parts.append(
                 f"only (1 − A)·B is determined at these slip velocities (|w| ≤ {w_max:.3g}"
                 " m/s, where μ ≈ μ0·(1 − (1 − A)·B·|w|)): A and B separately are not"
             )
-        else:
-            message = (
-                f"{', '.join(weak)}: 95 % interval wider than {WEAK_WIDTH} of the box or "
-                "undetermined (singular direction); the data do not pin "
-                f"{'it' if len(weak) == 1 else 'them'} down"
-            )
-        warnings.append(_warning("weakly_identified", weak, message))
+        warnings.append(_warning("weakly_identified", weak, "; ".join(parts)))
     status = status_of(fit.status)
     if not status.converged:
         warnings.append(
@@ -161,11 +169,14 @@ def fit_report(data, fit, numbers=None) -> dict:
     derived, peak_warnings = peak_report(
         numbers.peak, numbers.peak_jacobian, cov, speed, float(numbers.max_creep)
     )
+    undetermined += [n for w in peak_warnings if w["code"] == "undetermined" for n in w["params"]]
+    if undetermined:  # one warning for the parameters and the peak
+        warnings.append(undetermined_warning(undetermined))
     corr = correlation(cov)
     return {
         "uncertainty": uncertainty,
         "correlation": [[float(c) if np.isfinite(c) else None for c in row] for row in corr],
-        "warnings": warnings + peak_warnings,
+        "warnings": warnings + [w for w in peak_warnings if w["code"] != "undetermined"],
         "hac_lags": int(numbers.lags),
         "derived": derived,
         "vehicle_speed": speed,

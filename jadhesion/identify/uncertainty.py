@@ -18,6 +18,12 @@ every parameter with a component in a dropped direction gets an **infinite** var
 columns ``inf``): a singular covariance is reported as such, never as finite garbage. A parameter
 flagged ``fixed`` (e.g. sitting on a bound) is left out: its row and column are ``nan``, the others
 are conditional on it.
+
+**Not determined** (:func:`determined`): a standard error that is not finite (a dropped direction),
+or larger than the width of the quantity's whole admissible range (its box: 1 for a Polach
+parameter), says that the data bound the quantity less than the box alone does; reports give it
+no standard error and no interval (``null``) and name it in an ``undetermined`` warning
+(:func:`undetermined_warning`), never an ``inf`` or a 10¹⁵⁴.
 """
 
 from __future__ import annotations
@@ -35,6 +41,26 @@ from .small_linalg import svd_tall
 RCOND = 1e-9
 #: Two-sided 95 % normal quantile.
 Z95 = 1.959963984540054
+
+
+def determined(sd, width=1.0) -> bool:
+    """Whether a standard error ``sd`` means something for a quantity whose box is ``width`` wide:
+    finite and at most ``width`` (module docstring)."""
+    return bool(np.isfinite(sd) and sd <= width)
+
+
+def undetermined_warning(names) -> dict:
+    """The ``undetermined`` warning ``{code, params, message}`` naming the quantities whose
+    standard error is not :func:`determined`."""
+    names = list(names)
+    return {
+        "code": "undetermined",
+        "params": names,
+        "message": (
+            f"{', '.join(names)}: not determined by the data (a singular direction of the fit, or a "
+            "standard error wider than the whole box): no standard error or interval (null)"
+        ),
+    }
 
 
 def lag1_autocorrelation(r):
