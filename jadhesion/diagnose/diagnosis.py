@@ -14,8 +14,7 @@ could detect and the run that would expose it: :mod:`.sensitivity`), ``residual_
 the base residual per signal), ``errors_in_variables`` (the noise levels behind the fits'
 effective-variance weights, :func:`.fitting.eiv_weights`),
 ``warnings`` (``code``, ``message``: an unconverged base fit, candidates whose fits did not
-converge — their ``p_value`` is null, they are never ranked — a null at its widest, and a misfit
-no catalogue effect explains),
+converge — their ``p_value`` is null, they are never ranked — and a null at its widest),
 ``explanation``; and ``_series`` (arrays for the report; not JSON, dropped by the CLI).
 """
 
@@ -123,10 +122,8 @@ def _reduction(value: float) -> str:
 def _warnings(result: dict) -> list:
     """How far to trust the decision: ``[{"code", "message", ...}]`` for a base fit that did not
     converge, candidates whose fits did not converge (untested, never ranked; those whose in-sample
-    SSE reduction exceeds the null's critical value named in ``above_critical``), a null at its
-    widest (γ = 0, :func:`.null.replicas`), and ``unexplained_misfit`` where the generic
-    discrepancy still lowers the held-out error by ``select.GENERIC_THRESHOLD`` or more after the
-    verdict's effects (``gain``, ``signal``): the verdict covers the catalogue only."""
+    SSE reduction exceeds the null's critical value named in ``above_critical``), and a null at its
+    widest (γ = 0, :func:`.null.replicas`)."""
     out = []
     if result["base"]["status"] != "converged":
         out.append(
@@ -165,20 +162,6 @@ def _warnings(result: dict) -> list:
                 f"±{null.SLOW_HALF_WIDTH_S:g} s counted as sensor error (γ = 0): the null is at its "
                 f"widest (critical SSE reduction {critical:.0%}), "
                 "and the smallest detectable sizes are large accordingly",
-            }
-        )
-    generic = result["generic"]
-    if generic["used"]:
-        model = " + ".join(["Polach", *result["effects"]])
-        out.append(
-            {
-                "code": "unexplained_misfit",
-                "message": f"the {model} model leaves residual structure that a sparse discrepancy "
-                f"term lowers by {generic['gain']:.0%} of the held-out error (following "
-                f"{result['strongest_signal']} most closely): physics outside the effect catalogue, "
-                "or an adhesion curve whose shape Polach's model cannot take",
-                "gain": generic["gain"],
-                "signal": result["strongest_signal"],
             }
         )
     return out
