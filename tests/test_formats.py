@@ -197,3 +197,26 @@ def test_unreadable_mat_is_one_line_naming_the_file(tmp_path, capsys, case):
     out, err = capsys.readouterr()
     assert out == "" and err.count("\n") == 1 and "Traceback" not in err
     assert f"{path}: not a readable MATLAB .mat file (" in err
+
+
+@pytest.mark.parametrize("style", ["comma", "semicolon"])
+def test_trailing_delimiter_is_dropped_an_empty_named_column_with_data_is_not(csv, tmp_path, style):
+    """Excel and SAP end every line with a delimiter: an unnamed last column without a value in
+    any row is no column; one with a value keeps the error."""
+    lines = csv.read_text().splitlines()
+    if style == "semicolon":
+        lines = [line.replace(",", ";").replace(".", ",") for line in lines]
+    sep = ";" if style == "semicolon" else ","
+    path = _sidecar(csv, tmp_path / f"{style}.csv")
+    path.write_text("".join(f"{line}{sep}\n" for line in lines))
+    rec, ref = load_recording(path), load_recording(csv)
+    assert set(rec.columns) == set(ref.columns)
+    for k, v in ref.columns.items():
+        np.testing.assert_array_equal(rec.columns[k], v)
+    lines = [f"{line}{sep}" for line in lines]
+    lines[7] += "1"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(
+        RecordingError, match=rf"header \(line 1\): column {len(lines[0].split(sep))} has an empty name"
+    ):
+        load_recording(path)

@@ -63,7 +63,8 @@ def normalise_delimiter(text: str) -> tuple[str, tuple]:
 
 
 def _parse_rows(text: str, name: str):
-    """Header, data rows and their 1-based line numbers; skips blank and ``#`` lines."""
+    """Header, data rows and their 1-based line numbers; skips blank and ``#`` lines, and an
+    unnamed last column without a value in any row (a delimiter ending every line)."""
     header, rows, lines = None, [], []
     reader = csv.reader(io.StringIO(text, newline=""))
     try:
@@ -88,6 +89,9 @@ def _parse_rows(text: str, name: str):
             f"no header row: line {header_line} holds numbers; the first row must name "
             f"the columns, e.g. {','.join(RAW_COLUMNS)}",
         )
+    while len(header) > 1 and not header[-1] and all(len(r) < len(header) or not r[-1].strip() for r in rows):
+        header.pop()  # a delimiter ending every line (Excel, SAP): no column
+        rows = [r[: len(header)] for r in rows]
     for j, col in enumerate(header):
         if not col:
             raise _fail(name, f"header (line {header_line}): column {j + 1} has an empty name")
