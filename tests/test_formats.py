@@ -220,3 +220,17 @@ def test_trailing_delimiter_is_dropped_an_empty_named_column_with_data_is_not(cs
         RecordingError, match=rf"header \(line 1\): column {len(lines[0].split(sep))} has an empty name"
     ):
         load_recording(path)
+
+
+@pytest.mark.parametrize("kind", ["timestamp", "duration"])
+def test_parquet_time_as_timestamp_or_duration_reads_as_seconds(tmp_path, kind):
+    """A pandas or Spark export stores time as a timestamp (epoch seconds, float64) or a duration."""
+    cols = stretches_si()
+    ticks = np.round(cols["time"] * 1e6).astype(np.int64)  # µs
+    epoch = 1_700_000_000 * 1_000_000 if kind == "timestamp" else 0
+    unit = pa.timestamp("us", tz="UTC") if kind == "timestamp" else pa.duration("us")
+    path = tmp_path / f"{kind}.parquet"
+    pq.write_table(pa.table({**cols, "time": pa.array(ticks + epoch, unit)}), path)
+    time = load_recording(path).columns["time"]
+    assert time.dtype == np.float64
+    np.testing.assert_allclose(time - epoch / 1e6, cols["time"], atol=1e-6)

@@ -4,7 +4,8 @@ names in file order and float64 arrays (``None`` for a column that is not numeri
 :func:`jadhesion.data.recording.load_recording` maps, converts and validates like a CSV's.
 
 * **Parquet**: one column a signal; integer, float and boolean columns are numeric (a null is
-  NaN, reported as not finite by the validation), others are ignored.
+  NaN, reported as not finite by the validation), timestamp and duration columns are seconds
+  (a timestamp's since the epoch, float64), others are ignored.
 * **.mat**: one variable a signal, a numeric vector (``n×1`` or ``1×n``); the row count is the
   length most variables share; scalars, matrices and vectors of another length are ignored (listed
   in the notes); ``__header__``-style entries and v7.3's ``#refs#`` are skipped.
@@ -25,6 +26,7 @@ from .validate import _fail
 #: File suffixes read by this module (lower case).
 PARQUET_SUFFIXES = (".parquet", ".pq")
 MAT_SUFFIXES = (".mat",)
+_TICKS_PER_SECOND = {"s": 1.0, "ms": 1e3, "us": 1e6, "ns": 1e9}
 
 
 def _missing(name: str, package: str, extra: str):
@@ -48,6 +50,9 @@ def _parquet(path: Path, name: str):
         if pa.types.is_integer(t) or pa.types.is_floating(t) or pa.types.is_boolean(t):
             values = column.cast(pa.float64()).to_numpy(zero_copy_only=False)
             columns.append(np.asarray(values, dtype=np.float64))
+        elif pa.types.is_timestamp(t) or pa.types.is_duration(t):
+            ticks = column.cast(pa.int64()).cast(pa.float64()).to_numpy(zero_copy_only=False)
+            columns.append(np.asarray(ticks, dtype=np.float64) / _TICKS_PER_SECOND[t.unit])
         else:
             columns.append(None)
     return header, columns, ()
