@@ -13,6 +13,7 @@ import scipy.io
 from logger_data import LOGGER_MAP, logger_columns, stretches_si, write_logger_file
 
 from jadhesion.cli import main
+from jadhesion.cli.fit_run import expand_files
 from jadhesion.data.dataset import to_dataset
 from jadhesion.data.recording import load_recording
 from jadhesion.errors import RecordingError
@@ -234,3 +235,22 @@ def test_parquet_time_as_timestamp_or_duration_reads_as_seconds(tmp_path, kind):
     time = load_recording(path).columns["time"]
     assert time.dtype == np.float64
     np.testing.assert_allclose(time - epoch / 1e6, cols["time"], atol=1e-6)
+
+
+def test_directory_lists_every_text_suffix(csv, tmp_path):
+    """A directory stands for every file a recording can be: text (.csv, .tsv, .txt), Parquet, .mat."""
+    text = csv.read_text()
+    for name, body in [
+        ("a.csv", text),
+        ("b.TSV", text.replace(",", "\t")),
+        ("c.txt", text),
+        ("d.json", "{}"),
+    ]:
+        (tmp_path / name).write_text(body)
+    write_parquet(logger_columns(stretches_si()), tmp_path / "e.parquet")
+    (tmp_path / "f.png").write_bytes(b"\x89PNG")
+    paths, many = expand_files([str(tmp_path)])
+    assert [p.name for p in paths] == ["a.csv", "b.TSV", "c.txt", "e.parquet"] and many
+    ref = load_recording(tmp_path / "a.csv", columns=LOGGER_MAP).columns["time"]
+    for p in paths[1:3]:
+        np.testing.assert_array_equal(load_recording(p, columns=LOGGER_MAP).columns["time"], ref)

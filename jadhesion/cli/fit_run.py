@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ..atomic import atomic_write
-from ..data.formats import MAT_SUFFIXES, PARQUET_SUFFIXES
+from ..data.formats import RECORDING_SUFFIXES
 from ..identify.batch_fit import bucketed, fit_datasets
 from ..identify.kiencke_fit import fit_document, fit_kiencke
 from ..identify.polach_fit import MIN_SAMPLES, RECOMMENDED_SAMPLES, require_samples, scaled
@@ -47,11 +47,10 @@ def _check_flags(args) -> None:
 
 # ---- which files ------------------------------------------------------------------------------
 
-RECORDING_SUFFIXES = (".csv",) + PARQUET_SUFFIXES + MAT_SUFFIXES
-
 
 def expand_files(names) -> tuple[list[Path], bool]:
-    """The recordings named (a directory stands for its CSV, Parquet and MATLAB files, sorted) and
+    """The recordings named (a directory stands for its text, Parquet and MATLAB files, sorted:
+    :data:`~jadhesion.data.formats.RECORDING_SUFFIXES`) and
     whether the call is a many-file one (more than one name, or a directory)."""
     paths, many = [], len(names) > 1
     for name in names:

@@ -26,6 +26,11 @@ from .validate import _fail
 #: File suffixes read by this module (lower case).
 PARQUET_SUFFIXES = (".parquet", ".pq")
 MAT_SUFFIXES = (".mat",)
+#: Suffixes of text recordings (comma, semicolon or tab separated: :mod:`.readers`).
+TEXT_SUFFIXES = (".csv", ".tsv", ".txt")
+#: Every recording's suffix: the files a directory stands for. A file named alone is read as text
+#: whatever its suffix, unless it is one of this module's.
+RECORDING_SUFFIXES = TEXT_SUFFIXES + PARQUET_SUFFIXES + MAT_SUFFIXES
 _TICKS_PER_SECOND = {"s": 1.0, "ms": 1e3, "us": 1e6, "ns": 1e9}
 
 
