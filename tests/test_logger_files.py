@@ -4,6 +4,7 @@
 import json
 import math
 import os
+import re
 import subprocess
 import sys
 
@@ -11,6 +12,7 @@ import jax
 import numpy as np
 import pytest
 
+from jadhesion.cli import main
 from jadhesion.data.dataset import to_dataset
 from jadhesion.data.recording import load_recording, save_recording
 from jadhesion.data.vehicle import LOCO_22E
@@ -291,3 +293,21 @@ def test_canonical_names_ignore_case(tmp_path):
         "; columns 'Time' and 'TIME' both match 'time' ignoring case and unit: "
         "map one with --column time=SOURCE"
     )
+
+
+def test_inspect_text_tells_epoch_times_apart(tmp_path, capsys):
+    """Times since 1970 (1.7e9 s) at 100 Hz: the text's gap and excluded-stretch bounds are the
+    JSON's to the step, not all '1.7e+09'."""
+    cols = _si_columns(400)
+    cols["time"] = cols["time"] + 1.7e9 + 5.0 * (np.arange(400) >= 200)
+    cols["vehicle_speed"][:40] = cols["wheel_speed"][:40] = 0.0
+    path = save_recording(cols, LOCO_22E, tmp_path / "epoch.csv")
+    assert main(["inspect", str(path), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert main(["inspect", str(path)]) == 0
+    text = capsys.readouterr().out
+    shown = [[float(x) for x in m] for m in re.findall(r"([-\d.e+]+) s → ([-\d.e+]+) s", text)]
+    shown += [[float(x) for x in m] for m in re.findall(r"excluded .*: ([-\d.e+]+)–([-\d.e+]+) s", text)]
+    expected = doc["sampling"]["gaps"] + [[e["start"], e["end"]] for e in doc["selection"]["excluded"]]
+    assert len(expected) == 2 and doc["selection"]["excluded"][0]["end"] == pytest.approx(1.7e9 + 0.39)
+    np.testing.assert_allclose(shown, expected, rtol=0, atol=0.005)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -14,22 +15,35 @@ from .common import UserError, emit_json
 from .loading import load_from_args
 
 
+def _time(t: float, step: float | None) -> str:
+    """``t`` [s] to six significant digits, or as many as tell samples ``step`` [s] apart (epoch
+    times: 1700000000.02, not 1.7e+09)."""
+    digits = 6
+    if step and t:
+        digits = min(17, max(6, math.floor(math.log10(abs(t))) - math.floor(math.log10(step)) + 1))
+    return f"{t:.{digits}g}"
+
+
 def _text(doc) -> str:
     s, r, sel = doc["sampling"], doc["ranges"], doc["selection"]
+    step = s["step_s"]["median"] if s["step_s"] else None
     lines = [f"{doc['file']}: {doc['samples']} samples, columns {', '.join(doc['columns'])}"]
     if s["rate_hz"] is not None:
         lines.append(
             f"duration {s['duration_s']:.4g} s, rate {s['rate_hz']:.4g} Hz, jitter "
             f"{100 * s['jitter']:.2g} % of the step, steps {s['step_s']['min']:.3g}–"
             f"{s['step_s']['max']:.3g} s, {len(s['gaps'])} gap(s)"
-            + "".join(f"\n  gap {a:.6g} s → {b:.6g} s" for a, b in s["gaps"])
+            + "".join(f"\n  gap {_time(a, step)} s → {_time(b, step)} s" for a, b in s["gaps"])
         )
     lines.append(
         f"selected: {sel['used']} of {sel['samples']} samples ({sel['phase']}); "
         f"{len(sel['stretches'])} stretch(es)"
     )
     for e in sel["excluded"]:
-        lines.append(f"  excluded {e['reason']}: {e['start']:.6g}–{e['end']:.6g} s, {e['samples']} samples")
+        lines.append(
+            f"  excluded {e['reason']}: {_time(e['start'], step)}–{_time(e['end'], step)} s, "
+            f"{e['samples']} samples"
+        )
     if not sel["excluded_listed_all"]:
         lines.append(
             "  (more excluded stretches; counts: "
