@@ -19,8 +19,8 @@ def add_recording_options(parser) -> None:
         default=[],
         metavar="CANONICAL=SOURCE[UNIT]",
         help="read a canonical column from the file's SOURCE column in UNIT, e.g. "
-        "vehicle_speed=v_Lok_kmh[km/h] (repeatable; overrides the sidecar's "
-        '"columns")',
+        "vehicle_speed=v_Lok_kmh[km/h]; a header 'SOURCE [UNIT]' is found by SOURCE "
+        '(repeatable; overrides the sidecar\'s "columns")',
     )
     parser.add_argument(
         "--axle",
