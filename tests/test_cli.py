@@ -268,3 +268,21 @@ def test_fit_of_one_creep_value_gives_no_standard_error_and_names_why(tmp_path, 
     assert main(["fit", str(path), "--method", "lm"]) == 0
     text = capsys.readouterr().out
     assert "inf" not in text.split() and "n/a" in text.split() and "warning [undetermined]" in text
+
+
+def test_fit_says_when_the_creep_range_is_too_narrow_for_the_curve(tmp_path, capsys):
+    """Creep held between 0.004 and 0.006 (a factor 1.5) cannot tell the curve's slope from its
+    bend: narrow_creep_range. One creep value, 0.02, puts the fitted peak outside the data on one
+    side or the other: peak_extrapolated too. Creep from 0.002 to 0.05 warns of neither."""
+    rng = np.random.default_rng(1)
+    theta, speed = np.array([0.43, 0.6, 0.36, 0.36, 0.13]), np.full(400, 0.6)
+
+    def codes(name, creep, noise=0.002):
+        mu = np.asarray(polach_adhesion(theta, creep, creep * speed, LOCO_22E.k_eps()))
+        path = _dataset_csv(tmp_path / name, creep, speed, mu + noise * rng.standard_normal(creep.size))
+        assert main(["fit", str(path), "--method", "lm", "--json"]) == 0
+        return {w["code"] for w in json.loads(capsys.readouterr().out)["warnings"]}
+
+    assert "narrow_creep_range" in codes("held.csv", rng.uniform(0.004, 0.006, 400))
+    assert {"narrow_creep_range", "peak_extrapolated"} <= codes("one.csv", np.full(400, 0.02), noise=0.0)
+    assert "narrow_creep_range" not in codes("wide.csv", np.geomspace(0.002, 0.05, 400))

@@ -69,6 +69,19 @@ def test_no_interior_peak_and_an_unreached_peak_are_said_so():
     assert [w["code"] for w in warnings] == ["peak_extrapolated"] and "extrapolated" in warnings[0]["message"]
 
 
+def test_a_peak_outside_the_recorded_creep_on_either_side_is_extrapolated():
+    """creep_opt below the smallest recorded creep (only the falling branch seen) is flagged as
+    well as above the largest (only the rising branch); a recording spanning it is not."""
+    peak, jac = peak_numbers(DRY, K_EPS, 2.0)
+    c = float(peak[1])
+    for lo, hi, branch in ((2 * c, 4 * c, "falling"), (0.1 * c, 0.5 * c, "rising")):
+        _, warnings = peak_report(peak, jac, 1e-4 * jnp.eye(5), 2.0, max_creep=hi, min_creep=lo)
+        assert [w["code"] for w in warnings] == ["peak_extrapolated"]
+        assert f"extrapolated from the {branch} branch" in warnings[0]["message"]
+    _, warnings = peak_report(peak, jac, 1e-4 * jnp.eye(5), 2.0, max_creep=2 * c, min_creep=0.5 * c)
+    assert warnings == []
+
+
 @pytest.mark.parametrize("loose", [1, 2])
 def test_an_undetermined_direction_the_peak_depends_on_gives_no_interval(loose):
     """μ0 (a gradient of about 1) or kS (a gradient well below 1) undetermined: the peak is too,

@@ -15,10 +15,10 @@ singular direction of the fit, or wider than its box, [0, :data:`MU_BOX_MAX`] fo
 ``ln(S_MAX/S_MIN)`` for ``creep_opt``'s ``sd_log``) is ``null`` with no interval, and the quantity is
 named in an ``undetermined`` warning.
 
-Two warnings (code ``peak_extrapolated``): the recording's creep never reaches ``creep_opt`` (the
-peak is extrapolated from the rising branch: the interval is the model's, not the data's), or the
-curve has no peak below creep :data:`S_MAX` (``mu_max`` is its value there; ``creep_opt`` has no
-interval).
+Warning ``peak_extrapolated``: ``creep_opt`` lies outside the creep the recording covers, on either
+side — its creep never reaches the peak (extrapolated from the rising branch) or never comes down to
+it (from the falling branch): the interval is the model's, not the data's — or the curve has no
+peak below creep :data:`S_MAX` (``mu_max`` is its value there; ``creep_opt`` has no interval).
 """
 
 from __future__ import annotations
@@ -73,10 +73,11 @@ def _variance(grad, cov):
     return float(max(var, 0.0)) if np.isfinite(var) else np.inf
 
 
-def peak_report(peak, jacobian, cov, speed, max_creep) -> tuple[dict, list]:
+def peak_report(peak, jacobian, cov, speed, max_creep, min_creep=0.0) -> tuple[dict, list]:
     """``(derived, warnings)`` of a fit: ``derived`` {``mu_max``, ``creep_opt``: {``value``,
     ``stderr``, ``ci95``}} from :func:`peak_numbers`' ``peak`` and ``jacobian``, the fit's ``cov``
-    (5, 5), the reference ``speed`` [m/s] and the largest ``|creep|`` of the fitted samples;
+    (5, 5), the reference ``speed`` [m/s] and the largest and smallest ``|creep|`` of the fitted
+    samples;
     ``warnings`` as in :mod:`.trust` (module docstring), with ``undetermined`` for a quantity whose
     standard error is not determined."""
     mu_max, creep_opt = (float(x) for x in np.asarray(peak))
@@ -110,6 +111,13 @@ def peak_report(peak, jacobian, cov, speed, max_creep) -> tuple[dict, list]:
             f"the recording's creep stays below the fitted curve's peak (at most {max_creep:.3g} "
             f"against creep_opt {creep_opt:.3g} at {speed:.3g} m/s): mu_max and creep_opt are "
             "extrapolated from the rising branch"
+        )
+        warnings.append({"code": "peak_extrapolated", "params": list(DERIVED), "message": message})
+    elif min_creep > creep_opt:
+        message = (
+            f"the recording's creep stays above the fitted curve's peak (at least {min_creep:.3g} "
+            f"against creep_opt {creep_opt:.3g} at {speed:.3g} m/s): mu_max and creep_opt are "
+            "extrapolated from the falling branch"
         )
         warnings.append({"code": "peak_extrapolated", "params": list(DERIVED), "message": message})
     return derived, warnings

@@ -30,8 +30,13 @@ Warning codes:
   a peak) every ``null`` standard error is named by a warning.
 * ``not_converged`` — the solver's status is not ``converged``.
 * ``few_samples`` — fewer than :data:`.polach_fit.RECOMMENDED_SAMPLES` samples.
-* ``peak_extrapolated`` — the recording's creep never reaches the fitted peak, or the curve has
-  none below creep 1 (:mod:`.peak`).
+* ``peak_extrapolated`` — the fitted peak lies outside the creep the recording covers (below its
+  smallest or above its largest ``|creep|``), or the curve has none below creep 1 (:mod:`.peak`).
+* ``narrow_creep_range`` — the samples' ``|creep|`` spans less than a factor :data:`CREEP_SPAN`
+  (1st to 99th percentile, as ``inspect``'s rules, so a few transition samples do not make a held
+  creep look covered): the curve is seen at (nearly) one creep value, where its initial slope, its
+  bend and its peak cannot be told apart; the parameters and the peak are the model's
+  extrapolation.
 * ``implausible_adhesion`` — μ̂ beyond any wheel–rail adhesion
   (:func:`jadhesion.data.inspection.implausible_adhesion`): the fit is of a mis-scaled recording.
 """
@@ -48,7 +53,7 @@ from ..data.inspection import implausible_adhesion
 from ..models.polach import PARAM_NAMES
 from ..status import status_of
 from .batch_fit import bucketed, valid_mask, valid_samples
-from .peak import peak_numbers, peak_report, reference_speed
+from .peak import DERIVED, peak_numbers, peak_report, reference_speed
 from .polach_fit import LM_RESIDUAL, RECOMMENDED_SAMPLES, scaled
 from .uncertainty import Z95, correlation, covariance, determined, undetermined_warning
 
@@ -56,6 +61,9 @@ from .uncertainty import Z95, correlation, covariance, determined, undetermined_
 BOUND_TOL = 1e-6
 #: A 95 % interval wider than this share of the unit box marks a parameter weakly identified.
 WEAK_WIDTH = 0.5
+#: A 99th-to-1st percentile ratio of the samples' |creep| below this (less than a third of a
+#: decade) is too narrow a creep range to determine the curve's shape.
+CREEP_SPAN = 2.0
 
 
 def _warning(code, params, message):
@@ -165,9 +173,28 @@ def fit_report(data, fit, numbers=None) -> dict:
         )
     if (note := implausible_adhesion(np.asarray(data.adhesion)[valid_mask(data)])) is not None:
         warnings.append(_warning(note["code"], [], note["message"]))
+    creep = np.abs(np.asarray(data.creep, float))[valid_mask(data)]
+    lo, hi = np.percentile(creep, [1, 99]) if creep.size else (0.0, 0.0)
+    if not hi >= CREEP_SPAN * lo:
+        warnings.append(
+            _warning(
+                "narrow_creep_range",
+                PARAM_NAMES + DERIVED,
+                (
+                    f"the samples' creep spans only {lo:.3g}–{hi:.3g} (1st–99th percentile, less than "
+                    f"a factor {CREEP_SPAN:g}): too narrow to determine the curve's shape; its "
+                    "parameters and peak are the model's extrapolation"
+                ),
+            )
+        )
     speed = float(numbers.speed)
     derived, peak_warnings = peak_report(
-        numbers.peak, numbers.peak_jacobian, cov, speed, float(numbers.max_creep)
+        numbers.peak,
+        numbers.peak_jacobian,
+        cov,
+        speed,
+        float(numbers.max_creep),
+        float(np.min(creep)) if creep.size else 0.0,
     )
     undetermined += [n for w in peak_warnings if w["code"] == "undetermined" for n in w["params"]]
     if undetermined:  # one warning for the parameters and the peak
