@@ -28,6 +28,7 @@ LOGGER_MAP = [
     "wheel_speed=n_Rad[rpm]",
     "traction_torque=M_Rad_kNm[kNm]",
 ]
+RPM_SPELLINGS = ("rpm", "1/min", "U/min", "min^-1", "min ^-1")
 
 
 def _si_columns(n=400):
@@ -215,7 +216,7 @@ def test_torque_unit_spellings(tmp_path, unit):
 def _renamed(cols, names, path, **extra):
     """``cols`` (SI) saved under ``names`` (canonical -> header), each in its header's unit."""
     rpm = 60 / (2 * math.pi * R)
-    scale = {"ms": 1e3, "km/h": 3.6, "kNm": 1e-3, "kN·m": 1e-3, "1/min": rpm, "rpm": rpm}
+    scale = {"ms": 1e3, "km/h": 3.6, "kNm": 1e-3, "kN·m": 1e-3} | dict.fromkeys(RPM_SPELLINGS, rpm)
     out = {h: cols[c] * scale.get(h.rpartition("[")[2].rstrip("]"), 1.0) for c, h in names.items()}
     return save_recording(out | extra, LOCO_22E, path)
 
@@ -254,10 +255,6 @@ def test_units_in_headers(tmp_path):
         "--column vehicle_speed=v_Lok[m/s]: no column 'v_Lok' in the file (columns: "
         "t [ms], v_Lok[km/h], n_Rad [1/min], M_Rad [kNm]); column 'v_Lok[km/h]' is in km/h, not m/s"
     )
-    assert _message(path, ["wheel_speed=n_Rad"]).endswith(
-        "column 'n_Rad [1/min]': '1/min' is not a unit of wheel_speed; give its unit, "
-        "--column wheel_speed=n_Rad[UNIT]"
-    )
 
     names = ["time [ms]", "vehicle_speed[km/h]", "wheel_speed [rpm]", "traction_torque [kN·m]"]
     rec = load_recording(
@@ -279,6 +276,24 @@ def test_units_in_headers(tmp_path):
     )
     assert _message(twice, ["vehicle_speed=v[km/h]"]).endswith(
         "twice.csv: --column vehicle_speed=v[km/h]: columns 'v[km/h]' and 'v [km/h]' both match; rename one"
+    )
+
+
+@pytest.mark.parametrize("unit", RPM_SPELLINGS[1:])
+def test_german_rpm_spellings(tmp_path, unit):
+    """``1/min``, ``U/min``, ``min^-1`` (German loggers' rpm) in a header or a ``--column``: read
+    as rpm, and one unit with it; a header in a unit not of wheel_speed still says so."""
+    cols = _si_columns(30)
+    names = ["t [ms]", "v_Lok [km/h]", f"n_Rad [{unit}]", "M_Rad [kNm]"]
+    path = _renamed(
+        cols, dict(zip(cols, names, strict=True)), tmp_path / "log.csv", **{"n_Mot [Hz]": cols["time"]}
+    )
+    for wheel in ("n_Rad", "n_Rad[rpm]", f"n_Rad[{unit}]"):
+        columns = ["time=t", "vehicle_speed=v_Lok", f"wheel_speed={wheel}", "traction_torque=M_Rad"]
+        _assert_si(load_recording(path, columns=columns), cols)
+    assert _message(path, ["wheel_speed=n_Mot"]).endswith(
+        "column 'n_Mot [Hz]': 'Hz' is not a unit of wheel_speed; give its unit, "
+        "--column wheel_speed=n_Mot[UNIT]"
     )
 
 

@@ -5,7 +5,8 @@ A map entry is ``CANONICAL=SOURCE[UNIT]`` (``--column`` on the command line) or,
 
 * ``time``: ``s``, ``ms``;
 * ``vehicle_speed``, ``slip_velocity``: ``m/s``, ``km/h``, ``mph``;
-* ``wheel_speed``: also ``rpm`` and ``rad/s`` (times the vehicle's nominal wheel radius [m]);
+* ``wheel_speed``: also ``rpm`` (German loggers' ``1/min``, ``U/min``, ``min^-1``) and ``rad/s``
+  (times the vehicle's nominal wheel radius [m]);
 * ``traction_torque``: ``N*m``, ``kN*m`` (``Nm``, ``kNm`` accepted);
 * ``creepage``, ``adhesion``: ``-`` (dimensionless).
 
@@ -27,12 +28,15 @@ from ..errors import RecordingError
 
 _SPEED = {"m/s": 1.0, "km/h": 1.0 / 3.6, "mph": 0.44704}
 _TORQUE = {"N*m": 1.0, "Nm": 1.0, "kN*m": 1e3, "kNm": 1e3}
+_RPM = 2.0 * math.pi / 60.0
+#: Wheel-speed units through the wheel radius, as rad/s per unit.
+_ANGULAR = {"rpm": _RPM, "1/min": _RPM, "U/min": _RPM, "min^-1": _RPM, "rad/s": 1.0}
 #: Units accepted per canonical column, as factors to SI; ``None`` marks units through the radius.
 UNITS = {
     "time": {"s": 1.0, "ms": 1e-3},
     "vehicle_speed": _SPEED,
     "slip_velocity": _SPEED,
-    "wheel_speed": {**_SPEED, "rpm": None, "rad/s": None},
+    "wheel_speed": {**_SPEED, **dict.fromkeys(_ANGULAR)},
     "traction_torque": _TORQUE,
     "creepage": {"-": 1.0},
     "adhesion": {"-": 1.0},
@@ -48,9 +52,14 @@ def unit_key(unit: str) -> str:
 
 
 def same_unit(canonical: str, a: str, b: str) -> bool:
-    """Whether unit keys ``a`` and ``b`` are one unit of ``canonical`` (``kNm`` and ``kN*m``)."""
-    factor = UNITS[canonical].get(a)
-    return a == b or (factor is not None and factor == UNITS[canonical].get(b))
+    """Whether unit keys ``a`` and ``b`` are one unit of ``canonical`` (``kNm`` and ``kN*m``,
+    ``rpm`` and ``1/min``)."""
+    table = UNITS[canonical]
+    if a == b:
+        return True
+    if a not in table or b not in table:
+        return False
+    return (table[a], _ANGULAR.get(a)) == (table[b], _ANGULAR.get(b))
 
 
 def split_unit(column: str) -> tuple[str, str | None]:
@@ -112,4 +121,4 @@ def to_si(spec: ColumnSpec, wheel_radius_m: float) -> float:
     factor = UNITS[spec.canonical][spec.unit]
     if factor is not None:
         return factor
-    return wheel_radius_m * (2.0 * math.pi / 60.0 if spec.unit == "rpm" else 1.0)
+    return wheel_radius_m * _ANGULAR[spec.unit]
