@@ -310,6 +310,37 @@ def test_canonical_names_ignore_case(tmp_path):
     )
 
 
+def test_units_row_under_the_header(tmp_path):
+    """A second line of units (an empty cell: no unit) reads as each header's ``[unit]``; a
+    --column unit given where the row has none applies, one against it is one error line; a row
+    that is not all units stays 'not a number'."""
+    cols = _si_columns(30)
+    twin = _logger_twin(cols, tmp_path / "twin.csv").read_text().splitlines()
+    names = "time,v [km/h],n,M"
+    path = tmp_path / "units.csv"
+    path.write_text("\n".join([names, "ms, km/h ,1/min,", *twin[1:]]) + "\n")
+    mapped = ["vehicle_speed=v", "wheel_speed=n", "traction_torque=M[kN·m]"]
+    rec = load_recording(path, columns=mapped)
+    _assert_si(rec, cols)
+    assert rec.sources == {
+        "vehicle_speed": "v[km/h]",
+        "wheel_speed": "n[1/min]",
+        "traction_torque": "M[kN*m]",
+        "time": "time[ms]",
+    }
+    assert _message(path, [*mapped, "time=time[s]"]).endswith("column 'time [ms]' is in ms, not s")
+    path.write_text("\n".join([names, "ms,km/h,rpm,", "0,x,0,0", *twin[2:]]) + "\n")
+    assert _message(path, mapped) == f"{path}: column 'v [km/h]', row 1 (line 3): 'x' is not a number"
+    path.write_text("\n".join([names, "ms,m/s,rpm,kNm", *twin[1:]]) + "\n")
+    assert (
+        _message(path) == f"{path}: column 'v [km/h]', units row (line 2): 'm/s', but the header says 'km/h'"
+    )
+    path.write_text("\n".join([names, "ms,km/h,rpm,furlong", *twin[1:]]) + "\n")
+    assert _message(path, mapped) == f"{path}: column 'time', row 1 (line 2): 'ms' is not a number"
+    path.write_text("time,vehicle_speed\ns,m/s\n")
+    assert _message(path) == f"{path}: no data rows after the units row (line 2)"
+
+
 def test_inspect_text_tells_epoch_times_apart(tmp_path, capsys):
     """Times since 1970 (1.7e9 s) at 100 Hz: the text's gap and excluded-stretch bounds are the
     JSON's to the step, not all '1.7e+09'."""

@@ -1,5 +1,8 @@
 """CSV reading: the file's text, its header and data rows with their line numbers; a vectorised
-pass (pyarrow) for plain files and a precise pass that names the exact row and line of any error."""
+pass (pyarrow) for plain files and a precise pass that names the exact row and line of any error.
+
+A units row directly under the header (``s,km/h,rpm,kN*m``: every cell a unit of
+:data:`~.units.UNITS` or empty) is read as if each header were ``name [unit]`` and skipped."""
 
 from __future__ import annotations
 
@@ -10,9 +13,11 @@ from pathlib import Path
 
 import numpy as np
 
+from .units import UNITS, same_unit, split_unit, unit_key
 from .validate import RAW_COLUMNS, _fail, _is_number
 
 _BLANK_LINE = re.compile(r"\n[ \t\r]*\n")
+_UNIT_KEYS = frozenset().union(*UNITS.values())
 
 
 def _read_text(path: Path, name: str, *, kind: str = "file") -> str:
@@ -62,9 +67,31 @@ def normalise_delimiter(text: str) -> tuple[str, tuple]:
     return text, ()
 
 
+def _is_units_row(fields) -> bool:
+    """Whether every cell is a unit of :data:`~.units.UNITS` or empty, and one is a unit."""
+    units = [unit_key(f) for f in fields if f.strip()]
+    return bool(units) and all(u in _UNIT_KEYS for u in units)
+
+
+def _with_unit(column: str, cell: str, name: str, line: int) -> str:
+    """``column [unit]`` for a units-row ``cell`` (``column`` when empty, or when the header
+    states that unit already); a header stating another unit raises."""
+    unit = unit_key(cell)
+    stated = split_unit(column)[1]
+    if not unit or (stated is not None and any(same_unit(c, stated, unit) for c in UNITS)):
+        return column
+    if stated is not None:
+        raise _fail(
+            name,
+            f"column {column!r}, units row (line {line}): {cell.strip()!r}, but the header says {stated!r}",
+        )
+    return f"{column} [{unit}]"
+
+
 def _parse_rows(text: str, name: str):
-    """Header, data rows and their 1-based line numbers; skips blank and ``#`` lines, and an
-    unnamed last column without a value in any row (a delimiter ending every line)."""
+    """Header, data rows and their 1-based line numbers; skips blank and ``#`` lines, an unnamed
+    last column without a value in any row (a delimiter ending every line) and a units row
+    (:func:`_is_units_row`) after the header, its units joined to the header's names."""
     header, rows, lines = None, [], []
     reader = csv.reader(io.StringIO(text, newline=""))
     try:
@@ -107,6 +134,11 @@ def _parse_rows(text: str, name: str):
         raise _fail(
             name, f"row {i + 1} (line {lines[i]}): {counts[i]} fields, but the header names {width} columns"
         )
+    if _is_units_row(rows[0]):
+        header = [_with_unit(h, f, name, lines[0]) for h, f in zip(header, rows[0], strict=True)]
+        if len(rows) == 1:
+            raise _fail(name, f"no data rows after the units row (line {lines[0]})")
+        rows, lines = rows[1:], lines[1:]
     return header, rows, lines
 
 
