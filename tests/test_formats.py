@@ -254,3 +254,24 @@ def test_directory_lists_every_text_suffix(csv, tmp_path):
     ref = load_recording(tmp_path / "a.csv", columns=LOGGER_MAP).columns["time"]
     for p in paths[1:3]:
         np.testing.assert_array_equal(load_recording(p, columns=LOGGER_MAP).columns["time"], ref)
+
+
+@pytest.mark.parametrize("fmt", ["mat5", "mat73"])
+def test_complex_mat_variable_is_named_not_dropped(tmp_path, fmt):
+    """A complex vector is a column that is not numeric, named so (not 'missing column'); an
+    unused one is left out with a note saying it is complex."""
+    writer, _ = WRITERS[fmt]
+    cols = logger_columns(stretches_si())
+    v = cols["v_Lok_kmh"]
+    if fmt == "mat5":
+        cols["v_Lok_kmh"] = v + 0j
+    else:
+        cols["v_Lok_kmh"] = np.rec.fromarrays([v, 0 * v], names="real,imag")
+    path = writer(cols, tmp_path / f"complex_{fmt}.mat")
+    with pytest.raises(RecordingError) as info:
+        load_recording(path, columns=LOGGER_MAP)
+    assert str(info.value) == f"{path}: column 'v_Lok_kmh': not numeric"
+    cols["v_Lok_kmh"], cols["phase"] = v, cols["v_Lok_kmh"]
+    rec = load_recording(writer(cols, tmp_path / f"unused_{fmt}.mat"), columns=LOGGER_MAP)
+    assert "phase" not in rec.columns
+    assert any("variable 'phase' complex, not read (a signal must be real)" in n for n in rec.notes)

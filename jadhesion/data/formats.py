@@ -8,7 +8,8 @@ names in file order and float64 arrays (``None`` for a column that is not numeri
   (a timestamp's since the epoch, float64), others are ignored.
 * **.mat**: one variable a signal, a numeric vector (``n×1`` or ``1×n``); the row count is the
   length most variables share; scalars, matrices and vectors of another length are ignored (listed
-  in the notes); ``__header__``-style entries and v7.3's ``#refs#`` are skipped.
+  in the notes); a complex vector is a column that is not numeric (named as complex in the notes);
+  ``__header__``-style entries and v7.3's ``#refs#`` are skipped.
 
 The optional packages are imported only here, only when such a file is read; a missing one is a
 one-line error naming the extra to install.
@@ -68,6 +69,17 @@ def _unreadable_mat(name: str, exc: Exception):
     return _fail(name, f"not a readable MATLAB .mat file ({reason})")
 
 
+def _complex(arr: np.ndarray) -> np.ndarray:
+    """A v7.3 complex variable (HDF5 compound of ``real`` and ``imag``) as a complex array."""
+    if arr.dtype.names is not None and set(arr.dtype.names) == {"real", "imag"}:
+        return arr["real"] + 1j * arr["imag"]
+    return arr
+
+
+def _listed(keys) -> str:
+    return f"variable{'s' if len(keys) > 1 else ''} {', '.join(map(repr, keys))}"
+
+
 def _mat_variables(path: Path, name: str) -> dict:
     try:  # optional dependency (extra ``mat``)
         import h5py
@@ -77,7 +89,7 @@ def _mat_variables(path: Path, name: str) -> dict:
         try:
             with h5py.File(path, "r") as f:
                 return {
-                    k: np.asarray(v)
+                    k: _complex(np.asarray(v))
                     for k, v in f.items()
                     if isinstance(v, h5py.Dataset) and not k.startswith("#")
                 }
@@ -103,8 +115,8 @@ def _mat(path: Path, name: str):
     skipped = []
     for key, value in variables.items():
         arr = np.asarray(value)
-        if arr.dtype.kind in "iufb" and arr.ndim <= 2 and arr.size >= 2 and min(arr.shape) == 1:
-            vectors[key] = arr.reshape(-1).astype(np.float64)
+        if arr.dtype.kind in "iufbc" and arr.ndim <= 2 and arr.size >= 2 and min(arr.shape) == 1:
+            vectors[key] = arr.reshape(-1)
         else:
             skipped.append(key)
     if not vectors:
@@ -112,15 +124,12 @@ def _mat(path: Path, name: str):
     n = Counter(v.size for v in vectors.values()).most_common(1)[0][0]
     skipped += [k for k, v in vectors.items() if v.size != n]
     header = [k for k in vectors if vectors[k].size == n]
-    notes = (
-        (
-            f"{name}: variable{'s' if len(skipped) > 1 else ''} "
-            f"{', '.join(map(repr, skipped))} ignored (not a numeric vector of {n} values)",
-        )
-        if skipped
-        else ()
-    )
-    return header, [vectors[k] for k in header], notes
+    complex_ = [k for k in header if vectors[k].dtype.kind == "c"]
+    notes = (f"{name}: {_listed(skipped)} ignored (not a numeric vector of {n} values)",) if skipped else ()
+    if complex_:
+        notes += (f"{name}: {_listed(complex_)} complex, not read (a signal must be real)",)
+    columns = [None if k in complex_ else vectors[k].astype(np.float64) for k in header]
+    return header, columns, notes
 
 
 def is_binary(path: Path) -> bool:
