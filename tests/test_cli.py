@@ -7,9 +7,11 @@ import sys
 
 import numpy as np
 import pytest
+from logger_data import stretches_si
 
 from jadhesion import LOCO_22E, adhesion_peak, polach_adhesion
 from jadhesion.cli import main
+from jadhesion.data.recording import save_recording
 from jadhesion.status import Status
 
 STATUS_LABELS = {s.label for s in Status}
@@ -286,3 +288,25 @@ def test_fit_says_when_the_creep_range_is_too_narrow_for_the_curve(tmp_path, cap
     assert "narrow_creep_range" in codes("held.csv", rng.uniform(0.004, 0.006, 400))
     assert {"narrow_creep_range", "peak_extrapolated"} <= codes("one.csv", np.full(400, 0.02), noise=0.0)
     assert "narrow_creep_range" not in codes("wide.csv", np.geomspace(0.002, 0.05, 400))
+
+
+def test_fit_names_speed_columns_that_look_swapped(tmp_path, capsys):
+    """Wheel and vehicle speed exchanged on both traction stretches of the logger test signal:
+    the braking fit runs, and its warnings (Polach's and Kiencke's) open with the likely cause of
+    the 700 of 1100 moving samples dropped as "torque and creep disagree"."""
+    cols = stretches_si()
+    index = np.arange(cols["time"].size)
+    which = (index >= 100) & ((index < 500) | (index >= 900))
+    cols["vehicle_speed"], cols["wheel_speed"] = (
+        np.where(which, cols["wheel_speed"], cols["vehicle_speed"]),
+        np.where(which, cols["vehicle_speed"], cols["wheel_speed"]),
+    )
+    path = save_recording(cols, LOCO_22E, tmp_path / "swapped.csv")
+    for model in ("polach", "kiencke"):
+        assert (
+            main(["fit", str(path), "--model", model, "--method", "lm", "--phase", "braking", "--json"]) == 0
+        )
+        doc = json.loads(capsys.readouterr().out)
+        assert doc["selection"]["counts"]["torque and creep disagree"] == 700
+        first = doc["warnings"][0]
+        assert first["code"] == "creep_sign" and "vehicle_speed swapped" in first["message"]

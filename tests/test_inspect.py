@@ -4,10 +4,12 @@ import json
 
 import numpy as np
 import pytest
-from logger_data import write_logger_file
+from logger_data import stretches_si, write_logger_file
 
 from jadhesion.cli import main
 from jadhesion.data.inspection import MU_IMPLAUSIBLE, identifiability, implausible_adhesion, sampling
+from jadhesion.data.recording import save_recording
+from jadhesion.data.vehicle import LOCO_22E
 
 
 @pytest.fixture(scope="module")
@@ -84,3 +86,22 @@ def test_implausible_adhesion_is_named_at_the_95th_percentile():
     s = np.linspace(0.001, 0.3, 1000)
     codes = [n["code"] for n in identifiability(s, s * 3.0, (MU_IMPLAUSIBLE + 0.4) * s / (0.01 + s))]
     assert "implausible_adhesion" in codes
+
+
+def test_inspect_says_when_the_speed_columns_look_swapped(tmp_path, capsys):
+    """Wheel and vehicle speed exchanged on both traction stretches: 700 of the 1100 moving samples
+    have the wheel slower than the vehicle under traction; inspect names the likely cause first."""
+    cols = stretches_si()
+    index = np.arange(cols["time"].size)
+    which = (index >= 100) & ((index < 500) | (index >= 900))
+    cols["vehicle_speed"], cols["wheel_speed"] = (
+        np.where(which, cols["wheel_speed"], cols["vehicle_speed"]),
+        np.where(which, cols["vehicle_speed"], cols["wheel_speed"]),
+    )
+    path = save_recording(cols, LOCO_22E, tmp_path / "swapped.csv")
+    assert main(["inspect", str(path), "--phase", "braking", "--json"]) == 0
+    first = json.loads(capsys.readouterr().out)["identifiability"][0]
+    assert first["code"] == "creep_sign"
+    assert first["message"].startswith("wheel slower than vehicle under traction on 64 % of moving samples")
+    assert main(["inspect", str(path), "--phase", "braking"]) == 0
+    assert "identifiability [creep_sign]: wheel slower than vehicle" in capsys.readouterr().out

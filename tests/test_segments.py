@@ -13,7 +13,7 @@ from logger_data import SCALE, stretches_si, write_logger_file
 from jadhesion.data.dataset import to_dataset
 from jadhesion.data.recording import load_recording, save_recording
 from jadhesion.data.segments import select, slice_recording
-from jadhesion.data.selected import selected_dataset
+from jadhesion.data.selected import creep_sign_warning, selected_dataset
 from jadhesion.data.vehicle import LOCO_22E
 from jadhesion.errors import RecordingError
 
@@ -182,3 +182,42 @@ def test_posterior_runs_on_the_selected_samples_and_refuses_the_observer_likelih
     bad = _cli(tmp_path, "posterior", path, "--steps", "60", "--likelihood", "observer")
     assert bad.returncode == 2 and bad.stdout == "" and bad.stderr.count("\n") == 1
     assert "--likelihood observer needs one contiguous series" in bad.stderr
+
+
+def _swapped(cols, which):
+    """``cols`` with wheel_speed and vehicle_speed exchanged on the samples ``which``."""
+    return {
+        **cols,
+        "vehicle_speed": np.where(which, cols["wheel_speed"], cols["vehicle_speed"]),
+        "wheel_speed": np.where(which, cols["vehicle_speed"], cols["wheel_speed"]),
+    }
+
+
+def test_speed_columns_swapped_on_most_moving_samples_are_named(logger, tmp_path):
+    """The wheel slower than the vehicle under traction on most moving samples (> 50 %) is no
+    contact: the selection says which columns to check. Of the 1100 moving samples, swapping the
+    speeds on the first traction stretch (400, 36 %) stays below the threshold, on both traction
+    stretches (700, 64 %) is named, and on every sample (braking too) leaves traction nothing,
+    with the same hint in the error."""
+    assert creep_sign_warning(logger, select(logger, "both")) is None
+    cols = stretches_si()
+    index = np.arange(cols["time"].size)
+    traction = (index >= 100) & (index < 500)
+    check = "are wheel_speed and vehicle_speed swapped, or the torque's sign inverted?"
+    for which, expected in ((traction, None), (traction | (index >= 900), "traction on 64 %")):
+        rec = load_recording(save_recording(_swapped(cols, which), LOCO_22E, tmp_path / "part.csv"))
+        sel = select(rec, "both")
+        assert sel.counts()["torque and creep disagree"] == which.sum()
+        warning = creep_sign_warning(rec, sel)
+        if expected is None:
+            assert warning is None
+        else:
+            message = f"wheel slower than vehicle under {expected} of moving samples: {check}"
+            assert warning == {"code": "creep_sign", "params": [], "message": message}
+    rec = load_recording(save_recording(_swapped(cols, index >= 0), LOCO_22E, tmp_path / "all.csv"))
+    with pytest.raises(RecordingError, match="selects no samples") as error:
+        selected_dataset(rec)
+    assert str(error.value).endswith(
+        "; wheel slower than vehicle under traction on 64 % and wheel faster than vehicle under "
+        f"braking on 27 % of moving samples: {check}"
+    )

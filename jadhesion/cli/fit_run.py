@@ -19,6 +19,7 @@ import numpy as np
 
 from ..atomic import atomic_write
 from ..data.formats import RECORDING_SUFFIXES
+from ..data.selected import creep_sign_warning
 from ..identify.batch_fit import bucketed, fit_datasets
 from ..identify.kiencke_fit import fit_document, fit_kiencke
 from ..identify.polach_fit import MIN_SAMPLES, RECOMMENDED_SAMPLES, require_samples, scaled
@@ -67,9 +68,10 @@ def expand_files(names) -> tuple[list[Path], bool]:
 
 
 def _load(args, path):
-    """``(dataset, selection)`` of one file: :func:`.loading.load_dataset` after a row count
-    check that names no model (it serves Polach and Kiencke fits, before any observer work);
-    :func:`require_samples` then counts the samples the selection kept."""
+    """``(dataset, selection, warnings)`` of one file: :func:`.loading.load_dataset` after a row
+    count check that names no model (it serves Polach and Kiencke fits, before any observer work);
+    :func:`require_samples` then counts the samples the selection kept; ``warnings`` those of the
+    recording itself (:func:`_recording_warnings`) for the fit's document."""
     recording = load_from_args(args, path)
     rows = min((len(c) for c in recording.columns.values()), default=0)
     if rows < MIN_SAMPLES:
@@ -80,7 +82,13 @@ def _load(args, path):
     _, dataset, selection = load_dataset(args, path, to_dataset, recording=recording)
     require_samples(dataset, str(path))
     release_if_near_limit()  # programs are per length bucket; many buckets still add up
-    return dataset, selection
+    return dataset, selection, _recording_warnings(recording, selection)
+
+
+def _recording_warnings(recording, selection) -> list:
+    """Warnings ``{code, params, message}`` about the recording rather than the fit: most moving
+    samples with the creep against the drive (:func:`jadhesion.data.selected.creep_sign_warning`)."""
+    return [w for w in (creep_sign_warning(recording, selection),) if w is not None]
 
 
 # ---- fits -------------------------------------------------------------------------------------
@@ -223,6 +231,8 @@ def _print_one(args, doc) -> None:
             f"mu_max {doc['mu_max']}, creep_opt {doc['creep_opt']}; MAE {doc['mae']:.5g}; "
             f"{'converged' if doc['converged'] else 'NOT CONVERGED: ' + doc['status']}"
         )
+        for w in doc["warnings"]:
+            print(f"warning [{w['code']}]: {w['message']}")
     else:
         print(
             f"method {doc['method']}: MAE {doc['mae']:.5g}, {doc['iterations']} iterations, "
@@ -277,11 +287,12 @@ def run(args) -> int:
     _check_flags(args)
     paths, many = expand_files(args.file)
     paths, loaded, skipped = _load_all(args, paths)  # every file checked before any fit
-    datasets = [d for d, _ in loaded]
+    datasets = [d for d, _, _ in loaded]
     docs = _fit_all(args, datasets)
-    for doc, (_, selection) in zip(docs, loaded, strict=True):
+    for doc, (_, selection, warnings) in zip(docs, loaded, strict=True):
         doc["creep"] = args.creep
         doc["selection"] = selection.document()
+        doc["warnings"] = warnings + doc.get("warnings", [])  # the recording's first (Kiencke: only)
     if args.plot is not None and args.model == "polach":
         for path, dataset, doc in zip(paths, datasets, docs, strict=True):
             _plot(args, path, dataset, doc, many)

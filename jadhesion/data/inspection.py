@@ -15,6 +15,9 @@ few noisy samples do not count):
 * μ̂ above :data:`MU_IMPLAUSIBLE` at its 95th percentile (:func:`implausible_adhesion`): no
   wheel–rail contact transmits that (dry rail peaks near 0.4–0.5, sanded near 0.6), so the torque's
   unit or place (wheelset, not motor) or the vehicle's axle load or wheel radius is wrong.
+
+And, from the selection, most moving samples excluded because the creep is against the drive
+(:func:`jadhesion.data.selected.creep_sign_warning`): swapped speed columns or an inverted sign.
 """
 
 from __future__ import annotations
@@ -22,6 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from .segments import Selection
+from .selected import creep_sign_warning
 
 SLIP_FOR_AB = 0.5
 CREEP_FOR_SLOPE = 0.005
@@ -124,7 +128,8 @@ def inspect_document(recording, selection: Selection, dataset) -> dict:
     """The inspection of ``recording`` as JSON: ``file``, ``samples``, ``columns``, ``sources``,
     ``notes``, ``sampling`` (:func:`sampling`, with ``gaps``), ``ranges`` of the selected samples
     (``vehicle_speed`` [m/s], ``creep`` [-], ``slip_velocity`` [m/s], ``adhesion`` μ̂ [-]) and
-    ``ranges_all`` of every sample's speeds, ``selection`` and ``identifiability``."""
+    ``ranges_all`` of every sample's speeds, ``selection`` and ``identifiability`` (the
+    selection's ``creep_sign`` remark first, where it applies)."""
     cols = recording.columns
     timing = (
         sampling(cols["time"])
@@ -139,6 +144,7 @@ def inspect_document(recording, selection: Selection, dataset) -> dict:
         "adhesion": _range(dataset.adhesion),
     }
     every = {c: _range(cols[c]) for c in ("vehicle_speed", "wheel_speed", "traction_torque") if c in cols}
+    sign = creep_sign_warning(recording, selection)
     return {
         "file": str(recording.path),
         "samples": recording.n_samples,
@@ -149,5 +155,6 @@ def inspect_document(recording, selection: Selection, dataset) -> dict:
         "ranges": ranges,
         "ranges_all": every,
         "selection": selection.document(),
-        "identifiability": identifiability(dataset.creep, dataset.slip, dataset.adhesion),
+        "identifiability": ([] if sign is None else [{"code": sign["code"], "message": sign["message"]}])
+        + identifiability(dataset.creep, dataset.slip, dataset.adhesion),
     }

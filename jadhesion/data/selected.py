@@ -23,6 +23,9 @@ from .segments import (
     slice_recording,
 )
 
+#: More than this share of the moving samples with the creep against the drive: a recording error.
+DISAGREE_SHARE = 0.5
+
 
 def _concatenate(parts) -> PolachDataset:
     first = parts[0]
@@ -57,13 +60,44 @@ def _weak_drive_hint(recording) -> str:
     )
 
 
+def creep_sign_warning(recording, selection: Selection) -> dict | None:
+    """``{code: "creep_sign", params: [], message}`` when more than :data:`DISAGREE_SHARE` of the
+    moving samples (``|v| >= MIN_SPEED``) are excluded because the creep has the drive's opposite
+    sign ("torque and creep disagree"), else ``None``. No adhesion law does that to most of a run:
+    the recording is the likely cause, and the message names what to check (swapped speed columns,
+    an inverted sign), with the share of the wheel slower than the vehicle under traction and
+    faster under braking."""
+    cols = recording.columns
+    v = np.asarray(cols["vehicle_speed"], float)
+    moving = np.abs(v) >= MIN_SPEED
+    disagree = selection.labels == "torque and creep disagree"
+    n = int(moving.sum())
+    if n == 0 or not disagree.sum() > DISAGREE_SHARE * n:
+        return None
+    slower = np.where(v < 0, -1.0, 1.0) * raw_creep(cols, v) < 0  # in the direction of travel
+    shares = (
+        ("wheel slower than vehicle under traction", np.sum(disagree & slower) / n),
+        ("wheel faster than vehicle under braking", np.sum(disagree & ~slower) / n),
+    )
+    what = " and ".join(f"{text} on {100 * share:.0f} %" for text, share in shares if share >= 0.01)
+    drive = "the torque's" if "traction_torque" in cols else "the adhesion's"
+    if "wheel_speed" in cols and not {"creepage", "slip_velocity"} & set(cols):
+        check = f"are wheel_speed and vehicle_speed swapped, or {drive} sign inverted?"
+    else:
+        source = "creepage" if "creepage" in cols else "slip_velocity"
+        check = f"is {source}'s sign inverted, or {drive}?"
+    return {"code": "creep_sign", "params": [], "message": f"{what} of moving samples: {check}"}
+
+
 def no_samples_message(recording, selection: Selection) -> str:
     """One line: the phase selected nothing, what the samples were, and where no moving sample
-    has a drive, what to check."""
+    has a drive, or most have the creep against it (:func:`creep_sign_warning`), what to check."""
     counts = ", ".join(f"{k} {v}" for k, v in sorted(selection.counts().items()))
+    sign = creep_sign_warning(recording, selection)
     return (
         f"{recording.path}: --phase {selection.phase} selects no samples ({counts}); try "
         f"another --phase or --start/--end{_weak_drive_hint(recording)}"
+        + ("" if sign is None else f"; {sign['message']}")
     )
 
 
