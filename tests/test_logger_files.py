@@ -15,6 +15,7 @@ import pytest
 from jadhesion.cli import main
 from jadhesion.data.dataset import to_dataset
 from jadhesion.data.recording import load_recording, save_recording
+from jadhesion.data.validate import _check_values
 from jadhesion.data.vehicle import LOCO_22E
 from jadhesion.errors import RecordingError
 from jadhesion.identify.polach_fit import fit_polach
@@ -357,3 +358,23 @@ def test_inspect_text_tells_epoch_times_apart(tmp_path, capsys):
     expected = doc["sampling"]["gaps"] + [[e["start"], e["end"]] for e in doc["selection"]["excluded"]]
     assert len(expected) == 2 and doc["selection"]["excluded"][0]["end"] == pytest.approx(1.7e9 + 0.39)
     np.testing.assert_allclose(shown, expected, rtol=0, atol=0.005)
+
+
+def test_time_in_ms_labelled_seconds_is_noted_not_refused(tmp_path):
+    """Whole steps of 1 s or more over more than 10 000 s: likely ms, a note naming the fix, not an
+    error; whole 3 s steps over 3297 s, fractional steps or a 100 Hz run get none."""
+    cols = _si_columns(1100)
+    ms = np.round(cols["time"] * 1e3)
+    rec = load_recording(save_recording(dict(cols, time=ms), LOCO_22E, tmp_path / "ms.csv"))
+
+    def notes(time):
+        shown = {"time": "t"}
+        return _check_values({**rec.columns, "time": time}, LOCO_22E, None, "ms.csv", 70.0, shown)
+
+    assert notes(rec.columns["time"]) == (
+        "ms.csv: column 't': median time step 10 s over 1.099e+04 s, every step a whole number "
+        'of seconds; looks like ms? map it with --column time=t[ms] (or the sidecar\'s "columns")',
+    )
+    assert (
+        notes(np.arange(1100) * 3.0) == notes(ms + 0.5 * (np.arange(1100) % 2)) == notes(cols["time"]) == ()
+    )

@@ -20,6 +20,8 @@ KNOWN_COLUMNS = frozenset(RAW_COLUMNS + DATASET_COLUMNS + CREEP_COLUMNS)
 MAX_SPEED = 70.0
 #: Largest plausible |adhesion coefficient| [-] (a larger value is a force or a percentage).
 MAX_ADHESION = 1.5
+#: Times [s] spanning more than this, in whole steps of 1 s or more, are likely ms (a note).
+MS_DURATION = 10_000.0
 #: Torque implying |mu| below this everywhere (but not all zero) is taken to be in kN·m.
 MIN_TORQUE_MU = 1e-3
 #: Torque implying |mu| above this somewhere is implausible (even with the wheelset's inertia).
@@ -104,7 +106,25 @@ def _check_finite(values, col: str, name: str, lines=None, cells=None):
     )
 
 
-def _check_values(cols, vehicle: Vehicle, lines, name: str, max_speed: float, shown: dict):
+def _ms_note(t, name: str, source: str) -> tuple:
+    """A note when times ``t`` [s] look like ms: median step >= 1 s, every step a whole number
+    (to 1e-3) and more than :data:`MS_DURATION` in all. Not an error: a 1 Hz logger looks so."""
+    dt = np.diff(t)
+    step, duration = float(np.median(dt)), float(t[-1] - t[0])
+    if step < 1.0 or duration <= MS_DURATION or not np.allclose(dt, np.round(dt), rtol=0.0, atol=1e-3):
+        return ()
+    return (
+        f"{name}: column {source!r}: median time step {step:.6g} s over {duration:.4g} s, every "
+        f"step a whole number of seconds; looks like ms? map it with --column time={source}[ms] "
+        f'(or the sidecar\'s "columns")',
+    )
+
+
+def _check_values(cols, vehicle: Vehicle, lines, name: str, max_speed: float, shown: dict) -> tuple:
+    """Raise at the first implausible value of ``cols`` (SI; ``shown``: the user's column names);
+    return notes of likely unit slips that may be right (:func:`_ms_note`)."""
+    notes = ()
+
     def _where(col, i, lines):
         line = "" if lines is None else f" (line {lines[i]})"  # no lines in Parquet or .mat
         return f"column {shown.get(col, col)!r}, row {i + 1}{line}"
@@ -120,6 +140,7 @@ def _check_values(cols, vehicle: Vehicle, lines, name: str, max_speed: float, sh
                 f"{_where('time', i, lines)}: time {t[i]:.10g} s is not after the "
                 f"previous row's {t[i - 1]:.10g} s (time must strictly increase)",
             )
+        notes = _ms_note(cols["time"], name, shown.get("time", "time"))
     for col in ("vehicle_speed", "wheel_speed"):
         if col not in cols:
             continue
@@ -181,3 +202,4 @@ def _check_values(cols, vehicle: Vehicle, lines, name: str, max_speed: float, sh
                 f"{cols['adhesion'][i]:.4g} is implausible (|mu| <= {MAX_ADHESION:g}); "
                 f"a force or a percentage?",
             )
+    return notes
