@@ -371,6 +371,7 @@ def test_time_in_ms_labelled_seconds_is_noted_not_refused(tmp_path):
         shown = {"time": "t"}
         return _check_values({**rec.columns, "time": time}, LOCO_22E, None, "ms.csv", 70.0, shown)
 
+    assert any("looks like ms?" in n for n in rec.notes)  # load_recording keeps the note
     assert notes(rec.columns["time"]) == (
         "ms.csv: column 't': median time step 10 s over 1.099e+04 s, every step a whole number "
         'of seconds; looks like ms? map it with --column time=t[ms] (or the sidecar\'s "columns")',

@@ -258,7 +258,7 @@ def load_recording(path, *, columns=(), axle=None, max_speed: float = MAX_SPEED)
             f"{', '.join(map(repr, ignored))} ignored",
         )
     with np.errstate(all="ignore"):  # differences of huge finite values may overflow to inf
-        _check_values({c: columns[c] for c in required}, vehicle, lines, name, max_speed, shown)
+        notes += _check_values({c: columns[c] for c in required}, vehicle, lines, name, max_speed, shown)
     return Recording(
         path=path,
         columns=columns,
