@@ -310,3 +310,46 @@ def test_fit_names_speed_columns_that_look_swapped(tmp_path, capsys):
         assert doc["selection"]["counts"]["torque and creep disagree"] == 700
         first = doc["warnings"][0]
         assert first["code"] == "creep_sign" and "vehicle_speed swapped" in first["message"]
+
+
+def test_misspelled_sidecar_keys_are_said_by_fit_online_and_posterior(tmp_path, capsys):
+    """A sidecar with ``axle_lod_kg`` and ``wheel_radius``: each command that loads it says on
+    stderr that the keys were ignored (with the key each likely meant) and lists it first in its
+    JSON ``warnings``; fit echoes the vehicle numbers it used, here 22E's defaults under the
+    sidecar's name. A correct sidecar: its numbers, no note."""
+    path = save_recording(stretches_si(), LOCO_22E.replace(axle_load_kg=21000.0), tmp_path / "ok.csv")
+    assert main(["fit", str(path), "--method", "lm", "--json"]) == 0
+    out = capsys.readouterr()
+    assert "unknown key" not in out.err
+    assert json.loads(out.out)["vehicle"] == {
+        "name": "22E",
+        "axle_load_kg": 21000.0,
+        "wheel_radius_m": LOCO_22E.wheel_radius_m,
+        "wheelset_inertia_kgm2": LOCO_22E.wheelset_inertia_kgm2,
+    }
+    path.with_suffix(".json").write_text(
+        json.dumps({"name": "typo", "axle_lod_kg": 21000, "wheel_radius": 0.625})
+    )
+    note = (
+        f"{path.with_suffix('.json')}: unknown key 'axle_lod_kg' ignored (did you mean 'axle_load_kg'?); "
+        "unknown key 'wheel_radius' ignored (did you mean 'wheel_radius_m'?)"
+    )
+    for command, *flags in (
+        ["fit", "--method", "lm"],
+        ["online"],
+        ["posterior", "--walkers", "12", "--steps", "60"],
+    ):
+        assert main([command, str(path), *flags, "--json"]) == 0
+        out = capsys.readouterr()
+        doc = json.loads(out.out)
+        assert note in out.err, command
+        first = doc["warnings"][0]
+        assert first["code"] == "sidecar_unknown_key" and note in first["message"], command
+        assert first["params"] == ["axle_lod_kg", "wheel_radius"]
+    assert main(["fit", str(path), "--method", "lm", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["vehicle"] == {
+        "name": "typo",
+        "axle_load_kg": LOCO_22E.axle_load_kg,
+        "wheel_radius_m": LOCO_22E.wheel_radius_m,
+        "wheelset_inertia_kgm2": LOCO_22E.wheelset_inertia_kgm2,
+    }

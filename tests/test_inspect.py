@@ -105,3 +105,13 @@ def test_inspect_says_when_the_speed_columns_look_swapped(tmp_path, capsys):
     assert first["message"].startswith("wheel slower than vehicle under traction on 64 % of moving samples")
     assert main(["inspect", str(path), "--phase", "braking"]) == 0
     assert "identifiability [creep_sign]: wheel slower than vehicle" in capsys.readouterr().out
+
+
+def test_inspect_notes_a_misspelled_sidecar_key_with_the_key_it_likely_meant(tmp_path, capsys):
+    path = save_recording(stretches_si(), LOCO_22E, tmp_path / "typo.csv")
+    path.with_suffix(".json").write_text('{"axle_lod_kg": 21000, "comment": "x"}')
+    assert main(["inspect", str(path), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["notes"] == [
+        f"{path.with_suffix('.json')}: unknown key 'axle_lod_kg' ignored (did you mean 'axle_load_kg'?)",
+        f"{path.with_suffix('.json')}: unknown key 'comment' ignored",
+    ]

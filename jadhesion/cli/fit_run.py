@@ -6,6 +6,10 @@ single-fit document per file with its ``file``. Every file is loaded and checked
 :func:`jadhesion.identify.batch_fit.fit_datasets`: each dataset padded to its length bucket, one
 compiled program per method and bucket (Polach's kept, :mod:`.fit_program`) — a lone file takes
 the same path, so its result is the same whether it is fitted alone or with others.
+
+Each document also says what was fitted against: ``vehicle`` (the vehicle numbers used, the
+sidecar's or 22E's defaults) and, first in ``warnings``, what is wrong with the recording itself
+(unknown sidecar keys, also said on stderr at once; speed columns that look swapped).
 """
 
 from __future__ import annotations
@@ -20,6 +24,7 @@ import numpy as np
 from ..atomic import atomic_write
 from ..data.formats import RECORDING_SUFFIXES
 from ..data.selected import creep_sign_warning
+from ..data.sidecar import sidecar_warning
 from ..identify.batch_fit import bucketed, fit_datasets
 from ..identify.kiencke_fit import fit_document, fit_kiencke
 from ..identify.polach_fit import MIN_SAMPLES, RECOMMENDED_SAMPLES, require_samples, scaled
@@ -68,11 +73,14 @@ def expand_files(names) -> tuple[list[Path], bool]:
 
 
 def _load(args, path):
-    """``(dataset, selection, warnings)`` of one file: :func:`.loading.load_dataset` after a row
+    """``(dataset, selection, report)`` of one file: :func:`.loading.load_dataset` after a row
     count check that names no model (it serves Polach and Kiencke fits, before any observer work);
-    :func:`require_samples` then counts the samples the selection kept; ``warnings`` those of the
-    recording itself (:func:`_recording_warnings`) for the fit's document."""
+    :func:`require_samples` then counts the samples the selection kept; ``report`` what the fit's
+    document says of the recording itself (:func:`_recording_report`). Unknown sidecar keys are
+    said on stderr at once, before anything they may explain goes wrong."""
     recording = load_from_args(args, path)
+    if (sidecar := sidecar_warning(recording)) is not None:
+        sys.stderr.write(f"jadhesion: warning: {sidecar['message']}\n")
     rows = min((len(c) for c in recording.columns.values()), default=0)
     if rows < MIN_SAMPLES:
         raise UserError(
@@ -82,13 +90,24 @@ def _load(args, path):
     _, dataset, selection = load_dataset(args, path, to_dataset, recording=recording)
     require_samples(dataset, str(path))
     release_if_near_limit()  # programs are per length bucket; many buckets still add up
-    return dataset, selection, _recording_warnings(recording, selection)
+    return dataset, selection, _recording_report(recording, selection)
 
 
-def _recording_warnings(recording, selection) -> list:
-    """Warnings ``{code, params, message}`` about the recording rather than the fit: most moving
-    samples with the creep against the drive (:func:`jadhesion.data.selected.creep_sign_warning`)."""
-    return [w for w in (creep_sign_warning(recording, selection),) if w is not None]
+#: The vehicle numbers a fit's document echoes (``vehicle``): μ̂ scales with the axle load and
+#: wheel radius, the observer with the inertia.
+VEHICLE_KEYS = ("name", "axle_load_kg", "wheel_radius_m", "wheelset_inertia_kgm2")
+
+
+def _recording_report(recording, selection) -> dict:
+    """``vehicle`` {:data:`VEHICLE_KEYS`} (the sidecar's, else 22E's defaults) and ``warnings``
+    ``{code, params, message}`` about the recording rather than the fit: unknown sidecar keys
+    (:func:`jadhesion.data.sidecar.sidecar_warning`), most moving samples with the creep against
+    the drive (:func:`jadhesion.data.selected.creep_sign_warning`)."""
+    found = (sidecar_warning(recording), creep_sign_warning(recording, selection))
+    return {
+        "vehicle": {k: getattr(recording.vehicle, k) for k in VEHICLE_KEYS},
+        "warnings": [w for w in found if w is not None],
+    }
 
 
 # ---- fits -------------------------------------------------------------------------------------
@@ -289,10 +308,11 @@ def run(args) -> int:
     paths, loaded, skipped = _load_all(args, paths)  # every file checked before any fit
     datasets = [d for d, _, _ in loaded]
     docs = _fit_all(args, datasets)
-    for doc, (_, selection, warnings) in zip(docs, loaded, strict=True):
+    for doc, (_, selection, report) in zip(docs, loaded, strict=True):
         doc["creep"] = args.creep
         doc["selection"] = selection.document()
-        doc["warnings"] = warnings + doc.get("warnings", [])  # the recording's first (Kiencke: only)
+        doc["vehicle"] = report["vehicle"]
+        doc["warnings"] = report["warnings"] + doc.get("warnings", [])  # the recording's first
     if args.plot is not None and args.model == "polach":
         for path, dataset, doc in zip(paths, datasets, docs, strict=True):
             _plot(args, path, dataset, doc, many)

@@ -1,14 +1,19 @@
-"""``jadhesion online``'s work: load, observe, track, print or ``--json`` (arguments: :mod:`.online`)."""
+"""``jadhesion online``'s work: load, observe, track, print or ``--json`` (arguments: :mod:`.online`).
+
+Unknown sidecar keys are said on stderr as soon as the recording is loaded and listed in
+``warnings`` (``sidecar_unknown_key``, :func:`jadhesion.data.sidecar.sidecar_warning`)."""
 
 from __future__ import annotations
 
 import math
+import sys
 from pathlib import Path
 
 import jax
 import numpy as np
 
 from ..data.selected import tracking_dataset
+from ..data.sidecar import sidecar_warning
 from ..identify.online import hold_warning, optimum_warning, track_dataset
 from ..plots.online import recording_figure
 from ..status import status_of
@@ -27,6 +32,8 @@ def run(args) -> int:
     if args.a_s is not None and not (math.isfinite(args.a_s) and args.a_s > 0):
         raise UserError(f"online: --a-s must be a positive number, got {args.a_s}")
     recording = load_from_args(args, args.file)
+    if (sidecar := sidecar_warning(recording)) is not None:  # before anything it may explain
+        sys.stderr.write(f"jadhesion: warning: {sidecar['message']}\n")
     data, selection = tracking_dataset(recording, args.phase)
     out = track_dataset(data, args.algorithm, args.a_s, jax.random.key(args.seed))
     used = np.asarray(out.used)
@@ -51,7 +58,7 @@ def run(args) -> int:
         "n_used": int(used.sum()),
         "selection": selection.document(),
         "track": {"time": time, **{f: np.asarray(getattr(tr, f)) for f in TRACK_FIELDS}, "used": used},
-        "warnings": [w for w in (hold_warning(out, time), optimum_warning(out)) if w is not None],
+        "warnings": [w for w in (sidecar, hold_warning(out, time), optimum_warning(out)) if w is not None],
     }
     if out.slope_fit is not None:
         fit = out.slope_fit

@@ -1,4 +1,8 @@
-"""``jadhesion posterior``'s work: LM start, emcee, diagnostics, figures (arguments: :mod:`.posterior`)."""
+"""``jadhesion posterior``'s work: LM start, emcee, diagnostics, figures (arguments: :mod:`.posterior`).
+
+Unknown sidecar keys are said on stderr as soon as the recording is loaded and listed in the
+document's ``warnings`` (``sidecar_unknown_key``, :func:`jadhesion.data.sidecar.sidecar_warning`;
+the chain's own warnings stay in ``diagnostics``)."""
 
 from __future__ import annotations
 
@@ -9,6 +13,7 @@ from pathlib import Path
 import jax
 import numpy as np
 
+from ..data.sidecar import sidecar_warning
 from ..identify.ensemble import ChainTooShortWarning
 from ..identify.laplace import colour_check, initial_spread, lm_optimum
 from ..identify.mcmc import sample_posterior
@@ -18,7 +23,7 @@ from ..identify.polach_residuals import eiv_scale, standardised_residual
 from ..models.polach import PARAM_NAMES
 from ..plots.posterior import corner_plot, predictive_plot
 from .common import Progress, UserError, emit_json, table
-from .loading import load_dataset
+from .loading import load_dataset, load_from_args
 
 #: Without ``--steps``: the chain's first length, and the most it is extended to while it holds
 #: fewer than 50 autocorrelation times (:func:`jadhesion.identify.ensemble.run_ensemble`).
@@ -102,7 +107,10 @@ def run(args) -> int:
         raise UserError(f"--walkers must be an even number >= 12, got {args.walkers}")
     if args.steps is not None and args.steps < 50:
         raise UserError(f"--steps must be at least 50, got {args.steps}")
-    recording, data, selection = load_dataset(args, args.file)
+    recording = load_from_args(args, args.file)
+    if (sidecar := sidecar_warning(recording)) is not None:  # before anything it may explain
+        sys.stderr.write(f"jadhesion: warning: {sidecar['message']}\n")
+    recording, data, selection = load_dataset(args, args.file, recording=recording)
     require_samples(data, args.file)
     if args.likelihood == "observer" and not selection.complete:
         raise UserError(
@@ -154,6 +162,7 @@ def run(args) -> int:
     doc = _document(result, theta0, note, "smoothed" if data.slip_sd is not None else "raw")
     doc["tempering"] = tempering
     doc["selection"] = selection.document()
+    doc["warnings"] = [] if sidecar is None else [sidecar]  # the recording's; the chain's: diagnostics
     if args.json:
         emit_json(doc)
         return 0

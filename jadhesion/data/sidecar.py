@@ -1,8 +1,15 @@
 """The recording's JSON sidecar ``<same stem>.json``: vehicle keys (:data:`SIDECAR_KEYS`) and the
-column map ``"columns": {"CANONICAL": "SOURCE[UNIT]"}``."""
+column map ``"columns": {"CANONICAL": "SOURCE[UNIT]"}``.
+
+Any other key is ignored with a note naming it (and the known key it most resembles, a likely
+misspelling): the vehicle then keeps the 22E default the key may have meant to change. Every command
+that loads a recording says so (:func:`sidecar_warning`: a line on stderr and, where its output
+carries ``warnings``, a ``sidecar_unknown_key`` entry).
+"""
 
 from __future__ import annotations
 
+import difflib
 import json
 import math
 from pathlib import Path
@@ -53,6 +60,36 @@ def _check_sidecar_value(key, value, name):
     return float(value)
 
 
+#: A known key at least this similar (:class:`difflib.SequenceMatcher` ratio) to an unknown one is
+#: suggested as what it meant.
+SIMILAR = 0.75
+
+
+def _unknown(key: str) -> str:
+    close = difflib.get_close_matches(key, [*SIDECAR_KEYS, "columns"], n=1, cutoff=SIMILAR)
+    return f"unknown key {key!r} ignored" + (f" (did you mean {close[0]!r}?)" if close else "")
+
+
+def unknown_key_note(name: str, key: str) -> str:
+    """The note of an unknown sidecar ``key`` in sidecar ``name``, with the known key it most
+    resembles when one is :data:`SIMILAR` enough."""
+    return f"{name}: {_unknown(key)}"
+
+
+def sidecar_warning(recording) -> dict | None:
+    """``{code: "sidecar_unknown_key", params: [keys], message}`` when ``recording``'s sidecar has
+    keys that are neither vehicle keys nor ``columns`` (the message: their notes as
+    :func:`unknown_key_note` words them), else ``None``."""
+    unknown = [k for k in recording.sidecar if k not in SIDECAR_KEYS and k != "columns"]
+    if not unknown:
+        return None
+    notes = "; ".join(map(_unknown, unknown))
+    message = (
+        f"{recording.path.with_suffix('.json')}: {notes}: a vehicle value meant there keeps its 22E default"
+    )
+    return {"code": "sidecar_unknown_key", "params": unknown, "message": message}
+
+
 def _load_sidecar(csv_path: Path):
     path = csv_path.with_suffix(".json")
     if not path.exists():
@@ -82,7 +119,7 @@ def _load_sidecar(csv_path: Path):
                 )
             continue
         if key not in SIDECAR_KEYS:
-            notes.append(f"{name}: unknown key {key!r} ignored")
+            notes.append(unknown_key_note(name, key))
             continue
         if value is None:
             continue
