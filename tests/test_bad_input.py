@@ -152,6 +152,8 @@ FLAGS = [
     (["fit", "{rec}", "--pop-size", "-3"], "--pop-size"),
     (["fit", "{rec}", "--pop-size", "1"], "--pop-size"),
     (["fit", "{rec}", "--max-iter", "0"], "--max-iter"),
+    (["fit", "{rec}", "--method", "lm", "--max-iter", "5000"], "--max-iter"),  # LM has no such budget
+    (["fit", "{rec}", "--method", "lm", "--pop-size", "20"], "--pop-size"),
     (["fit", "{rec}", "--seed", "-1"], "--seed"),
     (["fit", "{rec}", "--plot", "{rec}"], "--plot"),
     (["posterior", "{rec}", "--walkers", "0"], "--walkers"),

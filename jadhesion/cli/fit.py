@@ -47,12 +47,18 @@ def register(sub) -> None:
         help="creep from the Kalman/RTS-smoothed speeds (default) or their raw difference",
     )
     p.add_argument("--seed", type=int, default=0, help="optimiser seed (default 0)")
-    p.add_argument("--pop-size", type=int, default=50, help="population size (default 50, >= 2)")
+    p.add_argument(
+        "--pop-size",
+        type=int,
+        default=None,
+        help="population size of a population method (default 50, >= 2; refused with lm)",
+    )
     p.add_argument(
         "--max-iter",
         type=int,
-        default=300,
-        help="iteration cap of a population method (default 300); it stops earlier when its best MAE stalls",
+        default=None,
+        help="iteration cap of a population method (default 300); it stops earlier when its best MAE "
+        "stalls (refused with lm, which stops at its own convergence test)",
     )
     p.add_argument(
         "--plot",

@@ -27,6 +27,7 @@ from ..data.selected import creep_sign_warning
 from ..data.sidecar import sidecar_warning
 from ..identify.batch_fit import bucketed, fit_datasets
 from ..identify.kiencke_fit import fit_document, fit_kiencke
+from ..identify.methods import METHODS
 from ..identify.polach_fit import MIN_SAMPLES, RECOMMENDED_SAMPLES, require_samples, scaled
 from ..identify.trust import fit_report
 from ..memory_maps import release_if_near_limit
@@ -37,10 +38,27 @@ from .fit_program import fit_polach, seed_key, to_dataset, trust_numbers
 from .loading import load_dataset, load_from_args
 
 
+def _budget(args) -> dict:
+    """``--pop-size``/``--max-iter`` as the method's keyword arguments, the registry's defaults
+    where not given (:data:`.methods.METHODS`); refused for a method without them (LM stops at its
+    own convergence test, capped inside the fit), not silently ignored."""
+    defaults = METHODS[args.method].defaults
+    given = {k: getattr(args, k) for k in ("pop_size", "max_iter") if getattr(args, k) is not None}
+    stray = [f"--{k.replace('_', '-')}" for k in given if k not in defaults]
+    if stray:
+        raise UserError(
+            f"fit: {' and '.join(stray)} {'set' if len(stray) > 1 else 'sets'} a population "
+            "method's budget (itlbo, tlbo, pso); "
+            f"--method {args.method} stops at its own convergence test"
+        )
+    return {**defaults, **given}
+
+
 def _check_flags(args) -> None:
     require_at_least("fit", 0, seed=args.seed)
     require_at_least("fit", 2, pop_size=args.pop_size)
     require_at_least("fit", 1, max_iter=args.max_iter)
+    _budget(args)
     if args.plot is not None and Path(args.plot).exists() and not Path(args.plot).is_dir():
         raise UserError(f"fit: --plot {args.plot}: exists and is not a directory")
     if args.out is not None:
@@ -183,8 +201,7 @@ def _fit_all(args, datasets) -> list[dict]:
         datasets,
         args.method,
         seed_key(args.seed),
-        pop_size=args.pop_size,
-        max_iter=args.max_iter,
+        **_budget(args),
         fit=fit_kiencke if args.model == "kiencke" else fit_polach,
     )
     if args.model == "kiencke":
