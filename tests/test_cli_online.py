@@ -83,7 +83,13 @@ def test_raw_recording_with_standstill_never_nan(capsys, tmp_path):
 
 
 @pytest.mark.parametrize(
-    "argv, needle", [(["--a-s", "-3"], "--a-s"), (["--a-s", "nan"], "--a-s"), (["--algorithm", "3"], None)]
+    "argv, needle",
+    [
+        (["--a-s", "-3"], "--a-s"),
+        (["--a-s", "nan"], "--a-s"),
+        (["--a-s", "1e308"], "--a-s"),
+        (["--algorithm", "3"], None),
+    ],
 )
 def test_bad_options_exit_2_and_write_nothing(capsys, sweep_csv, tmp_path, argv, needle):
     try:

@@ -43,7 +43,7 @@ def register(sub) -> None:
         type=float,
         default=None,
         metavar="VALUE",
-        help="Kiencke's initial slope a_s [-] (default: estimated from the data)",
+        help="Kiencke's initial slope a_s [-], 1 to 10000 (default: estimated from the data)",
     )
     p.add_argument("--seed", type=int, default=0, help="seed of the a_s estimate's LM (default 0)")
     p.add_argument("--plot", metavar="DIR", default=None, help="write FILE-stem_online.png into DIR")

@@ -14,6 +14,7 @@ import numpy as np
 
 from ..data.selected import tracking_dataset
 from ..data.sidecar import sidecar_warning
+from ..identify.kiencke_fit import A_S_LOG10_BOUNDS
 from ..identify.online import hold_warning, optimum_warning, track_dataset
 from ..plots.online import recording_figure
 from ..status import status_of
@@ -29,8 +30,11 @@ def _finite(v):
 
 
 def run(args) -> int:
-    if args.a_s is not None and not (math.isfinite(args.a_s) and args.a_s > 0):
-        raise UserError(f"online: --a-s must be a positive number, got {args.a_s}")
+    low, high = (10.0**b for b in A_S_LOG10_BOUNDS)
+    if args.a_s is not None and not low <= args.a_s <= high:  # NaN fails too
+        raise UserError(
+            f"online: --a-s must lie in [{low:g}, {high:g}] (the offline fit's bounds), got {args.a_s}"
+        )
     recording = load_from_args(args, args.file)
     if (sidecar := sidecar_warning(recording)) is not None:  # before anything it may explain
         sys.stderr.write(f"jadhesion: warning: {sidecar['message']}\n")

@@ -50,6 +50,9 @@ ALGORITHMS = {"itlbo": ITLBO, "tlbo": TLBO, "pso": PSO}
 METHODS = (*ALGORITHMS, "lm")
 #: Box of the search coordinates ``(log10 a_s, log10 λ_m, μ_m)`` (module docstring).
 SEARCH_BOUNDS = ((0.0, -4.0, 0.01), (4.0, 0.0, 1.5))
+#: log10 bounds of the initial slope a_s [-] (the box's first coordinate; a given a_s is checked
+#: against them).
+A_S_LOG10_BOUNDS = (SEARCH_BOUNDS[0][0], SEARCH_BOUNDS[1][0])
 #: Informative samples: ``|v| ≥ MIN_SPEED`` [m/s] and ``|μ̂| ≥ MIN_ADHESION`` [-].
 MIN_SPEED = 0.1
 MIN_ADHESION = 0.02
