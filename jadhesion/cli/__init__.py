@@ -12,7 +12,8 @@ a missing command.
 Every command takes ``--json``. Bad input raises :class:`UserError` (or a :class:`ValueError`
 subclass from the data layer): one line on stderr, exit code 2, nothing written. A reader that
 closes the pipe early (``jadhesion inspect run.csv --json | head -1``) ends the command quietly
-with exit code 1, Python's convention for EPIPE.
+with exit code 1, Python's convention for EPIPE; Ctrl-C ends it with one line and exit code 130
+(a sweep resumes from its finished chunks when run again).
 """
 
 from __future__ import annotations
@@ -72,6 +73,10 @@ def main(argv=None) -> int:
         return int(_handler(args)(args) or 0)
     except BrokenPipeError:
         return _closed_pipe()
+    except KeyboardInterrupt:
+        resume = " (run it again to resume from its finished chunks)" if command == "sweep" else ""
+        sys.stderr.write(f"jadhesion: {command or 'command'} interrupted{resume}\n")
+        return 130
     except (UserError, OSError) as exc:
         sys.stderr.write(f"jadhesion: error: {exc}\n")
         return 2
