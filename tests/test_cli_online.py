@@ -191,3 +191,23 @@ def test_a_run_that_ends_without_an_optimum_says_so(capsys, tmp_path):
             assert doc["final"]["creep_opt"] is None
     _, one, _ = _run(capsys, "online", path, "--algorithm", "1")
     assert one["final"]["p2"] <= 0
+
+
+def test_a_run_without_excitation_says_so_and_an_extrapolated_peak_is_named(capsys, sweep_csv, tmp_path):
+    """Constant creep (0.003, the curve's rising branch; fuzzing found Algorithm 2 printing a
+    creep_opt of 0.05 with status singular and no warning): a ``not_converged`` warning for the
+    singular status and ``peak_extrapolated`` for a tracked optimum beyond the data's creep. The
+    reproduce sweep, which crosses the peak, gets neither."""
+    rng = np.random.default_rng(3)
+    lam = 0.003 + 1e-5 * rng.standard_normal(400)
+    mu = np.asarray(kiencke_adhesion(lam, *TRUE)) + 0.002 * rng.standard_normal(400)
+    path = tmp_path / "flat.csv"
+    save_recording({"creepage": lam, "vehicle_speed": np.full(400, 10.0), "adhesion": mu}, path=path)
+    code, doc, _ = _run(capsys, "online", path, "--algorithm", "2")
+    codes = {w["code"] for w in doc["warnings"]}
+    assert code == 0 and doc["status"] == "singular" and "not_converged" in codes
+    if doc["final"]["creep_opt"] is not None and doc["final"]["creep_opt"] > lam.max():
+        assert "peak_extrapolated" in codes
+    assert doc["final"]["creep_opt"] is None or "peak_extrapolated" in codes  # no peak inside 0.003 ± 3e-5
+    code, doc, _ = _run(capsys, "online", sweep_csv[0], "--algorithm", "2")
+    assert code == 0 and not {"not_converged", "peak_extrapolated"} & {w["code"] for w in doc["warnings"]}

@@ -15,7 +15,13 @@ import numpy as np
 from ..data.selected import tracking_dataset
 from ..data.sidecar import sidecar_warning
 from ..identify.kiencke_fit import A_S_LOG10_BOUNDS
-from ..identify.online import hold_warning, optimum_warning, track_dataset
+from ..identify.online import (
+    extrapolated_warning,
+    hold_warning,
+    optimum_warning,
+    singular_warning,
+    track_dataset,
+)
 from ..plots.online import recording_figure
 from ..status import status_of
 from .common import UserError, emit_json, table
@@ -62,7 +68,17 @@ def run(args) -> int:
         "n_used": int(used.sum()),
         "selection": selection.document(),
         "track": {"time": time, **{f: np.asarray(getattr(tr, f)) for f in TRACK_FIELDS}, "used": used},
-        "warnings": [w for w in (sidecar, hold_warning(out, time), optimum_warning(out)) if w is not None],
+        "warnings": [
+            w
+            for w in (
+                sidecar,
+                singular_warning(out),
+                hold_warning(out, time),
+                optimum_warning(out),
+                extrapolated_warning(out, data.creep),
+            )
+            if w is not None
+        ],
     }
     if out.slope_fit is not None:
         fit = out.slope_fit

@@ -46,6 +46,7 @@ from ..data.dataset import PolachDataset
 from ..models.kiencke import DEFAULT_SLOPE, kiencke_adhesion, kiencke_regressors
 from ..status import Status
 from .kiencke_fit import MIN_SAMPLES, fit_kiencke, informative
+from .peak import extrapolation_warning
 
 
 class OnlineParams(NamedTuple):
@@ -318,6 +319,31 @@ def optimum_warning(tracked) -> dict | None:
         "message": f"the run ends with p2 = {p2:.4g} <= 0: the tracked curve has no peak, so "
         "creep_opt is none and mu_max is its p2 = 0 value a_s/p1; the last stretch of data does "
         "not reach far enough up the curve to place the peak",
+    }
+
+
+def extrapolated_warning(tracked, creep) -> dict | None:
+    """``peak_extrapolated`` (:func:`.peak.extrapolation_warning`) when the run's final
+    ``creep_opt`` lies outside the ``|creep|`` [-] of its used samples (``creep`` (n,), the
+    tracked dataset's): the tracked peak is then Kiencke's extrapolation, not data. ``None``
+    otherwise and for a run without a peak (:func:`optimum_warning`)."""
+    creep_opt = float(tracked.trace.creep_opt[-1])
+    used = np.abs(np.asarray(creep, float))[np.asarray(tracked.used, bool)]
+    if not (np.isfinite(creep_opt) and used.size):
+        return None
+    return extrapolation_warning(creep_opt, float(used.min()), float(used.max()))
+
+
+def singular_warning(tracked) -> dict | None:
+    """``not_converged`` for a run whose status is ``SINGULAR`` (:func:`final_status`: too little
+    excitation, e.g. constant creep): ``p1`` and ``p2`` are then not separately determined."""
+    if int(tracked.status) != int(Status.SINGULAR):
+        return None
+    return {
+        "code": "not_converged",
+        "params": ["p1", "p2", "mu_max", "creep_opt"],
+        "message": "status singular: the data excite too little of the curve (the creep hardly "
+        "varies), so p1 and p2, and the peak, are not separately determined",
     }
 
 

@@ -106,21 +106,30 @@ def peak_report(peak, jacobian, cov, speed, max_creep, min_creep=0.0) -> tuple[d
             f"mu_max is its value at creep {creep_opt:.3g}, creep_opt has no interval"
         )
         warnings.append({"code": "peak_extrapolated", "params": list(DERIVED), "message": message})
-    elif max_creep < creep_opt:
-        message = (
-            f"the recording's creep stays below the fitted curve's peak (at most {max_creep:.3g} "
-            f"against creep_opt {creep_opt:.3g} at {speed:.3g} m/s): mu_max and creep_opt are "
-            "extrapolated from the rising branch"
-        )
-        warnings.append({"code": "peak_extrapolated", "params": list(DERIVED), "message": message})
-    elif min_creep > creep_opt:
-        message = (
-            f"the recording's creep stays above the fitted curve's peak (at least {min_creep:.3g} "
-            f"against creep_opt {creep_opt:.3g} at {speed:.3g} m/s): mu_max and creep_opt are "
-            "extrapolated from the falling branch"
-        )
-        warnings.append({"code": "peak_extrapolated", "params": list(DERIVED), "message": message})
+    elif (
+        outside := extrapolation_warning(creep_opt, min_creep, max_creep, f" at {speed:.3g} m/s")
+    ) is not None:
+        warnings.append(outside)
     return derived, warnings
+
+
+def extrapolation_warning(creep_opt, min_creep, max_creep, where="") -> dict | None:
+    """``peak_extrapolated`` when a curve's ``creep_opt`` [-] lies outside the ``|creep|`` the data
+    cover (``min_creep``–``max_creep``): its peak is then extrapolated from the rising (or falling)
+    branch; ``where`` qualifies the peak in the message (e.g. the reference speed). ``None``
+    otherwise (fit and ``online`` both use it)."""
+    if min_creep <= creep_opt <= max_creep:
+        return None
+    side, bound, branch = (
+        ("below", f"at most {max_creep:.3g}", "rising")
+        if creep_opt > max_creep
+        else ("above", f"at least {min_creep:.3g}", "falling")
+    )
+    message = (
+        f"the recording's creep stays {side} the fitted curve's peak ({bound} against creep_opt "
+        f"{creep_opt:.3g}{where}): mu_max and creep_opt are extrapolated from the {branch} branch"
+    )
+    return {"code": "peak_extrapolated", "params": list(DERIVED), "message": message}
 
 
 def _entry(value, sd, ci, ok):
