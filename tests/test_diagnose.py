@@ -195,17 +195,20 @@ def test_warnings_say_what_was_not_tested():
 
     result = {
         "base": {"status": "stalled"},
-        "null": {"critical_sse_reduction": 0.3, "noise": {"gamma": 0.0}},
+        "null": {"critical_sse_reduction": 0.3, "noise": {"gamma": 0.0}, "replicas": 19},
         "candidates": [cand("rail_change", "stalled", 0.9), cand("load_transfer", "max_steps", 0.1)],
     }
     warnings = {w["code"]: w for w in diagnosis._warnings(result)}
     assert set(warnings) == {"base_not_converged", "candidates_not_tested", "null_at_widest"}
     assert warnings["candidates_not_tested"]["candidates"] == ["rail_change", "load_transfer"]
     assert warnings["candidates_not_tested"]["above_critical"] == ["rail_change"]
-    result["null"] = {"critical_sse_reduction": 0.95, "noise": {"gamma": 0.5}}
+    result["null"] = {"critical_sse_reduction": 0.95, "noise": {"gamma": 0.5}, "replicas": 19}
     result["base"]["status"] = "converged"
     warnings = diagnosis._warnings(result)
     assert [w["code"] for w in warnings] == ["candidates_not_tested"] and not warnings[0]["above_critical"]
+    for replicas, code in ((0, "no_null"), (1, "null_too_small"), (18, "null_too_small")):
+        result["null"]["replicas"] = replicas
+        assert code in {w["code"] for w in diagnosis._warnings(result)}
 
 
 def test_the_explanation_claims_only_what_was_tested():

@@ -14,7 +14,8 @@ could detect and the run that would expose it: :mod:`.sensitivity`), ``residual_
 the base residual per signal), ``errors_in_variables`` (the noise levels behind the fits'
 effective-variance weights, :func:`.fitting.eiv_weights`),
 ``warnings`` (``code``, ``message``: an unconverged base fit, candidates whose fits did not
-converge — their ``p_value`` is null, they are never ranked — and a null at its widest),
+converge — their ``p_value`` is null, they are never ranked — a null too small or none, and a null at
+its widest),
 ``explanation``; and ``_series`` (arrays for the report; not JSON, dropped by the CLI).
 """
 
@@ -122,8 +123,9 @@ def _reduction(value: float) -> str:
 def _warnings(result: dict) -> list:
     """How far to trust the decision: ``[{"code", "message", ...}]`` for a base fit that did not
     converge, candidates whose fits did not converge (untested, never ranked; those whose in-sample
-    SSE reduction exceeds the null's critical value named in ``above_critical``), and a null at its
-    widest (γ = 0, :func:`.null.replicas`)."""
+    SSE reduction exceeds the null's critical value named in ``above_critical``), a null too small
+    to reject at α or none at all (``--replicas``), and a null at its widest (γ = 0,
+    :func:`.null.replicas`)."""
     out = []
     if result["base"]["status"] != "converged":
         out.append(
@@ -150,6 +152,25 @@ def _warnings(result: dict) -> list:
                 ),
                 "candidates": [c["name"] for c in untested],
                 "above_critical": strong,
+            }
+        )
+    replicas = result["null"]["replicas"]
+    if replicas == 0:
+        out.append(
+            {
+                "code": "no_null",
+                "message": "no replicas (--replicas 0): candidates are decided by the global held-out "
+                f"gain threshold ({select.GAIN_THRESHOLD:.1%}, calibrated on our simulator), not "
+                "against clean versions of this recording",
+            }
+        )
+    elif replicas < round(1.0 / null.ALPHA) - 1:
+        out.append(
+            {
+                "code": "null_too_small",
+                "message": f"with {replicas} replicas the smallest p-value is 1/{replicas + 1} = "
+                f"{1.0 / (replicas + 1):.2f} > {null.ALPHA:g}: no candidate can be named "
+                f"(at least {round(1.0 / null.ALPHA) - 1} replicas are needed)",
             }
         )
     noise = result["null"]["noise"]
