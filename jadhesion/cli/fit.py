@@ -51,14 +51,14 @@ def register(sub) -> None:
         "--pop-size",
         type=int,
         default=None,
-        help="population size of a population method (default 50, >= 2; refused with lm)",
+        help="population size of a population method (default 50, >= 2; lm ignores it, with a warning)",
     )
     p.add_argument(
         "--max-iter",
         type=int,
         default=None,
         help="iteration cap of a population method (default 300); it stops earlier when its best MAE "
-        "stalls (refused with lm, which stops at its own convergence test)",
+        "stalls (lm, which stops at its own convergence test, ignores it with a warning)",
     )
     p.add_argument(
         "--plot",

@@ -40,25 +40,33 @@ from .loading import load_dataset, load_from_args
 
 def _budget(args) -> dict:
     """``--pop-size``/``--max-iter`` as the method's keyword arguments, the registry's defaults
-    where not given (:data:`.methods.METHODS`); refused for a method without them (LM stops at its
-    own convergence test, capped inside the fit), not silently ignored."""
+    where not given (:data:`.methods.METHODS`); for a method without them (LM stops at its own
+    convergence test, capped inside the fit) they are left out."""
     defaults = METHODS[args.method].defaults
     given = {k: getattr(args, k) for k in ("pop_size", "max_iter") if getattr(args, k) is not None}
-    stray = [f"--{k.replace('_', '-')}" for k in given if k not in defaults]
-    if stray:
-        raise UserError(
-            f"fit: {' and '.join(stray)} {'set' if len(stray) > 1 else 'sets'} a population "
-            "method's budget (itlbo, tlbo, pso); "
-            f"--method {args.method} stops at its own convergence test"
-        )
-    return {**defaults, **given}
+    return {**defaults, **{k: v for k, v in given.items() if k in defaults}}
+
+
+def _ignored_budget(args) -> str | None:
+    """The warning for budget flags the method has none of (said, not silently dropped: a script
+    may pass one set of flags to every method)."""
+    defaults = METHODS[args.method].defaults
+    stray = [f"--{k.replace('_', '-')}" for k in ("pop_size", "max_iter") if getattr(args, k) is not None]
+    stray = [f for f in stray if f[2:].replace("-", "_") not in defaults]
+    if not stray:
+        return None
+    return (
+        f"{' and '.join(stray)} set a population method's budget (itlbo, tlbo, pso) and are ignored: "
+        f"--method {args.method} stops at its own convergence test"
+    )
 
 
 def _check_flags(args) -> None:
     require_at_least("fit", 0, seed=args.seed)
     require_at_least("fit", 2, pop_size=args.pop_size)
     require_at_least("fit", 1, max_iter=args.max_iter)
-    _budget(args)
+    if (note := _ignored_budget(args)) is not None:
+        sys.stderr.write(f"jadhesion: warning: {note}\n")
     if args.plot is not None and Path(args.plot).exists() and not Path(args.plot).is_dir():
         raise UserError(f"fit: --plot {args.plot}: exists and is not a directory")
     if args.out is not None:
