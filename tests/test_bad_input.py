@@ -156,10 +156,14 @@ FLAGS = [
     (["fit", "{rec}", "--plot", "{rec}"], "--plot"),
     (["posterior", "{rec}", "--walkers", "0"], "--walkers"),
     (["posterior", "{rec}", "--steps", "0"], "--steps"),
+    (["posterior", "{rec}", "--seed", "-1"], "--seed"),  # was NumPy's SeedSequence traceback
+    (["diagnose", "{rec}", "--seed", "-1"], "--seed"),
+    (["simulate", "--seed", "99999999999999999999999", "--out", "{tmp}/x.csv"], "--seed"),  # JAX's
     (["simulate", "--scenario", "dry", "--out", "{tmp}/x.txt"], "--out"),
     (["simulate", "--scenario", "icy", "--out", "{tmp}/x.csv"], "icy"),
     (["simulate", "--scenario", "dry", "--effect", "nonsense", "--out", "{tmp}/x.csv"], "nonsense"),
     (["sweep", "--seeds", "0", "--out", "{tmp}/s.csv"], "--seeds"),
+    (["sweep", "--seeds", "99999999999999999999999", "--out", "{tmp}/s.csv"], "--seeds"),
     (["sweep", "--pop-size", "0", "--methods", "itlbo", "--out", "{tmp}/s.csv"], "--pop-size"),
     (["sweep", "--max-iter", "-1", "--methods", "itlbo", "--out", "{tmp}/s.csv"], "--max-iter"),
     (["sweep", "--chunk-size", "0", "--out", "{tmp}/s.csv"], "--chunk-size"),

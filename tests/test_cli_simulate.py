@@ -105,6 +105,7 @@ def test_braking_mirrors_traction(pair):
         (["--rate", "nan"], "--rate"),
         (["--vehicle", "missing.json"], "--vehicle"),
         (["--vehicle", "BAD"], "--vehicle"),
+        (["--seed", "-1"], "--seed"),
     ],
 )
 def test_bad_values_exit_2_naming_the_flag(capsys, tmp_path, argv, flag):

@@ -22,6 +22,24 @@ def require_at_least(command: str, least: int, **flags) -> None:
             raise UserError(f"{command}: --{name.replace('_', '-')} must be >= {least}, got {value}")
 
 
+#: The largest ``--seed`` of every command: NumPy's ``default_rng`` takes any integer >= 0 and
+#: ``jax.random.key`` any int64 (the command line runs JAX in x64), so seeds are [0, 2**63 - 1].
+SEED_MAX = 2**63 - 1
+
+
+def require_in_range(command: str, lo, hi, **flags) -> None:
+    """Raise :class:`UserError` for the first ``--flag`` (given, not None) outside ``[lo, hi]``
+    (NaN included), e.g. ``require_in_range("simulate", 0.0, 10.0, sensor_noise=args.sensor_noise)``."""
+    for name, value in flags.items():
+        if value is not None and not lo <= value <= hi:
+            raise UserError(f"{command}: --{name.replace('_', '-')} must be in [{lo}, {hi}], got {value}")
+
+
+def require_seed(command: str, seed) -> None:
+    """``--seed`` in [0, :data:`SEED_MAX`], the one rule of every command's seed."""
+    require_in_range(command, 0, SEED_MAX, seed=seed)
+
+
 def _plain(obj):
     if isinstance(obj, dict):
         return {str(k): _plain(v) for k, v in obj.items()}

@@ -33,6 +33,8 @@ def register(sub) -> None:
         help="clean re-synthesised replicas of the recording's null (default 19, the fewest that "
         "can reject at 5 %%; 0 skips the null and decides on the held-out gain alone)",
     )
-    p.add_argument("--seed", type=int, default=0, help="seed of the null's replicas (default 0)")
+    p.add_argument(
+        "--seed", type=int, default=0, help="seed of the null's replicas, 0 to 2**63 - 1 (default 0)"
+    )
     add_recording_options(p)
     p.set_defaults(handler="jadhesion.cli.diagnose_run:run")

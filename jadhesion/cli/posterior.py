@@ -72,7 +72,7 @@ def register(sub) -> None:
         help="smoothed (default): creep as a smoothed state with its uncertainty in the "
         "likelihood (errors in variables); raw: the difference of the speeds",
     )
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=int, default=0, help="0 to 2**63 - 1 (default 0)")
     p.add_argument("--json", action="store_true", help="one JSON document on stdout")
     add_recording_options(p)
     p.add_argument("--plot", metavar="DIR", default=None, help="write corner and predictive figures")

@@ -22,7 +22,7 @@ from ..identify.polach_fit import fit_polach, require_samples
 from ..identify.polach_residuals import eiv_scale, standardised_residual
 from ..models.polach import PARAM_NAMES
 from ..plots.posterior import corner_plot, predictive_plot
-from .common import Progress, UserError, emit_json, table
+from .common import Progress, UserError, emit_json, require_seed, table
 from .loading import load_dataset, load_from_args
 
 #: Without ``--steps``: the chain's first length, and the most it is extended to while it holds
@@ -102,7 +102,7 @@ def _document(result, theta0, note="", creep="raw") -> dict:
 
 
 def run(args) -> int:
-
+    require_seed("posterior", args.seed)
     if args.walkers < 12 or args.walkers % 2:
         raise UserError(f"--walkers must be an even number >= 12, got {args.walkers}")
     if args.steps is not None and args.steps < 50:

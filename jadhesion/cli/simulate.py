@@ -78,7 +78,7 @@ def register(sub) -> None:
         metavar="NAME[=MAGNITUDE]",
         help=f"add an effect (repeatable): {', '.join(EFFECT_NAMES)}",
     )
-    p.add_argument("--seed", type=int, default=0, help="PRNG seed (default 0)")
+    p.add_argument("--seed", type=int, default=0, help="PRNG seed, 0 to 2**63 - 1 (default 0)")
     p.add_argument(
         "--sensor-noise",
         type=float,

@@ -15,7 +15,7 @@ from ..data.vehicle import LOCO_22E
 from ..errors import RecordingError
 from ..models.effects import magnitudes
 from ..models.polach import PARAM_NAMES
-from .common import UserError, emit_json
+from .common import UserError, emit_json, require_seed
 
 #: Accepted ranges of ``--params`` values (physical validity, not the fit's box): name → (lo, hi,
 #: whether lo itself is allowed).
@@ -88,6 +88,7 @@ def _vehicle(path):
 
 
 def run(args) -> int:
+    require_seed("simulate", args.seed)
     scenario = get_scenario(args.scenario)
     if args.params is not None:
         given = parse_params(args.params)

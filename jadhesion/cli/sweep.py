@@ -15,6 +15,10 @@ import math
 
 from . import COMMANDS
 
+#: The most ``--seeds``: a million data seeds per cell (the grid holds them all; 3e9 ran out of
+#: memory before the first fit).
+MAX_SEEDS = 1_000_000
+
 
 def _list(kind, name):
     def parse(text):
@@ -38,7 +42,9 @@ def register(sub) -> None:
         default=["dry", "wet", "sand"],
         help="comma-separated scenarios (default dry,wet,sand)",
     )
-    p.add_argument("--seeds", type=int, default=10, help="data seeds 0..N-1 (default 10)")
+    p.add_argument(
+        "--seeds", type=int, default=10, help=f"data seeds 0..N-1, N at most {MAX_SEEDS} (default 10)"
+    )
     p.add_argument(
         "--methods",
         type=_list(str, "--methods"),

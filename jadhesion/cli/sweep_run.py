@@ -7,7 +7,8 @@ import jax
 
 from ..identify.polach_fit import MIN_SAMPLES
 from ..sweeps import Grid, run_sweep
-from .common import Progress, UserError, emit_json, require_at_least
+from .common import Progress, UserError, emit_json, require_at_least, require_in_range
+from .sweep import MAX_SEEDS
 
 
 def _initialize(args) -> None:
@@ -26,7 +27,8 @@ def run(args) -> int:
     """Run the sweep the arguments describe; print (or ``--json``) its summary on process 0."""
     _initialize(args)
     budget = {"pop_size": args.pop_size, "max_iter": args.max_iter}
-    require_at_least("sweep", 1, seeds=args.seeds, max_iter=args.max_iter, chunk_size=args.chunk_size)
+    require_in_range("sweep", 1, MAX_SEEDS, seeds=args.seeds)
+    require_at_least("sweep", 1, max_iter=args.max_iter, chunk_size=args.chunk_size)
     require_at_least("sweep", 2, pop_size=args.pop_size)
     require_at_least("sweep", MIN_SAMPLES, samples=args.samples)
     grid = Grid(
