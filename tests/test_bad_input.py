@@ -155,7 +155,9 @@ FLAGS = [
     (["fit", "{rec}", "--seed", "-1"], "--seed"),
     (["fit", "{rec}", "--plot", "{rec}"], "--plot"),
     (["posterior", "{rec}", "--walkers", "0"], "--walkers"),
+    (["posterior", "{rec}", "--walkers", "514", "--steps", "50"], "--walkers"),  # above 512
     (["posterior", "{rec}", "--steps", "0"], "--steps"),
+    (["posterior", "{rec}", "--steps", "100000000"], "143 GiB"),  # was an ArrayMemoryError
     (["posterior", "{rec}", "--seed", "-1"], "--seed"),  # was NumPy's SeedSequence traceback
     (["diagnose", "{rec}", "--seed", "-1"], "--seed"),
     (["simulate", "--seed", "99999999999999999999999", "--out", "{tmp}/x.csv"], "--seed"),  # JAX's

@@ -363,6 +363,15 @@ def test_cli_posterior_json(tmp_path, capsys):
     assert main(["posterior", str(bad), "--json"]) == 2
 
 
+def test_posterior_default_steps_fit_the_chain_cap_at_any_allowed_walkers():
+    """Without --steps the chain may grow to AUTO_MAX_STEPS: the memory cap never refuses it."""
+    from jadhesion.cli.posterior import MAX_CHAIN_BYTES, MAX_WALKERS
+    from jadhesion.cli.posterior_run import AUTO_MAX_STEPS, chain_bytes
+
+    assert chain_bytes(MAX_WALKERS, AUTO_MAX_STEPS, "observer") <= MAX_CHAIN_BYTES  # 7 coordinates
+    assert chain_bytes(32, 100_000_000, "auto") == 32 * 100_000_000 * 6 * 8
+
+
 def test_table2_row(data):
     row = table2_row(data, THETA, walkers=32, steps=80, seed=0, truth=THETA)  # short: reported, no warning
     assert row["method"] == "mcmc" and not row["converged"] and row["steps"] > 80

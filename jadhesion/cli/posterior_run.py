@@ -16,6 +16,7 @@ import numpy as np
 from ..data.sidecar import sidecar_warning
 from ..identify.ensemble import ChainTooShortWarning
 from ..identify.laplace import colour_check, initial_spread, lm_optimum
+from ..identify.likelihood import noise_names
 from ..identify.mcmc import sample_posterior
 from ..identify.observer_view import recording_observer_terms
 from ..identify.polach_fit import fit_polach, require_samples
@@ -24,9 +25,11 @@ from ..models.polach import PARAM_NAMES
 from ..plots.posterior import corner_plot, predictive_plot
 from .common import Progress, UserError, emit_json, require_seed, table
 from .loading import load_dataset, load_from_args
+from .posterior import MAX_CHAIN_BYTES, MAX_WALKERS, MIN_WALKERS
 
 #: Without ``--steps``: the chain's first length, and the most it is extended to while it holds
-#: fewer than 50 autocorrelation times (:func:`jadhesion.identify.ensemble.run_ensemble`).
+#: fewer than 50 autocorrelation times (:func:`jadhesion.identify.ensemble.run_ensemble`); the
+#: latter's chain fits :data:`.posterior.MAX_CHAIN_BYTES` at any allowed ``--walkers``.
 DEFAULT_STEPS, AUTO_MAX_STEPS = 5000, 20000
 
 
@@ -101,12 +104,35 @@ def _document(result, theta0, note="", creep="raw") -> dict:
     }
 
 
-def run(args) -> int:
+def chain_bytes(walkers: int, steps: int, likelihood: str) -> int:
+    """Memory [B] of a chain of ``steps`` × ``walkers`` of the ``likelihood``'s coordinates
+    (the five Polach parameters and its noise ones; ``auto`` samples the Gaussian's)."""
+    coordinates = len(PARAM_NAMES) + len(noise_names("gauss" if likelihood == "auto" else likelihood))
+    return walkers * steps * coordinates * 8
+
+
+def _check_flags(args) -> None:
+    """Refuse a bad flag before any work."""
     require_seed("posterior", args.seed)
-    if args.walkers < 12 or args.walkers % 2:
-        raise UserError(f"--walkers must be an even number >= 12, got {args.walkers}")
-    if args.steps is not None and args.steps < 50:
-        raise UserError(f"--steps must be at least 50, got {args.steps}")
+    if not (MIN_WALKERS <= args.walkers <= MAX_WALKERS and args.walkers % 2 == 0):
+        raise UserError(
+            f"posterior: --walkers must be an even number in [{MIN_WALKERS}, {MAX_WALKERS}], "
+            f"got {args.walkers}"
+        )
+    if args.steps is None:
+        return
+    if args.steps < 50:
+        raise UserError(f"posterior: --steps must be at least 50, got {args.steps}")
+    if (need := chain_bytes(args.walkers, args.steps, args.likelihood)) > MAX_CHAIN_BYTES:
+        raise UserError(
+            f"posterior: --steps {args.steps} with --walkers {args.walkers} needs a "
+            f"{need / 2**30:.3g} GiB chain, more than {MAX_CHAIN_BYTES / 2**30:g} GiB: "
+            "use fewer steps or walkers"
+        )
+
+
+def run(args) -> int:
+    _check_flags(args)
     recording = load_from_args(args, args.file)
     if (sidecar := sidecar_warning(recording)) is not None:  # before anything it may explain
         sys.stderr.write(f"jadhesion: warning: {sidecar['message']}\n")
