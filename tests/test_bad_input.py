@@ -160,6 +160,7 @@ FLAGS = [
     (["posterior", "{rec}", "--steps", "100000000"], "143 GiB"),  # was an ArrayMemoryError
     (["posterior", "{rec}", "--seed", "-1"], "--seed"),  # was NumPy's SeedSequence traceback
     (["diagnose", "{rec}", "--seed", "-1"], "--seed"),
+    (["diagnose", "{rec}", "--replicas", "-1"], "--replicas"),  # was an AxisError
     (["simulate", "--seed", "99999999999999999999999", "--out", "{tmp}/x.csv"], "--seed"),  # JAX's
     (["simulate", "--scenario", "dry", "--out", "{tmp}/x.txt"], "--out"),
     (["simulate", "--scenario", "icy", "--out", "{tmp}/x.csv"], "icy"),
