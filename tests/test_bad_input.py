@@ -146,6 +146,8 @@ def recording(tmp_path_factory):
     return path
 
 
+#: A sweep of one short fit per scenario (quick even where a check would let it run).
+SMALL = ["--seeds", "1", "--samples", "100"]
 #: command line (``{rec}`` = a valid recording, ``{tmp}`` = a fresh folder) -> flag named
 FLAGS = [
     (["fit", "{rec}", "--pop-size", "0"], "--pop-size"),
@@ -167,6 +169,9 @@ FLAGS = [
     (["simulate", "--scenario", "dry", "--effect", "nonsense", "--out", "{tmp}/x.csv"], "nonsense"),
     (["sweep", "--seeds", "0", "--out", "{tmp}/s.csv"], "--seeds"),
     (["sweep", "--seeds", "99999999999999999999999", "--out", "{tmp}/s.csv"], "--seeds"),
+    (["sweep", "--scenarios", "dry,,wet", *SMALL, "--out", "{tmp}/s.csv"], "--scenarios"),  # was dry,wet
+    (["sweep", "--scenarios", "dry", *SMALL, "--out", "{tmp}/s.txt"], "--out"),
+    (["sweep", "--scenarios", "dry", *SMALL, "--out", "{tmp}/missing/s.csv"], "--out"),  # was made
     (["sweep", "--pop-size", "0", "--methods", "itlbo", "--out", "{tmp}/s.csv"], "--pop-size"),
     (["sweep", "--max-iter", "-1", "--methods", "itlbo", "--out", "{tmp}/s.csv"], "--max-iter"),
     (["sweep", "--chunk-size", "0", "--out", "{tmp}/s.csv"], "--chunk-size"),

@@ -116,6 +116,18 @@ def test_bad_values_exit_2_naming_the_flag(capsys, tmp_path, argv, flag):
     assert list(tmp_path.iterdir()) == [tmp_path / "BAD.json"]  # nothing written
 
 
+def test_out_onto_a_directory_is_refused_before_simulating(capsys, tmp_path):
+    """A directory where the recording (or its sidecar) would go: one line at once, not
+    '[Errno 21] Is a directory' after the simulation."""
+    (tmp_path / "d.csv").mkdir()
+    (tmp_path / "r.json").mkdir()
+    code, _, err = _simulate(capsys, tmp_path / "d.csv")
+    assert code == 2 and err == f"jadhesion: error: --out {tmp_path / 'd.csv'}: is a directory\n"
+    code, _, err = _simulate(capsys, tmp_path / "r.csv")
+    assert code == 2 and err.count("\n") == 1 and "r.json (written beside it) is a directory" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d.csv", "r.json"]
+
+
 def test_help_names_and_defaults_are_the_catalogues_and_the_simulators():
     """The JAX-free argument module's copies (help text only) equal what they copy."""
     assert simulate.SCENARIO_NAMES == tuple(SCENARIOS)

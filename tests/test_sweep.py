@@ -304,11 +304,29 @@ def test_cli_bad_arguments_exit_2(tmp_path, capsys):
         ["--chunk-size", "0"],
         ["--creep-max", "-1"],
         ["--max-iter", "0"],
+        ["--scenarios", "dry,,wet"],  # an empty item was dropped
+        ["--noise", "1,x"],
     ):
         assert cli_main(["sweep", *argv, "--out", str(out), "--json"]) == 2
         err = capsys.readouterr().err
         assert err.startswith("jadhesion: error:") and err.count("\n") == 1
     assert list(tmp_path.iterdir()) == []
+
+
+def test_cli_out_must_be_a_table_file_in_an_existing_directory(tmp_path, capsys):
+    """As simulate's --out: refused at once, nothing made (a missing directory was created, a
+    .txt written as CSV, a directory named .csv failed after the fits)."""
+    (tmp_path / "d.csv").mkdir()
+    for out, words in (
+        ("d.csv", "is a directory"),
+        ("x.txt", "expected a .csv or .parquet file name"),
+        ("missing/x.csv", "does not exist"),
+    ):
+        argv = ["sweep", "--scenarios", "dry", "--seeds", "1", "--samples", "100", "--out"]
+        assert cli_main([*argv, str(tmp_path / out)]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "--out" in err and words in err
+    assert list(tmp_path.iterdir()) == [tmp_path / "d.csv"]
 
 
 @pytest.mark.slow

@@ -103,6 +103,11 @@ def run(args) -> int:
         raise UserError(f"--out {args.out}: expected a .csv file name")
     if not out.parent.is_dir():
         raise UserError(f"--out {args.out}: directory {str(out.parent)!r} does not exist")
+    if out.is_dir():
+        raise UserError(f"--out {args.out}: is a directory")
+    for path in (out.with_suffix(".json"), out.with_suffix(".truth.json")):  # its sidecar and truth
+        if path.is_dir():
+            raise UserError(f"--out {args.out}: {path} (written beside it) is a directory")
     if not args.sensor_noise >= 0.0:
         raise UserError(f"--sensor-noise {args.sensor_noise}: expected a scale >= 0")
     result = simulate(

@@ -11,7 +11,6 @@ This module defines the arguments only; :mod:`.sweep_run` does the work.
 from __future__ import annotations
 
 import argparse
-import math
 
 from . import COMMANDS
 
@@ -20,54 +19,37 @@ from . import COMMANDS
 MAX_SEEDS = 1_000_000
 
 
-def _list(kind, name):
-    def parse(text):
-        items = [t.strip() for t in text.split(",") if t.strip()]
-        if not items:
-            raise argparse.ArgumentTypeError(f"{name}: empty list")
-        try:
-            return [kind(t) for t in items]
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{name}: cannot read {text!r} as {kind.__name__}s") from None
-
-    return parse
-
-
 def register(sub) -> None:
     """Add the ``sweep`` subcommand to ``sub`` (argparse subparsers)."""
     p = sub.add_parser("sweep", help=COMMANDS["sweep"], description=__doc__.splitlines()[0])
     p.add_argument(
-        "--scenarios",
-        type=_list(str, "--scenarios"),
-        default=["dry", "wet", "sand"],
-        help="comma-separated scenarios (default dry,wet,sand)",
+        "--scenarios", default="dry,wet,sand", help="comma-separated scenarios (default dry,wet,sand)"
     )
     p.add_argument(
         "--seeds", type=int, default=10, help=f"data seeds 0..N-1, N at most {MAX_SEEDS} (default 10)"
     )
     p.add_argument(
-        "--methods",
-        type=_list(str, "--methods"),
-        default=["lm"],
-        help="comma-separated fitting methods: lm, itlbo, tlbo, pso (default lm)",
+        "--methods", default="lm", help="comma-separated fitting methods: lm, itlbo, tlbo, pso (default lm)"
     )
     p.add_argument(
         "--noise",
-        type=_list(float, "--noise"),
-        default=[1.0],
-        help="noise scales around the true curve (default 1 = as simulated)",
+        default="1",
+        help="comma-separated noise scales around the true curve (default 1 = as simulated)",
     )
     p.add_argument(
         "--creep-max",
-        type=_list(float, "--creep-max"),
-        default=[math.inf],
-        help="creep ranges covered by the test, 'inf' = all samples (default inf)",
+        default="inf",
+        help="comma-separated creep ranges covered by the test, 'inf' = all samples (default inf)",
     )
     p.add_argument("--pop-size", type=int, default=None, help="population methods: class size (default 50)")
     p.add_argument("--max-iter", type=int, default=None, help="population methods: iterations (default 300)")
     p.add_argument("--samples", type=int, default=None, help="samples per simulated test (default 2000)")
     p.add_argument("--chunk-size", type=int, default=64, help="fits per compiled batch (default 64)")
-    p.add_argument("--out", default="sweep.csv", help="table file, .csv or .parquet (default sweep.csv)")
+    p.add_argument(
+        "--out",
+        default="sweep.csv",
+        help="table file, .csv or .parquet, in an existing directory (default sweep.csv)",
+    )
     p.add_argument(
         "--resume",
         action=argparse.BooleanOptionalAction,

@@ -3,12 +3,36 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import jax
 
 from ..identify.polach_fit import MIN_SAMPLES
 from ..sweeps import Grid, run_sweep
 from .common import Progress, UserError, emit_json, require_at_least, require_in_range
 from .sweep import MAX_SEEDS
+
+
+def _list(kind, flag: str, text: str) -> list:
+    """A comma-separated ``--flag`` value as a list of ``kind``; an empty item is refused."""
+    items = [t.strip() for t in text.split(",")]
+    if "" in items:
+        raise UserError(f"sweep: {flag} {text!r}: empty item (expected comma-separated values)")
+    try:
+        return [kind(t) for t in items]
+    except ValueError:
+        raise UserError(f"sweep: {flag} {text!r}: cannot read it as {kind.__name__}s") from None
+
+
+def _check_out(name: str) -> None:
+    """``--out``: a ``.csv`` or ``.parquet`` file (the writer's formats) in an existing directory."""
+    out = Path(name)
+    if not (out.suffix.lower() == ".csv" or out.suffix == ".parquet"):
+        raise UserError(f"sweep: --out {name}: expected a .csv or .parquet file name")
+    if not out.parent.is_dir():
+        raise UserError(f"sweep: --out {name}: directory {str(out.parent)!r} does not exist")
+    if out.is_dir():
+        raise UserError(f"sweep: --out {name}: is a directory")
 
 
 def _initialize(args) -> None:
@@ -25,18 +49,19 @@ def _initialize(args) -> None:
 
 def run(args) -> int:
     """Run the sweep the arguments describe; print (or ``--json``) its summary on process 0."""
-    _initialize(args)
-    budget = {"pop_size": args.pop_size, "max_iter": args.max_iter}
     require_in_range("sweep", 1, MAX_SEEDS, seeds=args.seeds)
     require_at_least("sweep", 1, max_iter=args.max_iter, chunk_size=args.chunk_size)
     require_at_least("sweep", 2, pop_size=args.pop_size)
     require_at_least("sweep", MIN_SAMPLES, samples=args.samples)
+    _check_out(args.out)
+    _initialize(args)
+    budget = {"pop_size": args.pop_size, "max_iter": args.max_iter}
     grid = Grid(
-        scenarios=args.scenarios,
+        scenarios=_list(str, "--scenarios", args.scenarios),
         seeds=range(args.seeds),
-        methods=args.methods,
-        noise_scale=args.noise,
-        creep_max=args.creep_max,
+        methods=_list(str, "--methods", args.methods),
+        noise_scale=_list(float, "--noise", args.noise),
+        creep_max=_list(float, "--creep-max", args.creep_max),
         n_samples=args.samples,
         fit_options={k: v for k, v in budget.items() if v is not None},
     )
