@@ -164,6 +164,7 @@ FLAGS = [
     (["diagnose", "{rec}", "--seed", "-1"], "--seed"),
     (["diagnose", "{rec}", "--replicas", "-1"], "--replicas"),  # was an AxisError
     (["simulate", "--seed", "99999999999999999999999", "--out", "{tmp}/x.csv"], "--seed"),  # JAX's
+    (["simulate", "--sensor-noise", "1e9", "--out", "{tmp}/x.csv"], "--sensor-noise"),
     (["simulate", "--scenario", "dry", "--out", "{tmp}/x.txt"], "--out"),
     (["simulate", "--scenario", "icy", "--out", "{tmp}/x.csv"], "icy"),
     (["simulate", "--scenario", "dry", "--effect", "nonsense", "--out", "{tmp}/x.csv"], "nonsense"),

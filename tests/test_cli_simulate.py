@@ -105,6 +105,8 @@ def test_braking_mirrors_traction(pair):
         (["--rate", "nan"], "--rate"),
         (["--vehicle", "missing.json"], "--vehicle"),
         (["--vehicle", "BAD"], "--vehicle"),
+        (["--sensor-noise", "11"], "--sensor-noise"),  # above 10× realistic: 1e9 wrote -1e6 m/s
+        (["--sensor-noise", "nan"], "--sensor-noise"),
         (["--seed", "-1"], "--seed"),
     ],
 )

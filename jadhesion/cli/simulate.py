@@ -33,6 +33,10 @@ EFFECT_NAMES = (
 )
 DEFAULT_RATE_HZ = 50.0
 DEFAULT_DURATION_S = 39.98
+#: The largest ``--sensor-noise``: 10× the realistic sensors puts the speed noise at 1e-2 m/s, the
+#: noisiest of the survey (:mod:`jadhesion.data.sensors`), and μ̂ already dips below 0 on a dry
+#: run; 100× gave μ̂ from −4.4 to 4.5 and torques of ±580 kN·m.
+MAX_SENSOR_NOISE = 10.0
 
 
 def register(sub) -> None:
@@ -84,7 +88,8 @@ def register(sub) -> None:
         type=float,
         default=1.0,
         metavar="SCALE",
-        help="scale of the realistic sensor noise (jadhesion.data.sensors; 0: none)",
+        help=f"scale of the realistic sensor noise, 0 (none) to {MAX_SENSOR_NOISE:g} "
+        "(jadhesion.data.sensors; default 1)",
     )
     p.add_argument("--out", required=True, metavar="FILE.csv", help="recording to write")
     p.add_argument("--json", action="store_true", help="one JSON document on stdout")

@@ -15,7 +15,8 @@ from ..data.vehicle import LOCO_22E
 from ..errors import RecordingError
 from ..models.effects import magnitudes
 from ..models.polach import PARAM_NAMES
-from .common import UserError, emit_json, require_seed
+from .common import UserError, emit_json, require_in_range, require_seed
+from .simulate import MAX_SENSOR_NOISE
 
 #: Accepted ranges of ``--params`` values (physical validity, not the fit's box): name → (lo, hi,
 #: whether lo itself is allowed).
@@ -89,6 +90,7 @@ def _vehicle(path):
 
 def run(args) -> int:
     require_seed("simulate", args.seed)
+    require_in_range("simulate", 0.0, MAX_SENSOR_NOISE, sensor_noise=args.sensor_noise)
     scenario = get_scenario(args.scenario)
     if args.params is not None:
         given = parse_params(args.params)
@@ -108,8 +110,6 @@ def run(args) -> int:
     for path in (out.with_suffix(".json"), out.with_suffix(".truth.json")):  # its sidecar and truth
         if path.is_dir():
             raise UserError(f"--out {args.out}: {path} (written beside it) is a directory")
-    if not args.sensor_noise >= 0.0:
-        raise UserError(f"--sensor-noise {args.sensor_noise}: expected a scale >= 0")
     result = simulate(
         scenario,
         seed=args.seed,
