@@ -372,6 +372,39 @@ def test_posterior_default_steps_fit_the_chain_cap_at_any_allowed_walkers():
     assert chain_bytes(32, 100_000_000, "auto") == 32 * 100_000_000 * 6 * 8
 
 
+def test_cli_posterior_warns_of_the_data_as_fit_does(tmp_path, capsys):
+    """60 samples at one creep: the posterior's intervals are the model's extrapolation, and its
+    warnings say so with fit's codes; speed columns swapped on most of a run: creep_sign first."""
+    from logger_data import stretches_si
+
+    from jadhesion import LOCO_22E
+    from jadhesion.cli import main
+    from jadhesion.data.recording import save_recording
+
+    d = synthetic_dataset(np.random.default_rng(5), THETA, n=60)
+    path = tmp_path / "held.csv"
+    rows = np.column_stack([np.full(60, 0.004), np.asarray(d.vehicle_speed), np.asarray(d.adhesion)])
+    np.savetxt(path, rows, delimiter=",", header="creepage,vehicle_speed,adhesion", comments="")
+    argv = ["posterior", str(path), "--walkers", "12", "--steps", "60"]
+    assert main([*argv, "--json"]) == 0
+    codes = [w["code"] for w in json.loads(capsys.readouterr().out)["warnings"]]
+    assert codes == ["few_samples", "narrow_creep_range", "peak_extrapolated"]
+    assert main(argv) == 0
+    assert "warning [narrow_creep_range]: the samples' creep spans only" in capsys.readouterr().out
+
+    cols = stretches_si()
+    index = np.arange(cols["time"].size)
+    which = (index >= 100) & ((index < 500) | (index >= 900))
+    cols["vehicle_speed"], cols["wheel_speed"] = (
+        np.where(which, cols["wheel_speed"], cols["vehicle_speed"]),
+        np.where(which, cols["vehicle_speed"], cols["wheel_speed"]),
+    )
+    swapped = save_recording(cols, LOCO_22E, tmp_path / "swapped.csv")
+    argv = ["posterior", str(swapped), "--phase", "braking", "--walkers", "12", "--steps", "60", "--json"]
+    assert main(argv) == 0
+    assert json.loads(capsys.readouterr().out)["warnings"][0]["code"] == "creep_sign"
+
+
 def test_table2_row(data):
     row = table2_row(data, THETA, walkers=32, steps=80, seed=0, truth=THETA)  # short: reported, no warning
     assert row["method"] == "mcmc" and not row["converged"] and row["steps"] > 80

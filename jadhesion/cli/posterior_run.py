@@ -2,7 +2,9 @@
 
 Unknown sidecar keys are said on stderr as soon as the recording is loaded and listed in the
 document's ``warnings`` (``sidecar_unknown_key``, :func:`jadhesion.data.sidecar.sidecar_warning`;
-the chain's own warnings stay in ``diagnostics``)."""
+the chain's own warnings stay in ``diagnostics``), followed by what ``fit`` warns of the data
+themselves, by fit's own rules (:func:`data_warnings`): a posterior on such data is the prior's and
+the model's extrapolation however narrow its intervals."""
 
 from __future__ import annotations
 
@@ -13,16 +15,21 @@ from pathlib import Path
 import jax
 import numpy as np
 
+from ..data.selected import creep_sign_warning
 from ..data.sidecar import sidecar_warning
+from ..identify.batch_fit import valid_mask
 from ..identify.ensemble import ChainTooShortWarning
 from ..identify.laplace import colour_check, initial_spread, lm_optimum
 from ..identify.likelihood import noise_names
 from ..identify.mcmc import sample_posterior
 from ..identify.observer_view import recording_observer_terms
-from ..identify.polach_fit import fit_polach, require_samples
+from ..identify.peak import extrapolation_warning
+from ..identify.polach_fit import PolachFit, fit_polach, require_samples
 from ..identify.polach_residuals import eiv_scale, standardised_residual
+from ..identify.trust import fit_report
 from ..models.polach import PARAM_NAMES
 from ..plots.posterior import corner_plot, predictive_plot
+from ..status import Status
 from .common import Progress, UserError, emit_json, require_seed, table
 from .loading import load_dataset, load_from_args
 from .posterior import MAX_CHAIN_BYTES, MAX_WALKERS, MIN_WALKERS
@@ -31,6 +38,8 @@ from .posterior import MAX_CHAIN_BYTES, MAX_WALKERS, MIN_WALKERS
 #: fewer than 50 autocorrelation times (:func:`jadhesion.identify.ensemble.run_ensemble`); the
 #: latter's chain fits :data:`.posterior.MAX_CHAIN_BYTES` at any allowed ``--walkers``.
 DEFAULT_STEPS, AUTO_MAX_STEPS = 5000, 20000
+#: The warning codes of :func:`jadhesion.identify.trust.fit_report` that judge the data, not the fit.
+DATA_CODES = ("few_samples", "implausible_adhesion", "narrow_creep_range")
 
 
 def tail_check(data, theta, kappa: float) -> dict:
@@ -45,6 +54,24 @@ def tail_check(data, theta, kappa: float) -> dict:
     excess = float(np.mean(zc**4) / max(np.mean(zc**2) ** 2, 1e-300) - 3.0)
     threshold = 3.0 * float(np.sqrt(24.0 * kappa / z.shape[0]))
     return {"excess_kurtosis": excess, "kurtosis_threshold": threshold, "heavy_tails": excess > threshold}
+
+
+def data_warnings(recording, selection, data, theta0, result) -> list:
+    """``fit``'s warnings {code, params, message} about the data, by its own code: ``creep_sign``
+    (:func:`jadhesion.data.selected.creep_sign_warning`), :data:`DATA_CODES` (``fit_report``'s
+    rules, evaluated at the LM start ``theta0``) and ``peak_extrapolated`` for the posterior's
+    median ``creep_opt`` outside the samples' ``|creep|`` (:func:`.peak.extrapolation_warning`)."""
+    # DATA_CODES read the data only: the start's other numbers (and fit_report's other warnings) do not matter
+    start = PolachFit(np.asarray(theta0), np.nan, np.nan, 0, 0, False, Status.CONVERGED)
+    creep = np.abs(np.asarray(data.creep, float))[valid_mask(data)]
+    peak = extrapolation_warning(
+        result.derived["creep_opt"]["median"],
+        float(creep.min()),
+        float(creep.max()),
+        f" at {result.vehicle_speed:.3g} m/s",
+    )
+    found = [w for w in fit_report(data, start)["warnings"] if w["code"] in DATA_CODES]
+    return [w for w in (creep_sign_warning(recording, selection), *found, peak) if w is not None]
 
 
 def _auto_note(t: dict) -> str:
@@ -188,7 +215,8 @@ def run(args) -> int:
     doc = _document(result, theta0, note, "smoothed" if data.slip_sd is not None else "raw")
     doc["tempering"] = tempering
     doc["selection"] = selection.document()
-    doc["warnings"] = [] if sidecar is None else [sidecar]  # the recording's; the chain's: diagnostics
+    found = data_warnings(recording, selection, data, theta0, result)
+    doc["warnings"] = ([] if sidecar is None else [sidecar]) + found  # the chain's: diagnostics
     if args.json:
         emit_json(doc)
         return 0
@@ -201,4 +229,6 @@ def run(args) -> int:
         f"tau max {max(d['tau'].values()):.0f} steps, "
         f"ESS min {min(d['ess'].values()):.0f}, {d['n_samples']} samples, {d['seconds']:.1f} s"
     )
+    for w in doc["warnings"]:
+        print(f"warning [{w['code']}]: {w['message']}")
     return 0
