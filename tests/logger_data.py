@@ -49,6 +49,20 @@ def stretches_si(seed=0):
     }
 
 
+def swapped_stretches():
+    """:func:`stretches_si` with wheel and vehicle speed exchanged on both traction stretches
+    (samples 100–499 and 900 on): 700 of its 1100 moving samples have the wheel slower than the
+    vehicle under traction, as when a logger's two speed columns are swapped."""
+    cols = stretches_si()
+    index = np.arange(cols["time"].size)
+    which = (index >= 100) & ((index < 500) | (index >= 900))
+    cols["vehicle_speed"], cols["wheel_speed"] = (
+        np.where(which, cols["wheel_speed"], cols["vehicle_speed"]),
+        np.where(which, cols["vehicle_speed"], cols["wheel_speed"]),
+    )
+    return cols
+
+
 def logger_columns(cols):
     """The same columns as a logger names and scales them."""
     return {

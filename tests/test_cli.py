@@ -7,7 +7,7 @@ import sys
 
 import numpy as np
 import pytest
-from logger_data import stretches_si
+from logger_data import stretches_si, swapped_stretches
 
 from jadhesion import LOCO_22E, adhesion_peak, polach_adhesion
 from jadhesion.cli import main
@@ -294,13 +294,7 @@ def test_fit_names_speed_columns_that_look_swapped(tmp_path, capsys):
     """Wheel and vehicle speed exchanged on both traction stretches of the logger test signal:
     the braking fit runs, and its warnings (Polach's and Kiencke's) open with the likely cause of
     the 700 of 1100 moving samples dropped as "torque and creep disagree"."""
-    cols = stretches_si()
-    index = np.arange(cols["time"].size)
-    which = (index >= 100) & ((index < 500) | (index >= 900))
-    cols["vehicle_speed"], cols["wheel_speed"] = (
-        np.where(which, cols["wheel_speed"], cols["vehicle_speed"]),
-        np.where(which, cols["vehicle_speed"], cols["wheel_speed"]),
-    )
+    cols = swapped_stretches()
     path = save_recording(cols, LOCO_22E, tmp_path / "swapped.csv")
     for model in ("polach", "kiencke"):
         assert (

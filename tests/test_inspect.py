@@ -4,7 +4,7 @@ import json
 
 import numpy as np
 import pytest
-from logger_data import stretches_si, write_logger_file
+from logger_data import stretches_si, swapped_stretches, write_logger_file
 
 from jadhesion.cli import main
 from jadhesion.data.inspection import MU_IMPLAUSIBLE, identifiability, implausible_adhesion, sampling
@@ -91,13 +91,7 @@ def test_implausible_adhesion_is_named_at_the_95th_percentile():
 def test_inspect_says_when_the_speed_columns_look_swapped(tmp_path, capsys):
     """Wheel and vehicle speed exchanged on both traction stretches: 700 of the 1100 moving samples
     have the wheel slower than the vehicle under traction; inspect names the likely cause first."""
-    cols = stretches_si()
-    index = np.arange(cols["time"].size)
-    which = (index >= 100) & ((index < 500) | (index >= 900))
-    cols["vehicle_speed"], cols["wheel_speed"] = (
-        np.where(which, cols["wheel_speed"], cols["vehicle_speed"]),
-        np.where(which, cols["vehicle_speed"], cols["wheel_speed"]),
-    )
+    cols = swapped_stretches()
     path = save_recording(cols, LOCO_22E, tmp_path / "swapped.csv")
     assert main(["inspect", str(path), "--phase", "braking", "--json"]) == 0
     first = json.loads(capsys.readouterr().out)["identifiability"][0]

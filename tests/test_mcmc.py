@@ -10,8 +10,12 @@ from pathlib import Path
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from logger_data import swapped_stretches
 from scipy import stats
 
+from jadhesion import LOCO_22E
+from jadhesion.cli import main
+from jadhesion.data.recording import save_recording
 from jadhesion.experiments.mcmc_row import table2_row
 from jadhesion.identify.ensemble import ChainTooShortWarning, Diagnostics, run_ensemble
 from jadhesion.identify.laplace import laplace_covariance, lm_optimum
@@ -375,12 +379,6 @@ def test_posterior_default_steps_fit_the_chain_cap_at_any_allowed_walkers():
 def test_cli_posterior_warns_of_the_data_as_fit_does(tmp_path, capsys):
     """60 samples at one creep: the posterior's intervals are the model's extrapolation, and its
     warnings say so with fit's codes; speed columns swapped on most of a run: creep_sign first."""
-    from logger_data import stretches_si
-
-    from jadhesion import LOCO_22E
-    from jadhesion.cli import main
-    from jadhesion.data.recording import save_recording
-
     d = synthetic_dataset(np.random.default_rng(5), THETA, n=60)
     path = tmp_path / "held.csv"
     rows = np.column_stack([np.full(60, 0.004), np.asarray(d.vehicle_speed), np.asarray(d.adhesion)])
@@ -392,13 +390,7 @@ def test_cli_posterior_warns_of_the_data_as_fit_does(tmp_path, capsys):
     assert main(argv) == 0
     assert "warning [narrow_creep_range]: the samples' creep spans only" in capsys.readouterr().out
 
-    cols = stretches_si()
-    index = np.arange(cols["time"].size)
-    which = (index >= 100) & ((index < 500) | (index >= 900))
-    cols["vehicle_speed"], cols["wheel_speed"] = (
-        np.where(which, cols["wheel_speed"], cols["vehicle_speed"]),
-        np.where(which, cols["vehicle_speed"], cols["wheel_speed"]),
-    )
+    cols = swapped_stretches()
     swapped = save_recording(cols, LOCO_22E, tmp_path / "swapped.csv")
     argv = ["posterior", str(swapped), "--phase", "braking", "--walkers", "12", "--steps", "60", "--json"]
     assert main(argv) == 0
