@@ -24,12 +24,11 @@ from ..identify.likelihood import noise_names
 from ..identify.mcmc import sample_posterior
 from ..identify.observer_view import recording_observer_terms
 from ..identify.peak import extrapolation_warning
-from ..identify.polach_fit import PolachFit, fit_polach, require_samples
+from ..identify.polach_fit import fit_polach, require_samples
 from ..identify.polach_residuals import eiv_scale, standardised_residual
-from ..identify.trust import fit_report
+from ..identify.trust import data_warnings as trust_data_warnings
 from ..models.polach import PARAM_NAMES
 from ..plots.posterior import corner_plot, predictive_plot
-from ..status import Status
 from .common import Progress, UserError, emit_json, require_seed, table
 from .loading import load_dataset, load_from_args
 from .posterior import MAX_CHAIN_BYTES, MAX_WALKERS, MIN_WALKERS
@@ -38,8 +37,6 @@ from .posterior import MAX_CHAIN_BYTES, MAX_WALKERS, MIN_WALKERS
 #: fewer than 50 autocorrelation times (:func:`jadhesion.identify.ensemble.run_ensemble`); the
 #: latter's chain fits :data:`.posterior.MAX_CHAIN_BYTES` at any allowed ``--walkers``.
 DEFAULT_STEPS, AUTO_MAX_STEPS = 5000, 20000
-#: The warning codes of :func:`jadhesion.identify.trust.fit_report` that judge the data, not the fit.
-DATA_CODES = ("few_samples", "implausible_adhesion", "narrow_creep_range")
 
 
 def tail_check(data, theta, kappa: float) -> dict:
@@ -56,13 +53,11 @@ def tail_check(data, theta, kappa: float) -> dict:
     return {"excess_kurtosis": excess, "kurtosis_threshold": threshold, "heavy_tails": excess > threshold}
 
 
-def data_warnings(recording, selection, data, theta0, result) -> list:
+def data_warnings(recording, selection, data, result) -> list:
     """``fit``'s warnings {code, params, message} about the data, by its own code: ``creep_sign``
-    (:func:`jadhesion.data.selected.creep_sign_warning`), :data:`DATA_CODES` (``fit_report``'s
-    rules, evaluated at the LM start ``theta0``) and ``peak_extrapolated`` for the posterior's
-    median ``creep_opt`` outside the samples' ``|creep|`` (:func:`.peak.extrapolation_warning`)."""
-    # DATA_CODES read the data only: the start's other numbers (and fit_report's other warnings) do not matter
-    start = PolachFit(np.asarray(theta0), np.nan, np.nan, 0, 0, False, Status.CONVERGED)
+    (:func:`jadhesion.data.selected.creep_sign_warning`), :func:`jadhesion.identify.trust.data_warnings`
+    and ``peak_extrapolated`` for the posterior's median ``creep_opt`` outside the samples'
+    ``|creep|`` (:func:`.peak.extrapolation_warning`)."""
     creep = np.abs(np.asarray(data.creep, float))[valid_mask(data)]
     peak = extrapolation_warning(
         result.derived["creep_opt"]["median"],
@@ -70,7 +65,7 @@ def data_warnings(recording, selection, data, theta0, result) -> list:
         float(creep.max()),
         f" at {result.vehicle_speed:.3g} m/s",
     )
-    found = [w for w in fit_report(data, start)["warnings"] if w["code"] in DATA_CODES]
+    found = trust_data_warnings(data)
     return [w for w in (creep_sign_warning(recording, selection), *found, peak) if w is not None]
 
 
@@ -215,7 +210,7 @@ def run(args) -> int:
     doc = _document(result, theta0, note, "smoothed" if data.slip_sd is not None else "raw")
     doc["tempering"] = tempering
     doc["selection"] = selection.document()
-    found = data_warnings(recording, selection, data, theta0, result)
+    found = data_warnings(recording, selection, data, result)
     doc["warnings"] = ([] if sidecar is None else [sidecar]) + found  # the chain's: diagnostics
     if args.json:
         emit_json(doc)

@@ -103,6 +103,39 @@ def trust_numbers(params, data) -> TrustNumbers:
     return TrustNumbers(cov, lags, speed, peak, peak_jacobian, jnp.max(creep))
 
 
+def data_warnings(data) -> list:
+    """The warnings about the data themselves, whatever was fitted to them (``fit`` and
+    ``posterior`` both report them): ``few_samples``, ``implausible_adhesion`` and
+    ``narrow_creep_range`` (module docstring)."""
+    out = []
+    n = valid_samples(data)
+    if n < RECOMMENDED_SAMPLES:
+        out.append(
+            _warning(
+                "few_samples",
+                [],
+                (f"{n} samples (< {RECOMMENDED_SAMPLES} recommended): errors and intervals are rough"),
+            )
+        )
+    if (note := implausible_adhesion(np.asarray(data.adhesion)[valid_mask(data)])) is not None:
+        out.append(_warning(note["code"], [], note["message"]))
+    creep = np.abs(np.asarray(data.creep, float))[valid_mask(data)]
+    lo, hi = np.percentile(creep, [1, 99]) if creep.size else (0.0, 0.0)
+    if not hi >= CREEP_SPAN * lo:
+        out.append(
+            _warning(
+                "narrow_creep_range",
+                PARAM_NAMES + DERIVED,
+                (
+                    f"the samples' creep spans only {lo:.3g}–{hi:.3g} (1st–99th percentile, less than "
+                    f"a factor {CREEP_SPAN:g}): too narrow to determine the curve's shape; its "
+                    "parameters and peak are the model's extrapolation"
+                ),
+            )
+        )
+    return out
+
+
 def fit_report(data, fit, numbers=None) -> dict:
     """The trust block of a fit of ``data`` (see the module docstring); ``numbers``:
     :func:`trust_numbers` of it when already computed (the command line's kept program), else
@@ -162,31 +195,8 @@ def fit_report(data, fit, numbers=None) -> dict:
                 (f"the solver stopped with status {status.label}: the parameters may not be a minimum"),
             )
         )
-    n = valid_samples(data)
-    if n < RECOMMENDED_SAMPLES:
-        warnings.append(
-            _warning(
-                "few_samples",
-                [],
-                (f"{n} samples (< {RECOMMENDED_SAMPLES} recommended): errors and intervals are rough"),
-            )
-        )
-    if (note := implausible_adhesion(np.asarray(data.adhesion)[valid_mask(data)])) is not None:
-        warnings.append(_warning(note["code"], [], note["message"]))
+    warnings += data_warnings(data)
     creep = np.abs(np.asarray(data.creep, float))[valid_mask(data)]
-    lo, hi = np.percentile(creep, [1, 99]) if creep.size else (0.0, 0.0)
-    if not hi >= CREEP_SPAN * lo:
-        warnings.append(
-            _warning(
-                "narrow_creep_range",
-                PARAM_NAMES + DERIVED,
-                (
-                    f"the samples' creep spans only {lo:.3g}–{hi:.3g} (1st–99th percentile, less than "
-                    f"a factor {CREEP_SPAN:g}): too narrow to determine the curve's shape; its "
-                    "parameters and peak are the model's extrapolation"
-                ),
-            )
-        )
     speed = float(numbers.speed)
     derived, peak_warnings = peak_report(
         numbers.peak,
