@@ -85,6 +85,7 @@ def test_raw_recording_with_standstill_never_nan(capsys, tmp_path):
         (["--a-s", "-3"], "--a-s"),
         (["--a-s", "nan"], "--a-s"),
         (["--a-s", "1e308"], "--a-s"),
+        (["--seed", "99999999999999999999999"], "--seed"),
         (["--algorithm", "3"], None),
     ],
 )

@@ -33,7 +33,7 @@ from ..identify.trust import fit_report
 from ..memory_maps import release_if_near_limit
 from ..models.polach import PARAM_NAMES
 from ..status import status_of
-from .common import UserError, emit_json, require_at_least, table
+from .common import UserError, emit_json, require_at_least, require_seed, table
 from .fit_program import fit_polach, seed_key, to_dataset, trust_numbers
 from .loading import load_dataset, load_from_args
 
@@ -62,7 +62,7 @@ def _ignored_budget(args) -> str | None:
 
 
 def _check_flags(args) -> None:
-    require_at_least("fit", 0, seed=args.seed)
+    require_seed("fit", args.seed)
     require_at_least("fit", 2, pop_size=args.pop_size)
     require_at_least("fit", 1, max_iter=args.max_iter)
     if (note := _ignored_budget(args)) is not None:

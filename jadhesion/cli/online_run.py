@@ -24,7 +24,7 @@ from ..identify.online import (
 )
 from ..plots.online import recording_figure
 from ..status import status_of
-from .common import UserError, emit_json, table
+from .common import UserError, emit_json, require_in_range, require_seed, table
 from .loading import load_from_args
 
 TRACK_FIELDS = ("p1", "p2", "mu_max", "creep_opt", "eta")
@@ -36,11 +36,8 @@ def _finite(v):
 
 
 def run(args) -> int:
-    low, high = (10.0**b for b in A_S_LOG10_BOUNDS)
-    if args.a_s is not None and not low <= args.a_s <= high:  # NaN fails too
-        raise UserError(
-            f"online: --a-s must lie in [{low:g}, {high:g}] (the offline fit's bounds), got {args.a_s}"
-        )
+    require_seed("online", args.seed)
+    require_in_range("online", *(10.0**b for b in A_S_LOG10_BOUNDS), a_s=args.a_s)  # the offline fit's box
     recording = load_from_args(args, args.file)
     if (sidecar := sidecar_warning(recording)) is not None:  # before anything it may explain
         sys.stderr.write(f"jadhesion: warning: {sidecar['message']}\n")
