@@ -38,21 +38,24 @@ from .fit_program import fit_polach, seed_key, to_dataset, trust_numbers
 from .loading import load_dataset, load_from_args
 
 
+def _given_budget(args) -> dict:
+    """The population-budget flags given on the command line (``pop_size``, ``max_iter``)."""
+    return {k: getattr(args, k) for k in ("pop_size", "max_iter") if getattr(args, k) is not None}
+
+
 def _budget(args) -> dict:
     """``--pop-size``/``--max-iter`` as the method's keyword arguments, the registry's defaults
     where not given (:data:`.methods.METHODS`); for a method without them (LM stops at its own
     convergence test, capped inside the fit) they are left out."""
     defaults = METHODS[args.method].defaults
-    given = {k: getattr(args, k) for k in ("pop_size", "max_iter") if getattr(args, k) is not None}
-    return {**defaults, **{k: v for k, v in given.items() if k in defaults}}
+    return {**defaults, **{k: v for k, v in _given_budget(args).items() if k in defaults}}
 
 
 def _ignored_budget(args) -> str | None:
     """The warning for budget flags the method has none of (said, not silently dropped: a script
     may pass one set of flags to every method)."""
     defaults = METHODS[args.method].defaults
-    stray = [f"--{k.replace('_', '-')}" for k in ("pop_size", "max_iter") if getattr(args, k) is not None]
-    stray = [f for f in stray if f[2:].replace("-", "_") not in defaults]
+    stray = [f"--{k.replace('_', '-')}" for k in _given_budget(args) if k not in defaults]
     if not stray:
         return None
     return (
