@@ -35,7 +35,7 @@ from ..models.polach import PARAM_NAMES
 from ..status import status_of
 from .common import UserError, emit_json, require_at_least, require_seed, table
 from .fit_program import fit_polach, seed_key, to_dataset, trust_numbers
-from .loading import load_dataset, load_from_args
+from .loading import load_dataset, load_from_args, say_sidecar_warning
 
 
 def _given_budget(args) -> dict:
@@ -108,8 +108,7 @@ def _load(args, path):
     document says of the recording itself (:func:`_recording_report`). Unknown sidecar keys are
     said on stderr at once, before anything they may explain goes wrong."""
     recording = load_from_args(args, path)
-    if (sidecar := sidecar_warning(recording)) is not None:
-        sys.stderr.write(f"jadhesion: warning: {sidecar['message']}\n")
+    say_sidecar_warning(recording)
     rows = min((len(c) for c in recording.columns.values()), default=0)
     if rows < MIN_SAMPLES:
         raise UserError(

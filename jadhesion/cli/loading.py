@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import dataclasses
+import sys
 
 from ..data.dataset import adhesion_source, to_dataset
 from ..data.recording import Recording, load_recording
 from ..data.segments import trim
 from ..data.selected import selected_dataset
+from ..data.sidecar import sidecar_warning
 
 
 def load_from_args(args, path) -> Recording:
@@ -21,6 +23,15 @@ def load_from_args(args, path) -> Recording:
         )
         recording = dataclasses.replace(recording, notes=recording.notes + (note,))
     return trim(recording, args.start, args.end)
+
+
+def say_sidecar_warning(recording: Recording) -> dict | None:
+    """The recording's ``sidecar_unknown_key`` warning
+    (:func:`jadhesion.data.sidecar.sidecar_warning`), said on stderr as soon as it is loaded,
+    before anything it may explain; ``None`` when its sidecar has no unknown key."""
+    if (warning := sidecar_warning(recording)) is not None:
+        sys.stderr.write(f"jadhesion: warning: {warning['message']}\n")
+    return warning
 
 
 def load_dataset(args, path, build=to_dataset, *, recording: Recording | None = None):

@@ -6,14 +6,12 @@ Unknown sidecar keys are said on stderr as soon as the recording is loaded and l
 from __future__ import annotations
 
 import math
-import sys
 from pathlib import Path
 
 import jax
 import numpy as np
 
 from ..data.selected import tracking_dataset
-from ..data.sidecar import sidecar_warning
 from ..identify.kiencke_fit import A_S_LOG10_BOUNDS
 from ..identify.online import (
     extrapolated_warning,
@@ -25,7 +23,7 @@ from ..identify.online import (
 from ..plots.online import recording_figure
 from ..status import status_of
 from .common import UserError, emit_json, require_in_range, require_seed, table
-from .loading import load_from_args
+from .loading import load_from_args, say_sidecar_warning
 
 TRACK_FIELDS = ("p1", "p2", "mu_max", "creep_opt", "eta")
 
@@ -39,8 +37,7 @@ def run(args) -> int:
     require_seed("online", args.seed)
     require_in_range("online", *(10.0**b for b in A_S_LOG10_BOUNDS), a_s=args.a_s)  # the offline fit's box
     recording = load_from_args(args, args.file)
-    if (sidecar := sidecar_warning(recording)) is not None:  # before anything it may explain
-        sys.stderr.write(f"jadhesion: warning: {sidecar['message']}\n")
+    sidecar = say_sidecar_warning(recording)
     data, selection = tracking_dataset(recording, args.phase)
     out = track_dataset(data, args.algorithm, args.a_s, jax.random.key(args.seed))
     used = np.asarray(out.used)

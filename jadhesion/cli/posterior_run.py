@@ -16,7 +16,6 @@ import jax
 import numpy as np
 
 from ..data.selected import creep_sign_warning
-from ..data.sidecar import sidecar_warning
 from ..identify.batch_fit import valid_mask
 from ..identify.ensemble import ChainTooShortWarning
 from ..identify.laplace import colour_check, initial_spread, lm_optimum
@@ -30,7 +29,7 @@ from ..identify.trust import data_warnings as trust_data_warnings
 from ..models.polach import PARAM_NAMES
 from ..plots.posterior import corner_plot, predictive_plot
 from .common import Progress, UserError, emit_json, require_seed, table
-from .loading import load_dataset, load_from_args
+from .loading import load_dataset, load_from_args, say_sidecar_warning
 from .posterior import MAX_CHAIN_BYTES, MAX_WALKERS, MIN_WALKERS
 
 #: Without ``--steps``: the chain's first length, and the most it is extended to while it holds
@@ -156,8 +155,7 @@ def _check_flags(args) -> None:
 def run(args) -> int:
     _check_flags(args)
     recording = load_from_args(args, args.file)
-    if (sidecar := sidecar_warning(recording)) is not None:  # before anything it may explain
-        sys.stderr.write(f"jadhesion: warning: {sidecar['message']}\n")
+    sidecar = say_sidecar_warning(recording)
     recording, data, selection = load_dataset(args, args.file, recording=recording)
     require_samples(data, args.file)
     if args.likelihood == "observer" and not selection.complete:
