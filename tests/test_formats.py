@@ -160,25 +160,28 @@ def test_cli_bad_input_exits_2_one_line_nothing_written(tmp_path, capsys):
     assert set(tmp_path.iterdir()) == before
 
 
-@pytest.mark.parametrize("style", ["semicolon", "tab"])
+@pytest.mark.parametrize("style", ["semicolon", "tab", "tab-decimal-comma"])
 def test_european_and_tab_separated_text_reads_as_its_comma_twin(csv, tmp_path, style):
     """A spreadsheet in a European locale writes ``;`` between fields and decimal commas; some
-    loggers write tabs. Both read as the comma-separated file, value for value, with a note; a bad
-    cell still names its line."""
+    loggers write tabs, with decimal points or commas. Each reads as the comma-separated file,
+    value for value, with a note; a bad cell still names its line."""
     text = csv.read_text()
     if style == "semicolon":
         text = text.replace(",", ";").replace(".", ",")
     else:
         text = text.replace(",", "\t")
+    if style == "tab-decimal-comma":
+        text = text.replace(".", ",")
     path = _sidecar(csv, tmp_path / f"{style}.csv")
     path.write_text(text)
     rec, ref = load_recording(path), load_recording(csv)
     for k, v in ref.columns.items():
         np.testing.assert_array_equal(rec.columns[k], v)
-    assert any(f"{style}-separated" in n for n in rec.notes)
+    assert any(f"{style.split('-')[0]}-separated" in n for n in rec.notes)
+    assert any("commas as decimal points" in n for n in rec.notes) == (style != "tab")
     lines = text.splitlines()
     lines[40] = lines[40].replace(
-        ";" if style == "semicolon" else "\t", "\tfast" if style == "tab" else ";fast", 1
+        ";" if style == "semicolon" else "\t", ";fast" if style == "semicolon" else "\tfast", 1
     )
     path.write_text("\n".join(lines) + "\n")
     with pytest.raises(RecordingError, match="line 41"):

@@ -342,6 +342,41 @@ def test_units_row_under_the_header(tmp_path):
     assert _message(path) == f"{path}: no data rows after the units row (line 2)"
 
 
+def test_a_row_of_dashes_is_missing_values_not_units(tmp_path):
+    """``-`` is the unit of a dimensionless column, but a row of nothing else under the header is
+    a row of missing values: named as such, not read as units (which made every column's unit
+    '-' and the file a list of unit errors)."""
+    twin = _logger_twin(_si_columns(30), tmp_path / "twin.csv").read_text().splitlines()
+    path = tmp_path / "dashes.csv"
+    path.write_text("\n".join([twin[0], ",".join("-" * len(twin[0].split(","))), *twin[1:]]) + "\n")
+    assert _message(path, LOGGER_MAP) == f"{path}: column 't_ms', row 1 (line 2): '-' is not a number"
+
+
+def _quoted(lines, decimal=","):
+    return [",".join(f'"{c}"'.replace(".", decimal) for c in line.split(",")) for line in lines]
+
+
+def test_quoted_decimal_commas_in_a_comma_separated_file(tmp_path):
+    """A spreadsheet that writes decimal commas but separates fields by commas quotes every
+    number (``"0,489"``): read value for value as its twin with points, with a note. When every
+    such number could also be a thousands group (``"1,500"``), the first is one error line."""
+    cols = _si_columns(30)
+    twin_path = _logger_twin(cols, tmp_path / "twin.csv")
+    twin = twin_path.read_text().splitlines()
+    path = tmp_path / "quoted.csv"
+    path.write_text("\n".join([twin[0], *_quoted(twin[1:])]) + "\n")
+    rec, ref = load_recording(path, columns=LOGGER_MAP), load_recording(twin_path, columns=LOGGER_MAP)
+    for k, v in ref.columns.items():
+        np.testing.assert_array_equal(rec.columns[k], v)
+    assert f"{path}: quoted numbers with decimal commas read with decimal points" in rec.notes
+    header = "time,vehicle_speed,wheel_speed,traction_torque\n"
+    path.write_text(header + '"1,500","2,000","2,000","3,000"\n' * 3)
+    assert _message(path) == (
+        f"{path}: row 1 (line 2), column 1: '1,500' is a decimal comma or a thousands separator; "
+        "write the numbers with a decimal point"
+    )
+
+
 def test_inspect_text_tells_epoch_times_apart(tmp_path, capsys):
     """Times since 1970 (1.7e9 s) at 100 Hz: the text's gap and excluded-stretch bounds are the
     JSON's to the step, not all '1.7e+09'."""

@@ -2,7 +2,9 @@
 pass (pyarrow) for plain files and a precise pass that names the exact row and line of any error.
 
 A units row directly under the header (``s,km/h,rpm,kN*m``: every cell a unit of
-:data:`~.units.UNITS` or empty) is read as if each header were ``name [unit]`` and skipped."""
+:data:`~.units.UNITS` or empty, one a unit other than ``-``) is read as if each header were
+``name [unit]`` and skipped. Quoted numbers with a decimal comma in a comma-separated file
+(``"0,489"``) are read with a decimal point once one cell shows the comma cannot group thousands."""
 
 from __future__ import annotations
 
@@ -18,6 +20,8 @@ from .validate import RAW_COLUMNS, _fail, _is_number
 
 _BLANK_LINE = re.compile(r"\n[ \t\r]*\n")
 _UNIT_KEYS = frozenset().union(*UNITS.values())
+#: A number with one decimal comma and no point (``0,489``, ``-1,5e-3``, ``,5``).
+_DECIMAL_COMMA = re.compile(r"^\s*[+-]?(\d*),(\d+)(?:[eE][+-]?\d+)?\s*$")
 
 
 def _read_text(path: Path, name: str, *, kind: str = "file") -> str:
@@ -56,21 +60,48 @@ def normalise_delimiter(text: str) -> tuple[str, tuple]:
     """``(text, notes)``: a semicolon-separated file (European spreadsheets and loggers, with
     decimal commas) or a tab-separated one rewritten as comma-separated with decimal points, so
     every reader and every error's line number stay as they are. Sniffed from the header line:
-    more ``;`` (or tabs) than commas. Comma-separated text comes back unchanged."""
+    more ``;`` (or tabs) than commas; a tab-separated file's commas are decimal commas. Comma-
+    separated text comes back unchanged."""
     header = header_line(text)
     commas = header.count(",")
     if header.count(";") > commas:
         note = "read as semicolon-separated, commas as decimal points"
         return text.replace(",", ".").replace(";", ","), (note,)
     if header.count("\t") > commas:
+        if "," in text:
+            note = "read as tab-separated, commas as decimal points"
+            return text.replace(",", ".").replace("\t", ","), (note,)
         return text.replace("\t", ","), ("read as tab-separated",)
     return text, ()
 
 
 def _is_units_row(fields) -> bool:
-    """Whether every cell is a unit of :data:`~.units.UNITS` or empty, and one is a unit."""
+    """Whether every cell is a unit of :data:`~.units.UNITS` or empty, and one is a unit other
+    than ``-`` (a row of ``-`` is a row of missing values)."""
     units = [unit_key(f) for f in fields if f.strip()]
-    return bool(units) and all(u in _UNIT_KEYS for u in units)
+    return any(u != "-" for u in units) and all(u in _UNIT_KEYS for u in units)
+
+
+def _decimal_commas(rows, lines, name: str) -> tuple[list, tuple]:
+    """``(rows, notes)`` with quoted decimal-comma numbers (:data:`_DECIMAL_COMMA`) written with a
+    point, when one of them cannot be a thousands group (a leading 0 or none, more than three
+    digits before the comma, or other than three after it); when every one could (``"1,500"``:
+    1.5 or 1500?), the first raises."""
+    found = [(i, j) for i, row in enumerate(rows) for j, cell in enumerate(row) if _DECIMAL_COMMA.match(cell)]
+    if not found:
+        return rows, ()
+    parts = (_DECIMAL_COMMA.match(rows[i][j]).groups() for i, j in found)
+    if not any(len(after) != 3 or len(before) > 3 or before.lstrip("0") != before for before, after in parts):
+        i, j = found[0]
+        raise _fail(
+            name,
+            f"row {i + 1} (line {lines[i]}), column {j + 1}: {rows[i][j].strip()!r} is a decimal comma or a "
+            "thousands separator; write the numbers with a decimal point",
+        )
+    rows = [list(row) for row in rows]
+    for i, j in found:
+        rows[i][j] = rows[i][j].replace(",", ".")
+    return rows, ("quoted numbers with decimal commas read with decimal points",)
 
 
 def _with_unit(column: str, cell: str, name: str, line: int) -> str:
@@ -89,9 +120,10 @@ def _with_unit(column: str, cell: str, name: str, line: int) -> str:
 
 
 def _parse_rows(text: str, name: str):
-    """Header, data rows and their 1-based line numbers; skips blank and ``#`` lines, an unnamed
-    last column without a value in any row (a delimiter ending every line) and a units row
-    (:func:`_is_units_row`) after the header, its units joined to the header's names."""
+    """Header, data rows, their 1-based line numbers and notes; skips blank and ``#`` lines, an
+    unnamed last column without a value in any row (a delimiter ending every line) and a units row
+    (:func:`_is_units_row`) after the header, its units joined to the header's names; reads quoted
+    decimal commas (:func:`_decimal_commas`)."""
     header, rows, lines = None, [], []
     reader = csv.reader(io.StringIO(text, newline=""))
     try:
@@ -139,7 +171,8 @@ def _parse_rows(text: str, name: str):
         if len(rows) == 1:
             raise _fail(name, f"no data rows after the units row (line {lines[0]})")
         rows, lines = rows[1:], lines[1:]
-    return header, rows, lines
+    rows, notes = _decimal_commas(rows, lines, name)
+    return header, rows, lines, notes
 
 
 def _float_column(column) -> np.ndarray:

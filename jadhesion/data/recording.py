@@ -210,7 +210,8 @@ def load_recording(path, *, columns=(), axle=None, max_speed: float = MAX_SPEED)
         text, delimiter_notes = normalise_delimiter(_read_text(path, name))
         fast, read_notes = _fast_parse(text), tuple(f"{name}: {n}" for n in delimiter_notes)
         if fast is None:
-            header, rows, lines = _parse_rows(text, name)
+            header, rows, lines, row_notes = _parse_rows(text, name)
+            read_notes += tuple(f"{name}: {n}" for n in row_notes)
             cells = np.array(rows, dtype=str)
         else:
             header, parsed, lines = fast
