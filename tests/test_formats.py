@@ -70,6 +70,31 @@ def test_round_trip_gives_the_csv_dataset(csv, tmp_path, fmt):
         np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
 
 
+@pytest.mark.parametrize("fmt", ["mat5", "mat73"])
+def test_mat_struct_reads_as_its_fields(csv, tmp_path, fmt):
+    """A MATLAB logger often saves one struct (``Messung.t_ms``, …; v7.3: a group): its fields
+    are the columns, by their own names; a name two fields share is dotted in full."""
+    cols = logger_columns(stretches_si())
+    path = _sidecar(csv, tmp_path / "struct.mat")
+    if fmt == "mat5":
+        scipy.io.savemat(
+            path, {"Messung": {**{k: v.reshape(-1, 1) for k, v in cols.items()}, "info": {"rate_hz": 100.0}}}
+        )
+    else:
+        with h5py.File(path, "w") as f:
+            group = f.create_group("Messung")
+            for k, v in cols.items():
+                group.create_dataset(k, data=v.reshape(1, -1))
+            f.create_dataset("t_ms", data=cols["t_ms"].reshape(1, -1))
+    rec, ref = load_recording(path), load_recording(csv)
+    for k, v in ref.columns.items():
+        np.testing.assert_array_equal(rec.columns[k], v)
+    if fmt == "mat73":  # two 't_ms': the field is dotted in full, the variable keeps its name
+        mapped = load_recording(path, columns=["time=Messung.t_ms[ms]"])
+        assert rec.sources["time"] == "t_ms[ms]" and mapped.sources["time"] == "Messung.t_ms[ms]"
+        np.testing.assert_array_equal(mapped.columns["time"], ref.columns["time"])
+
+
 def test_cli_inspect_reads_parquet_with_column_flags(csv, tmp_path, capsys):
     path = write_parquet(logger_columns(stretches_si()), tmp_path / "log.parquet")  # no sidecar
     argv = ["inspect", str(path), "--json"] + [x for c in LOGGER_MAP for x in ("--column", c)]

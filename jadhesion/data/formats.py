@@ -9,7 +9,9 @@ names in file order and float64 arrays (``None`` for a column that is not numeri
 * **.mat**: one variable a signal, a numeric vector (``n×1`` or ``1×n``); the row count is the
   length most variables share; scalars, matrices and vectors of another length are ignored (listed
   in the notes); a complex vector is a column that is not numeric (named as complex in the notes);
-  ``__header__``-style entries and v7.3's ``#refs#`` are skipped.
+  ``__header__``-style entries and v7.3's ``#refs#`` are skipped. A struct (v7.3: a group) stands
+  for its fields, at any depth: each is named by its field name, or ``struct.field`` where two
+  share a name.
 
 The optional packages are imported only here, only when such a file is read; a missing one is a
 one-line error naming the extra to install.
@@ -80,19 +82,38 @@ def _listed(keys) -> str:
     return f"variable{'s' if len(keys) > 1 else ''} {', '.join(map(repr, keys))}"
 
 
+def _scipy_fields(key: str, value) -> list:
+    """``[(path, array)]`` of a scipy.io variable: itself, or a 1×1 struct's fields at any depth
+    (``path`` a tuple of names)."""
+    value = np.asarray(value)
+    if value.dtype.names is None or value.size != 1:
+        return [((key,), value)]
+    record = value.reshape(-1)[0]
+    return [((key, *sub), v) for f in value.dtype.names for sub, v in _scipy_fields(f, record[f])]
+
+
+def _short_names(variables: list) -> dict:
+    """``{name: array}``: each field by its last name, or dotted in full where two share it."""
+    last = Counter(path[-1] for path, _ in variables)
+    return {(path[-1] if last[path[-1]] == 1 else ".".join(path)): v for path, v in variables}
+
+
 def _mat_variables(path: Path, name: str) -> dict:
     try:  # optional dependency (extra ``mat``)
         import h5py
     except ImportError:
         h5py = None
     if h5py is not None and h5py.is_hdf5(path):  # MATLAB v7.3
+        found = []
+
+        def dataset(key, obj):
+            if isinstance(obj, h5py.Dataset) and not key.startswith("#"):
+                found.append((tuple(key.split("/")), _complex(np.asarray(obj))))
+
         try:
             with h5py.File(path, "r") as f:
-                return {
-                    k: _complex(np.asarray(v))
-                    for k, v in f.items()
-                    if isinstance(v, h5py.Dataset) and not k.startswith("#")
-                }
+                f.visititems(dataset)
+            return _short_names(found)
         except OSError as exc:  # h5py's error for a truncated or corrupt HDF5 file
             raise _unreadable_mat(name, exc) from None
     try:
@@ -106,7 +127,7 @@ def _mat_variables(path: Path, name: str) -> dict:
         raise _missing(name, "h5py (MATLAB v7.3 files)", "mat") from None
     except (MatReadError, ValueError, OSError, TypeError) as exc:  # MatReadError: empty or truncated
         raise _unreadable_mat(name, exc) from None
-    return {k: v for k, v in data.items() if not k.startswith("__")}
+    return _short_names([f for k, v in data.items() if not k.startswith("__") for f in _scipy_fields(k, v)])
 
 
 def _mat(path: Path, name: str):
