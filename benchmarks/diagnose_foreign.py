@@ -78,6 +78,8 @@ def main(argv=None) -> int:
                         "verdict": d["verdict"],
                         "verdict_set": d["verdict_set"],
                         "recovered": recovered,
+                        "base_mu0": d["base"]["params"]["mu0"],
+                        "warnings": [w["code"] for w in d["warnings"]],
                         "top": [
                             {k: c[k] for k in ("name", "gain", "sse_reduction", "p_value", "status")}
                             for c in d["candidates"][:3]

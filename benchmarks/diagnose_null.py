@@ -47,6 +47,7 @@ def summary_of(d: dict) -> dict:
         ],
         "critical_sse_reduction": d["null"]["critical_sse_reduction"],
         "base_status": d["base"]["status"],
+        "base_mu0": d["base"]["params"]["mu0"],
         "generic_gain": d["generic"]["gain"],
         "generic_used": d["generic"]["used"],
         "warnings": [w["code"] for w in d["warnings"]],
