@@ -156,6 +156,13 @@ FLAGS = [
     (["fit", "{rec}", "--max-iter", "0"], "--max-iter"),
     (["fit", "{rec}", "--seed", "-1"], "--seed"),
     (["fit", "{rec}", "--plot", "{rec}"], "--plot"),
+    # a figure folder under a file: refused before the work (was an OSError line after it, no flag)
+    (["fit", "{rec}", "--plot", "{rec}/sub"], "--plot"),
+    (["inspect", "{rec}", "--plot", "{rec}/sub"], "--plot"),
+    (["online", "{rec}", "--plot", "{rec}"], "--plot"),
+    (["posterior", "{rec}", "--plot", "{rec}"], "--plot"),
+    (["diagnose", "{rec}", "--report", "{rec}"], "--report"),
+    (["reproduce", "online", "--runs", "1", "--plot", "{rec}"], "--plot"),
     (["posterior", "{rec}", "--walkers", "0"], "--walkers"),
     (["posterior", "{rec}", "--walkers", "514", "--steps", "50"], "--walkers"),  # above 512
     (["posterior", "{rec}", "--steps", "0"], "--steps"),
@@ -216,3 +223,13 @@ def test_lm_says_it_ignores_a_population_budget(capsys, recording):
     )
     assert code == 0 and json.loads(out)["method"] == "lm"
     assert "--max-iter" in err and "ignored" in err and "--pop-size" not in err
+
+
+def test_fit_out_onto_a_directory_is_refused_before_anything_is_written(tmp_path, capsys, recording):
+    """``--out`` naming an existing directory: one line naming the flag, before the fit (was an
+    OSError naming a temporary file after it, with ``--plot``'s figure already written)."""
+    (tmp_path / "table.csv").mkdir()
+    argv = ["fit", recording, "--method", "lm", "--out", tmp_path / "table.csv", "--plot", tmp_path / "fig"]
+    code, out, err = run_main(capsys, argv)
+    assert_one_line_exit_2(code, out, err, ["--out", "is a directory"])
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["table.csv"]

@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import math
 import sys
+from pathlib import Path
 
 from ..errors import InputError as UserError  # noqa: F401  (re-exported for command modules)
 from ..report.text import table  # noqa: F401  (re-exported for command modules)
@@ -38,6 +39,19 @@ def require_in_range(command: str, lo, hi, **flags) -> None:
 def require_seed(command: str, seed) -> None:
     """``--seed`` in [0, :data:`SEED_MAX`], the one rule of every command's seed."""
     require_in_range(command, 0, SEED_MAX, seed=seed)
+
+
+def require_output_dir(command: str, flag: str, value) -> None:
+    """Raise :class:`UserError` unless ``--flag DIR`` (given, not None) can hold the command's
+    files: a directory, or a missing one whose nearest existing ancestor is a directory. Checked
+    before any work, so a bad one never wastes it or leaves other outputs half written."""
+    if value is None:
+        return
+    path = Path(value)
+    existing = next(p for p in (path, *path.parents) if p.exists())
+    if not existing.is_dir():
+        where = "exists" if existing == path else f"{existing} exists"
+        raise UserError(f"{command}: --{flag} {value}: {where} and is not a directory")
 
 
 def _plain(obj):

@@ -19,7 +19,7 @@ from ..data.segments import select
 from ..data.selected import zero_creep_message
 from ..diagnose import diagnose
 from ..diagnose.null import N_REPLICAS
-from .common import UserError, emit_json, require_at_least, require_seed, table
+from .common import UserError, emit_json, require_at_least, require_output_dir, require_seed, table
 from .loading import load_from_args
 
 
@@ -55,6 +55,7 @@ def diagnose_file(
 def run(args) -> int:
     require_seed("diagnose", args.seed)
     require_at_least("diagnose", 0, replicas=args.replicas)
+    require_output_dir("diagnose", "report", args.report)
     start = time.perf_counter()
     result, _ = diagnose_file(
         args.file, args.column, args.axle, args.phase, args.start, args.end, args.replicas, args.seed

@@ -33,7 +33,7 @@ from ..identify.trust import fit_report
 from ..memory_maps import release_if_near_limit
 from ..models.polach import PARAM_NAMES
 from ..status import status_of
-from .common import UserError, emit_json, require_at_least, require_seed, table
+from .common import UserError, emit_json, require_at_least, require_output_dir, require_seed, table
 from .fit_program import fit_polach, seed_key, to_dataset, trust_numbers
 from .loading import load_dataset, load_from_args, say_sidecar_warning
 
@@ -70,14 +70,15 @@ def _check_flags(args) -> None:
     require_at_least("fit", 1, max_iter=args.max_iter)
     if (note := _ignored_budget(args)) is not None:
         sys.stderr.write(f"jadhesion: warning: {note}\n")
-    if args.plot is not None and Path(args.plot).exists() and not Path(args.plot).is_dir():
-        raise UserError(f"fit: --plot {args.plot}: exists and is not a directory")
+    require_output_dir("fit", "plot", args.plot)
     if args.out is not None:
         out = Path(args.out)
         if out.suffix.lower() != ".csv":
             raise UserError(f"fit: --out {args.out}: must name a .csv file")
         if not out.parent.is_dir():
             raise UserError(f"fit: --out {args.out}: directory {out.parent} does not exist")
+        if out.is_dir():
+            raise UserError(f"fit: --out {args.out}: is a directory")
 
 
 # ---- which files ------------------------------------------------------------------------------

@@ -11,7 +11,7 @@ from ..data.inspection import inspect_document
 from ..data.segments import select
 from ..data.selected import per_stretch_dataset
 from ..plots.recording import recording_overview
-from .common import UserError, emit_json
+from .common import emit_json, require_output_dir
 from .loading import load_from_args
 
 
@@ -62,8 +62,7 @@ def _text(doc) -> str:
 
 def run(args) -> int:
     """Inspect one recording and print (or ``--json``) what it holds."""
-    if args.plot is not None and Path(args.plot).exists() and not Path(args.plot).is_dir():
-        raise UserError(f"inspect: --plot {args.plot}: exists and is not a directory")
+    require_output_dir("inspect", "plot", args.plot)
     recording = load_from_args(args, args.file)
     selection = select(recording, args.phase)
     full = per_stretch_dataset(recording, selection)

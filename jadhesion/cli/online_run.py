@@ -22,7 +22,7 @@ from ..identify.online import (
 )
 from ..plots.online import recording_figure
 from ..status import status_of
-from .common import UserError, emit_json, require_in_range, require_seed, table
+from .common import UserError, emit_json, require_in_range, require_output_dir, require_seed, table
 from .loading import load_from_args, say_sidecar_warning
 
 TRACK_FIELDS = ("p1", "p2", "mu_max", "creep_opt", "eta")
@@ -36,6 +36,7 @@ def _finite(v):
 def run(args) -> int:
     require_seed("online", args.seed)
     require_in_range("online", *(10.0**b for b in A_S_LOG10_BOUNDS), a_s=args.a_s)  # the offline fit's box
+    require_output_dir("online", "plot", args.plot)
     recording = load_from_args(args, args.file)
     sidecar = say_sidecar_warning(recording)
     data, selection = tracking_dataset(recording, args.phase)

@@ -28,7 +28,7 @@ from ..identify.polach_residuals import eiv_scale, standardised_residual
 from ..identify.trust import data_warnings as trust_data_warnings
 from ..models.polach import PARAM_NAMES
 from ..plots.posterior import corner_plot, predictive_plot
-from .common import Progress, UserError, emit_json, require_seed, table
+from .common import Progress, UserError, emit_json, require_output_dir, require_seed, table
 from .loading import load_dataset, load_from_args, say_sidecar_warning
 from .posterior import MAX_CHAIN_BYTES, MAX_WALKERS, MIN_WALKERS
 
@@ -135,6 +135,7 @@ def chain_bytes(walkers: int, steps: int, likelihood: str) -> int:
 def _check_flags(args) -> None:
     """Refuse a bad flag before any work."""
     require_seed("posterior", args.seed)
+    require_output_dir("posterior", "plot", args.plot)
     if not (MIN_WALKERS <= args.walkers <= MAX_WALKERS and args.walkers % 2 == 0):
         raise UserError(
             f"posterior: --walkers must be an even number in [{MIN_WALKERS}, {MAX_WALKERS}], "

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from ..experiments import online, online_text, table2, table2_text
 from ..experiments.mcmc_row import MCMC_MIN_STEPS
-from .common import Progress, UserError, emit_json, require_at_least
+from .common import Progress, UserError, emit_json, require_at_least, require_output_dir
 
 
 def run(args) -> int:
@@ -14,6 +14,7 @@ def run(args) -> int:
     require_at_least("reproduce", MCMC_MIN_STEPS, mcmc_steps=args.mcmc_steps)
     if not args.sensor_noise >= 0.0:
         raise UserError(f"reproduce: --sensor-noise must be >= 0, got {args.sensor_noise}")
+    require_output_dir("reproduce", "plot", args.plot)
     out = {}
     if args.target in (None, "table2"):
         with Progress(label="table2", unit="cells") as progress:
