@@ -17,8 +17,9 @@ def enable_x64() -> None:
 
 
 def compilation_cache_dir() -> Path:
-    """The persistent compilation cache: ``$JADHESION_CACHE`` or ``~/.cache/jadhesion/xla``."""
-    return Path(os.environ.get("JADHESION_CACHE", Path.home() / ".cache" / "jadhesion" / "xla"))
+    """The persistent compilation cache: ``$JADHESION_CACHE`` or, where it is unset or empty (not the
+    current directory), ``~/.cache/jadhesion/xla``."""
+    return Path(os.environ.get("JADHESION_CACHE") or Path.home() / ".cache" / "jadhesion" / "xla")
 
 
 def program_cache_dir() -> Path:

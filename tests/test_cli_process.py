@@ -1,5 +1,7 @@
-"""How a command ends when its reader or its user stops it: a closed pipe, Ctrl-C."""
+"""How a command ends when its reader or its user stops it (a closed pipe, Ctrl-C), and when its
+compilation cache cannot be made."""
 
+import json
 import os
 import subprocess
 import sys
@@ -54,3 +56,39 @@ def test_ctrl_c_is_one_line_and_exit_130(capsys, monkeypatch, creepage_csv, comm
     err = capsys.readouterr().err
     assert err.strip().splitlines() == [err.strip()] and f"{command} interrupted" in err
     assert ("resume" in err) is hint
+
+
+def _inspect(creepage_csv, cwd, **env):
+    return subprocess.run(
+        [sys.executable, "-m", "jadhesion", "inspect", str(creepage_csv), "--json"],
+        env={**os.environ, **env},
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+
+
+@pytest.mark.parametrize("where", ["file", "under_file"])
+def test_a_cache_that_cannot_be_made_is_one_warning_not_a_traceback(tmp_path, creepage_csv, where):
+    """``JADHESION_CACHE`` naming a file (or a folder under one): the command runs without the
+    cache and says so in one line (was a FileExistsError/NotADirectoryError traceback, exit 1,
+    in every command)."""
+    blocker = tmp_path / "blocker"
+    blocker.write_text("")
+    cache = blocker if where == "file" else blocker / "xla"
+    proc = _inspect(creepage_csv, tmp_path, JADHESION_CACHE=str(cache))
+    assert proc.returncode == 0 and json.loads(proc.stdout)["samples"] == 60
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and "warning" in lines[0] and "JADHESION_CACHE" in lines[0], proc.stderr
+
+
+def test_an_empty_cache_variable_is_the_default_not_the_current_directory(tmp_path, creepage_csv):
+    """``JADHESION_CACHE=`` (set, empty) means the default ``~/.cache/jadhesion/xla``; it was
+    ``Path("")``, the current directory, which filled with compiled programs."""
+    work, home = tmp_path / "work", tmp_path / "home"
+    work.mkdir()
+    proc = _inspect(creepage_csv, work, JADHESION_CACHE="", HOME=str(home))
+    assert proc.returncode == 0, proc.stderr
+    assert list(work.iterdir()) == []
+    assert (home / ".cache" / "jadhesion" / "xla").is_dir()

@@ -13,7 +13,9 @@ Every command takes ``--json``. Bad input raises :class:`UserError` (or a :class
 subclass from the data layer): one line on stderr, exit code 2, nothing written. A reader that
 closes the pipe early (``jadhesion inspect run.csv --json | head -1``) ends the command quietly
 with exit code 1, Python's convention for EPIPE; Ctrl-C ends it with one line and exit code 130
-(a sweep resumes from its finished chunks when run again).
+(a sweep resumes from its finished chunks when run again). A compilation cache that cannot be
+made (``JADHESION_CACHE``, or ``~/.cache``, a file or not writable) is one warning line, and the
+command runs without it.
 """
 
 from __future__ import annotations
@@ -68,7 +70,13 @@ def main(argv=None) -> int:
     command = argv[0] if argv and argv[0] in COMMANDS else None
     args = build_parser(command).parse_args(argv)
     enable_x64()
-    enable_compilation_cache()
+    try:
+        enable_compilation_cache()
+    except OSError as exc:  # a cache that cannot be made never stops a command; it is said
+        sys.stderr.write(
+            f"jadhesion: warning: no compilation cache ({exc}); every program is compiled anew: "
+            "set JADHESION_CACHE to a writable directory\n"
+        )
     try:
         return int(_handler(args)(args) or 0)
     except BrokenPipeError:
