@@ -166,6 +166,8 @@ FLAGS = [
     (["posterior", "{rec}", "--walkers", "0"], "--walkers"),
     (["posterior", "{rec}", "--walkers", "514", "--steps", "50"], "--walkers"),  # above 512
     (["posterior", "{rec}", "--steps", "0"], "--steps"),
+    # ar1 and observer sample 7 coordinates: emcee's RuntimeError traceback below 14 walkers
+    (["posterior", "{rec}", "--likelihood", "ar1", "--walkers", "12", "--steps", "50"], "--walkers"),
     (["posterior", "{rec}", "--steps", "100000000"], "143 GiB"),  # was an ArrayMemoryError
     (["posterior", "{rec}", "--seed", "-1"], "--seed"),  # was NumPy's SeedSequence traceback
     (["diagnose", "{rec}", "--seed", "-1"], "--seed"),

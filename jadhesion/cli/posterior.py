@@ -57,7 +57,8 @@ def register(sub) -> None:
         "--walkers",
         type=int,
         default=32,
-        help=f"ensemble size, even, {MIN_WALKERS} to {MAX_WALKERS} (default 32)",
+        help=f"ensemble size, even, {MIN_WALKERS} (14 for ar1 and observer: 2 per coordinate) to "
+        f"{MAX_WALKERS} (default 32)",
     )
     p.add_argument(
         "--steps",

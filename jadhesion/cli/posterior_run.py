@@ -125,20 +125,27 @@ def _document(result, theta0, note="", creep="raw") -> dict:
     }
 
 
+def coordinates(likelihood: str) -> int:
+    """Coordinates the ``likelihood``'s chain samples: the five Polach parameters and its noise
+    ones (``auto`` samples the Gaussian's)."""
+    return len(PARAM_NAMES) + len(noise_names("gauss" if likelihood == "auto" else likelihood))
+
+
 def chain_bytes(walkers: int, steps: int, likelihood: str) -> int:
-    """Memory [B] of a chain of ``steps`` × ``walkers`` of the ``likelihood``'s coordinates
-    (the five Polach parameters and its noise ones; ``auto`` samples the Gaussian's)."""
-    coordinates = len(PARAM_NAMES) + len(noise_names("gauss" if likelihood == "auto" else likelihood))
-    return walkers * steps * coordinates * 8
+    """Memory [B] of a chain of ``steps`` × ``walkers`` of the ``likelihood``'s coordinates."""
+    return walkers * steps * coordinates(likelihood) * 8
 
 
 def _check_flags(args) -> None:
     """Refuse a bad flag before any work."""
     require_seed("posterior", args.seed)
     require_output_dir("posterior", "plot", args.plot)
-    if not (MIN_WALKERS <= args.walkers <= MAX_WALKERS and args.walkers % 2 == 0):
+    # emcee's stretch move needs at least two walkers per coordinate (ar1 and observer sample 7)
+    least = max(MIN_WALKERS, 2 * coordinates(args.likelihood))
+    if not (least <= args.walkers <= MAX_WALKERS and args.walkers % 2 == 0):
+        why = "" if least == MIN_WALKERS else f" with --likelihood {args.likelihood} (2 per coordinate)"
         raise UserError(
-            f"posterior: --walkers must be an even number in [{MIN_WALKERS}, {MAX_WALKERS}], "
+            f"posterior: --walkers must be an even number in [{least}, {MAX_WALKERS}]{why}, "
             f"got {args.walkers}"
         )
     if args.steps is None:
