@@ -12,6 +12,7 @@ This module defines the arguments only; :mod:`.reproduce_run` does the work.
 from __future__ import annotations
 
 from . import COMMANDS
+from .simulate import MAX_SENSOR_NOISE
 
 
 def register(sub) -> None:
@@ -42,7 +43,8 @@ def register(sub) -> None:
         type=float,
         default=1.0,
         metavar="SCALE",
-        help="table2: scale of the realistic sensor noise (jadhesion.data.sensors; default 1)",
+        help=f"table2: scale of the realistic sensor noise, 0 (none) to {MAX_SENSOR_NOISE:g} "
+        "(jadhesion.data.sensors; default 1)",
     )
     p.add_argument("--plot", metavar="DIR", default=None, help="write figures into DIR")
     p.add_argument("--json", action="store_true", help="one JSON document on stdout")
