@@ -14,8 +14,8 @@ could detect and the run that would expose it: :mod:`.sensitivity`), ``residual_
 the base residual per signal), ``errors_in_variables`` (the noise levels behind the fits'
 effective-variance weights, :func:`.fitting.eiv_weights`),
 ``warnings`` (``code``, ``message``: an unconverged base fit, candidates whose fits did not
-converge — their ``p_value`` is null, they are never ranked — a null too small or none, and a null at
-its widest),
+converge — their ``p_value`` is null, they are never ranked — a null too small or none, a null at
+its widest, and a base fit at the identification box's edge whose replicas come from the fit past it),
 ``explanation``; and ``_series`` (arrays for the report; not JSON, dropped by the CLI).
 """
 
@@ -124,7 +124,9 @@ def _warnings(result: dict) -> list:
     """How far to trust the decision: ``[{"code", "message", ...}]`` for a base fit that did not
     converge, candidates whose fits did not converge (untested, never ranked; those whose in-sample
     SSE reduction exceeds the null's critical value named in ``above_critical``), a null too small
-    to reject at α or none at all (``--replicas``), and a null at its widest (γ = 0,
+    to reject at α or none at all (``--replicas``), a base fit at the identification box's edge
+    whose release lowers the SSE strongly (ΔBIC below −:data:`.select.BIC_SEPARATION`; the
+    replicas' curve, :func:`.fitting.fit_truth`), and a null at its widest (γ = 0,
     :func:`.null.replicas`)."""
     out = []
     if result["base"]["status"] != "converged":
@@ -171,6 +173,19 @@ def _warnings(result: dict) -> list:
                 "message": f"with {replicas} replicas the smallest p-value is 1/{replicas + 1} = "
                 f"{1.0 / (replicas + 1):.2f} > {null.ALPHA:g}: no candidate can be named "
                 f"(at least {round(1.0 / null.ALPHA) - 1} replicas are needed)",
+            }
+        )
+    truth = result["null"]["truth"]
+    if truth["delta_bic"] < -select.BIC_SEPARATION:
+        past = {k: truth["params"][k] for k in fitting.OPEN_ABOVE}
+        out.append(
+            {
+                "code": "base_at_box_edge",
+                "message": "the base fit sits at the identification box's upper edge ([0, 1]); past it ("
+                + ", ".join(f"{k} = {v:.3g}" for k, v in past.items())
+                + f") the plain Polach model lowers the SSE by {truth['sse_reduction']:.0%} (ΔBIC "
+                f"{truth['delta_bic']:.0f}): the replicas are re-synthesised from that fit, so they carry "
+                "the box's misfit as this recording does, and the null is wider accordingly",
             }
         )
     noise = result["null"]["noise"]
@@ -263,13 +278,15 @@ def diagnose(
     names1 = ["none"] + list(ext.NAMES)
     observed = null.statistic(t1)
     p_values, noise, critical = [None] * len(sets1), None, None
+    p_truth, box_gain = p_base, 0.0
     if n_replicas:
+        p_truth, box_gain = fitting.fit_truth(padded, n_valid, p_base)
         null_stats, noise = null.null_statistics(
             columns,
             np.asarray(sig.weight),
             latent,
             vehicle,
-            p_base,
+            p_truth,
             tau_th,
             _round_rows(p0, sets1),
             _merger(sets1),
@@ -366,8 +383,14 @@ def diagnose(
             "alpha": null.ALPHA,
             "noise": noise,
             "critical_sse_reduction": critical,
+            "truth": {
+                "params": _row(p_truth, none, sig, tau_th),
+                "sse_reduction": box_gain,
+                "delta_bic": float(n_eff * np.log1p(-box_gain)),
+            },
             "method": "parametric bootstrap on this recording (measured speeds, torque from the base "
-            "fit along the smoothed creep), max-T p-values of the in-sample SSE reduction",
+            "fit, or past the identification box's edge where it sits there, along the smoothed creep), "
+            "max-T p-values of the in-sample SSE reduction",
         },
         "errors_in_variables": {
             "method": "effective-variance weights 1/sqrt(target_sd^2 + slope^2 slip_sd^2)",

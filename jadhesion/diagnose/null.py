@@ -10,8 +10,11 @@ wheel speed. What slip error is left is weighted by Orear's effective variance
 
 **Re-synthesis.** A replica keeps the recording's measured speeds (so its regressors are the
 recording's) and replaces the torque by what a clean Polach wheelset would have needed along a
-"true" creep path: the base fit's adhesion along the speeds ``x̄ + γ (x̂ − x̄)``, where ``x̂`` are
-the latent speeds and ``x̄`` their centred moving average over ±:data:`SLOW_HALF_WIDTH_S`. The
+"true" creep path: the base fit's adhesion (where the base fit sits at the identification box's
+upper edge in μ0, the fit past that edge, :func:`jadhesion.diagnose.fitting.fit_truth`: the
+replicas then carry the box's misfit as the recording does) along the speeds ``x̄ + γ (x̂ − x̄)``,
+where ``x̂`` are the latent speeds and ``x̄`` their centred moving average over
+±:data:`SLOW_HALF_WIDTH_S`. The
 regressor then differs from the replica's truth by ``(1 − γ)(x̂ − x̄)``: *classical* errors in
 variables (the truth is the smoother, slower path; the regressor scatters about it), which dilute
 Polach's slope and push an intercept into the fits as the recording's own sensor errors do. (A truth
@@ -166,10 +169,12 @@ def error_share(data_power: float, torque_power: float, power_of) -> float:
     return 0.0
 
 
-def replicas(torque, measured, vehicle: Vehicle, p_base, n_replicas: int, seed: int, latent) -> tuple:
+def replicas(torque, measured, vehicle: Vehicle, p_truth, n_replicas: int, seed: int, latent) -> tuple:
     """``(replica torques [N·m], {"torque": noise model, "gamma": γ})``: measured speeds kept (so
     the regressors, the latent speeds and slip sd ``latent = (v̂, v̂_w, sd_w)``, are the
-    recording's), torque re-synthesised from the base fit along the speeds ``x̄ + γ (x̂ − x̄)``
+    recording's), torque re-synthesised from the Polach curve ``p_truth`` (the base fit, or where
+    that sits at the identification box's edge the fit past it:
+    :func:`jadhesion.diagnose.fitting.fit_truth`) along the speeds ``x̄ + γ (x̂ − x̄)``
     with no slip error (module docstring). ``torque``: the recording's; ``measured``: its
     :class:`Signals` on the latent speeds, whose weights select the samples γ is matched on."""
     torque = np.asarray(torque, float)
@@ -184,7 +189,7 @@ def replicas(torque, measured, vehicle: Vehicle, p_base, n_replicas: int, seed: 
 
     def path_mu(gamma):
         v, vw = (xs + gamma * (x - xs) for xs, x in zip(slow, latent[:2], strict=True))
-        return np.asarray(ext.predict(np.asarray(p_base), none, exact._replace(speed=v, wheel_speed=vw))[1])
+        return np.asarray(ext.predict(np.asarray(p_truth), none, exact._replace(speed=v, wheel_speed=vw))[1])
 
     mu_fit = path_mu(1.0)
     torque_power = (2.0 * model["sigma"] ** 2 + model["q"] ** 2 / 6.0) / scale**2
@@ -200,7 +205,17 @@ def replicas(torque, measured, vehicle: Vehicle, p_base, n_replicas: int, seed: 
 
 
 def null_statistics(
-    columns, mask, latent, vehicle, p_base, tau_heat, rows, merge, n_valid: int, n_replicas=N_REPLICAS, seed=0
+    columns,
+    mask,
+    latent,
+    vehicle,
+    p_truth,
+    tau_heat,
+    rows,
+    merge,
+    n_valid: int,
+    n_replicas=N_REPLICAS,
+    seed=0,
 ) -> tuple:
     """``(statistics (R, C − 1), noise model)``: every replica's :func:`statistic` of the
     round-1 candidates.
@@ -208,14 +223,15 @@ def null_statistics(
     ``rows = (starts, idx, actives)`` are the observed recording's round-1 rows (base first) and
     ``merge(table) -> table`` the same post-processing (best radius start); ``tau_heat`` the
     thermal lag picked on the recording; ``mask`` its fit weights (> 0 on the selected samples);
-    ``latent`` its :func:`latent_speeds`. The replicas differ from the recording only in their
+    ``latent`` its :func:`latent_speeds`; ``p_truth`` the curve the replicas are re-synthesised
+    from (:func:`replicas`). The replicas differ from the recording only in their
     torque, so their signals share everything the speeds determine (:func:`torque_builder`); they
     are fitted on :func:`workers` threads (XLA runs them in parallel; the results are those of
     one after another).
     """
     build = torque_builder(columns, vehicle, mask=mask, regressors=latent)
     torque = columns["traction_torque"]
-    torques, model = replicas(torque, build(torque), vehicle, p_base, n_replicas, seed, latent)
+    torques, model = replicas(torque, build(torque), vehicle, p_truth, n_replicas, seed, latent)
 
     def fit(replica_torque):
         sse, status = _fit_replica(*rows, fitting.pad_signals(build(replica_torque, tau_heat)), n_valid)
