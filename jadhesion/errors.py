@@ -8,3 +8,8 @@ class InputError(ValueError):
 
 class RecordingError(InputError):
     """A recording (CSV or sidecar) that cannot be used: message names file, column and row."""
+
+
+class VehicleError(InputError):
+    """A vehicle whose numbers (a sidecar's) give no usable contact; the message names the vehicle
+    and the keys to check, a caller that knows the sidecar adds its path."""

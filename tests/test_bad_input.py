@@ -65,6 +65,17 @@ FILES = {
         json.dumps({"wheel_radius_m": -0.6}),
         ["sidecar_negative.json", "wheel_radius_m"],
     ),
+    # contact numbers far outside any wheel's: k_eps NaN (was a traceback) or 0/inf (a junk fit)
+    "sidecar_contact.csv": (
+        csv(*ROWS),
+        json.dumps({"contact_semi_axes_m": [1e-300, 1e-300]}),
+        ["k_eps", "contact_semi_axes_m"],
+    ),
+    "sidecar_shear.csv": (
+        csv(*ROWS),
+        json.dumps({"shear_modulus_pa": 1e-300}),
+        ["k_eps = 0", "shear_modulus_pa"],
+    ),
     "three_rows.csv": (csv(*ROWS[:3]), None, ["three_rows.csv", "samples"]),
     "creep_too_few.csv": (
         csv("0.01,0.6,0.2", "0.02,0.6,0.25", header=CREEP_HEADER),
@@ -237,3 +248,16 @@ def test_fit_out_onto_a_directory_is_refused_before_anything_is_written(tmp_path
     code, out, err = run_main(capsys, argv)
     assert_one_line_exit_2(code, out, err, ["--out", "is a directory"])
     assert sorted(p.name for p in tmp_path.iterdir()) == ["table.csv"]
+
+
+def test_fit_keep_going_names_the_sidecar_whose_contact_is_unusable(tmp_path, capsys, recording):
+    """A sidecar whose contact gives no k_eps skips its file, naming that sidecar, and the other
+    files are fitted (was a NaN traceback ending the whole call)."""
+    bad = tmp_path / "bad.csv"
+    bad.write_text(recording.read_text())
+    bad.with_suffix(".json").write_text(json.dumps({"wheel_load_n": 1e-300}))
+    code, out, err = run_main(capsys, ["fit", recording, bad, "--method", "lm", "--keep-going", "--json"])
+    assert code == 0, err
+    doc = json.loads(out)
+    assert [f["file"] for f in doc["fits"]] == [str(recording)]
+    assert [s["file"] for s in doc["skipped"]] == [str(bad)] and "bad.json" in doc["skipped"][0]["error"]

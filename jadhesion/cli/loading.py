@@ -10,6 +10,7 @@ from ..data.recording import Recording, load_recording
 from ..data.segments import trim
 from ..data.selected import selected_dataset
 from ..data.sidecar import sidecar_warning
+from ..errors import VehicleError
 
 
 def load_from_args(args, path) -> Recording:
@@ -42,7 +43,10 @@ def load_dataset(args, path, build=to_dataset, *, recording: Recording | None = 
     :func:`load_from_args` already gave, when the caller has it."""
     if recording is None:
         recording = load_from_args(args, path)
-    dataset, selection = selected_dataset(
-        recording, args.phase, creep=getattr(args, "creep", "smoothed"), build=build
-    )
+    try:
+        dataset, selection = selected_dataset(
+            recording, args.phase, creep=getattr(args, "creep", "smoothed"), build=build
+        )
+    except VehicleError as error:  # several files: say which sidecar
+        raise VehicleError(f"{recording.path.with_suffix('.json')}: {error}") from None
     return recording, dataset, selection

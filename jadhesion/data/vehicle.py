@@ -27,11 +27,13 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import math
 from typing import Optional
 
 import jax
 import jax.numpy as jnp
 
+from ..errors import VehicleError
 from ..models.contact import Contact, hertz_semi_axes
 from ..models.polach import gradient_constant
 
@@ -103,12 +105,24 @@ class Vehicle:
     def k_eps(self) -> float:
         """Polach gradient constant ``k_eps`` [-] (``eps = k_eps · s / mu``); computed once per
         vehicle (op by op, the contact's table lookups took ~80 ms a call); uncached when a field
-        is not hashable (a list or an array given by hand)."""
+        is not hashable (a list or an array given by hand). :class:`VehicleError` when it is not a
+        positive finite number (a sidecar's contact numbers far outside any wheel's: a fit on it
+        would be NaN or a flat curve)."""
         try:
             hash(self)
         except TypeError:
-            return _k_eps.__wrapped__(self)
-        return _k_eps(self)
+            value = _k_eps.__wrapped__(self)
+        else:
+            value = _k_eps(self)
+        if not (math.isfinite(value) and value > 0):
+            a, b = (float(x) for x in self.contact())
+            raise VehicleError(
+                f"vehicle {self.name!r}: its contact (wheel load {self.wheel_load:.3g} N, semi-axes "
+                f"{a:.3g} x {b:.3g} m, G {self.shear_modulus:.3g} Pa) gives Polach's gradient constant "
+                f"k_eps = {value:g}, not a positive finite number: check the sidecar's axle_load_kg, "
+                "wheel_load_n, wheel_radius_m, rail_head_radius_m, contact_semi_axes_m, shear_modulus_pa"
+            )
+        return value
 
     def replace(self, **changes) -> "Vehicle":
         """A copy with fields changed."""
