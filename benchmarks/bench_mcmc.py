@@ -33,11 +33,13 @@ import time
 import warnings
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 
 jax.config.update("jax_enable_x64", True)
 
 from jadhesion.cli.common import emit_json, table  # noqa: E402
+from jadhesion.data.dataset import to_dataset  # noqa: E402
 from jadhesion.data.scenarios import SCENARIOS  # noqa: E402
 from jadhesion.data.simulated_datasets import (  # noqa: E402
     result_dataset,
@@ -49,6 +51,7 @@ from jadhesion.identify.ensemble import ChainTooShortWarning, run_ensemble  # no
 from jadhesion.identify.laplace import initial_spread, lm_optimum  # noqa: E402
 from jadhesion.identify.likelihood import (  # noqa: E402
     LOG_SCALE_BOUNDS,
+    batch_log_posterior,
     ensemble_log_prob,
 )
 from jadhesion.identify.mcmc import initial_ball  # noqa: E402
@@ -93,9 +96,12 @@ def _per_call(fn, x, repeats=400):
 
 def bench_speed(walkers, steps, n_points, seed=0, nuts=False):
     """Warm emcee timings (JAX and NumPy log-probability), compile time apart, and a profile of one
-    step: emcee calls the log-probability twice per step (each half of the ensemble), so
-    ``2 x steps x per-call time`` is the log-probability's share and the rest is emcee's own
-    Python (stretch move, bookkeeping), measured directly with a trivial log-probability."""
+        step: emcee calls the log-probability twice per step (each half of the ensemble), so
+        ``2 x steps x per-call time`` is the log-probability's share and the rest is emcee's own
+        Python (stretch move, bookkeeping), measured directly with a trivial log-probability. The
+    default likelihood on a recording's smoothed creep (errors in variables: the curve's expectation
+    over the slip's law) is timed per call twice in the same run: with the slip law's nodes stored
+    once (``with_node_slips``, what the sampler does) and evaluated on every call (before)."""
     data = simulate_dataset("dry", seed, n_samples=n_points)
     theta0 = lm_optimum(data)
     rng = np.random.default_rng(seed)
@@ -141,6 +147,18 @@ def bench_speed(walkers, steps, n_points, seed=0, nuts=False):
     lp(p_obs[: walkers // 2])
     out["observer_compile_s"] = time.perf_counter() - t0
     out["observer_call_ms"] = 1e3 * _per_call(lp, p_obs[: walkers // 2])
+    # errors in variables: the smoothed creep's dataset of the same recording, nodes stored or not
+    (recording,) = simulate_many("dry", [seed], n_samples=n_points)
+    smoothed = to_dataset(recording)
+    stored = ensemble_log_prob(smoothed)
+    box = (jnp.zeros(5), jnp.ones(5), jnp.zeros(()))
+
+    def per_call(phis):
+        return np.asarray(batch_log_posterior(phis, smoothed, *box, "gauss", None, jnp.ones(())))
+
+    np.testing.assert_allclose(stored(p0), per_call(p0), rtol=1e-12)
+    out["eiv_call_ms"] = 1e3 * _per_call(stored, p0[: walkers // 2])
+    out["eiv_nodes_per_call_ms"] = 1e3 * _per_call(per_call, p0[: walkers // 2])
     if nuts:
         from jadhesion.identify.mcmc import sample_nuts
 
@@ -377,6 +395,10 @@ def main(argv=None):
         f"  emcee alone (trivial log-prob) {s['emcee_overhead_s']:.2f} s; jit dispatch "
         f"{s['jit_dispatch_us']:.0f} us/call; observer likelihood {s['observer_call_ms']:.3f} ms/call "
         f"(compile {s['observer_compile_s']:.2f} s)"
+    )
+    print(
+        f"  errors in variables (smoothed creep): {s['eiv_call_ms']:.3f} ms/call with the slip law's "
+        f"nodes stored, {s['eiv_nodes_per_call_ms']:.3f} ms/call evaluating them on every call"
     )
     if "nuts" in s:
         n = s["nuts"]

@@ -8,9 +8,13 @@ import numpy as np
 from jadhesion.data.dataset import PolachDataset
 from jadhesion.data.scenarios import SCENARIOS
 from jadhesion.data.vehicle import LOCO_22E
+from jadhesion.identify.batch_fit import pad_dataset
+from jadhesion.identify.box_lm import box_lm
 from jadhesion.identify.laplace import lm_optimum
+from jadhesion.identify.likelihood import curve_moments, with_node_slips
 from jadhesion.identify.polach_fit import fit_polach
 from jadhesion.identify.polach_residuals import polach_eiv_residual, polach_residual
+from jadhesion.identify.slip_law import GH_NODES
 from jadhesion.models.polach import polach_adhesion
 
 TRUTH = jnp.asarray(SCENARIOS["dry"].params)
@@ -56,3 +60,22 @@ def test_eiv_residual_vanishes_without_slip_uncertainty():
     np.testing.assert_allclose(polach_eiv_residual(TRUTH, data), polach_residual(TRUTH, data), atol=1e-9)
     raw = data._replace(slip_sd=None, creep_sd=None)
     np.testing.assert_array_equal(polach_eiv_residual(TRUTH, raw), polach_residual(TRUTH, raw))
+
+
+def test_stored_node_slips_change_no_number():
+    """The slip law's nodes stored once (``with_node_slips``, as every fit and sampler does) give
+    the same expectation bit for bit as nodes evaluated on each call; they pad and split into LM's
+    row blocks with the other per-sample fields."""
+    data = _dataset(0.004, n=1000)
+    stored = with_node_slips(data)
+    assert stored.node_slips.shape == (1000, GH_NODES) and with_node_slips(stored) is stored
+    for a, b in zip(curve_moments(TRUTH, data), curve_moments(TRUTH, stored), strict=True):
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+    padded = pad_dataset(stored, 1100)
+    np.testing.assert_array_equal(
+        np.asarray(padded.node_slips), np.asarray(with_node_slips(pad_dataset(data, 1100)).node_slips)
+    )
+    bounds = (jnp.zeros(5), jnp.ones(5))
+    whole = box_lm(polach_eiv_residual, TRUTH * 0.9, stored, bounds)
+    blocks = box_lm(polach_eiv_residual, TRUTH * 0.9, stored, bounds, block_rows=300)
+    np.testing.assert_allclose(np.asarray(blocks.params), np.asarray(whole.params), rtol=0, atol=1e-10)

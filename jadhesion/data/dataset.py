@@ -54,6 +54,11 @@ class PolachDataset(NamedTuple):
             LM's first stage (:func:`jadhesion.identify.polach_fit.fit_polach`); with it LM's
             residual is standardised and robust
             (:func:`jadhesion.identify.polach_residuals.polach_lm_residual`).
+        node_slips: the true slip [m/s] at each node of the errors-in-variables expectation,
+            shape (n, nodes), or None (computed from ``slip``, ``slip_sd`` and ``adhesion`` where
+            needed). A function of the data alone, set once by
+            :func:`jadhesion.identify.likelihood.with_node_slips` where a fit or a sampler starts,
+            so that its residual does not evaluate the nodes' inverse normal CDFs at every step.
     """
 
     creep: jax.Array
@@ -65,10 +70,12 @@ class PolachDataset(NamedTuple):
     creep_sd: Optional[jax.Array] = None
     weight: Optional[jax.Array] = None
     residual_scale: Optional[jax.Array] = None
+    node_slips: Optional[jax.Array] = None
 
 
-#: Fields with one value per sample; ``k_eps`` is one per dataset, ``weight`` the padding's mask.
-SAMPLE_FIELDS = ("creep", "slip", "adhesion", "vehicle_speed", "slip_sd", "creep_sd")
+#: Fields with one row per sample (axis 0); ``k_eps`` is one per dataset, ``weight`` the padding's
+#: mask.
+SAMPLE_FIELDS = ("creep", "slip", "adhesion", "vehicle_speed", "slip_sd", "creep_sd", "node_slips")
 
 CREEP_OPTIONS = ("smoothed", "raw")
 RAW_SIGNALS = ("time", "vehicle_speed", "wheel_speed", "traction_torque")

@@ -50,7 +50,9 @@ def pad_dataset(data: PolachDataset, length: int | None = None) -> PolachDataset
     extra = length - n
 
     def pad(a):
-        return None if a is None else jnp.pad(jnp.asarray(a), (0, extra), mode="edge")
+        if a is None:
+            return None
+        return jnp.pad(jnp.asarray(a), [(0, extra)] + [(0, 0)] * (jnp.ndim(a) - 1), mode="edge")
 
     fields = {f: pad(getattr(data, f)) for f in SAMPLE_FIELDS}
     weight = np.zeros(length, jnp.result_type(data.adhesion))

@@ -105,10 +105,10 @@ def _reductions(res, lo, width, u, args):
 def _blocked_reductions(res, lo, width, u, args, n, block):
     """:func:`_reductions` of a row-wise residual of ``n`` rows, summed over blocks of ``block``
     rows (``lax.scan``, then the remainder): memory ``O(block)`` instead of ``O(n)`` for the
-    Jacobian and its intermediates. ``args`` leaves of shape ``(n,)`` are split by rows, the others
-    passed whole to every block."""
+    Jacobian and its intermediates. ``args`` leaves of shape ``(n, …)`` are split by rows, the
+    others passed whole to every block."""
     leaves, tree = jax.tree.flatten(args)
-    is_row = [jnp.shape(x) == (n,) for x in leaves]
+    is_row = [jnp.shape(x)[:1] == (n,) for x in leaves]
     full = (n // block) * block
 
     def add(acc, rows):
@@ -122,7 +122,8 @@ def _blocked_reductions(res, lo, width, u, args, n, block):
     row_leaves = [x for x, row in zip(leaves, is_row, strict=True) if row]
     d, dtype = u.shape[0], u.dtype
     zero = (jnp.zeros((), dtype), jnp.zeros(d, dtype), jnp.zeros((d, d), dtype), jnp.zeros((), dtype))
-    acc, _ = jax.lax.scan(add, zero, [x[:full].reshape(n // block, block) for x in row_leaves])
+    blocks = [x[:full].reshape((n // block, block) + x.shape[1:]) for x in row_leaves]
+    acc, _ = jax.lax.scan(add, zero, blocks)
     if full < n:
         acc, _ = add(acc, [x[full:] for x in row_leaves])
     return acc
@@ -249,7 +250,7 @@ def box_lm(residual, p0, args, bounds, options=DEFAULT_OPTIONS, *, max_steps=100
     ``steps`` counts iterations; each costs one residual and one forward Jacobian.
 
     ``block_rows``: for a *row-wise* residual (row ``i`` depends only on the ``i``-th entry of
-    every ``args`` leaf of shape ``(n,)``), a residual longer than ``block_rows`` is linearised in
+    every ``args`` leaf of shape ``(n, …)``), a residual longer than ``block_rows`` is linearised in
     blocks of that many rows (:func:`_blocked_reductions`): the same sums to rounding, with
     memory for one block's Jacobian instead of all ``n`` rows'. ``None`` (default): in one piece.
     """

@@ -38,6 +38,7 @@ from .likelihood import (
     log_posterior,
     noise_names,
     prediction,
+    with_node_slips,
 )
 from .observer_view import ObserverTerms
 from .peak import reference_speed
@@ -282,7 +283,7 @@ def sample_nuts(
     phi0 = np.concatenate([np.asarray(theta0, float), [log_scale0], [] if rho0 is None else [rho0]])
     u0 = np.clip((phi0 - lo) / (hi - lo), 1e-3, 1 - 1e-3)
     lo_j, width = jnp.asarray(lo), jnp.asarray(hi - lo)
-    data = jax.tree_util.tree_map(lambda x: jnp.asarray(x, jnp.float64), data)
+    data = with_node_slips(jax.tree_util.tree_map(lambda x: jnp.asarray(x, jnp.float64), data))
     lower_j, upper_j = jnp.asarray(lower), jnp.asarray(upper)
 
     def logdensity(z):

@@ -21,10 +21,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..data.dataset import PolachDataset
+from ..data.dataset import SAMPLE_FIELDS, PolachDataset
 from ..errors import InputError
 from .batch_fit import bucketed
 from .driver import STALL_FTOL, run_until
+from .likelihood import with_node_slips
 from .lm import best_of, box_lm_queue, global_lm, seed_starts
 from .methods import NAMES as METHODS
 from .methods import POPULATION as ALGORITHMS
@@ -104,7 +105,7 @@ def subsample(data: PolachDataset, n_max: int = SEED_SAMPLES) -> PolachDataset:
         idx = jnp.round(jnp.arange(n_max) * ((valid - 1) / (n_max - 1))).astype(jnp.int32)
     else:
         idx = np.linspace(0, n - 1, n_max).round().astype(np.int32)
-    fields = ("creep", "slip", "adhesion", "vehicle_speed", "slip_sd", "creep_sd", "weight")
+    fields = (*SAMPLE_FIELDS, "weight")
     return data._replace(**{k: getattr(data, k)[idx] for k in fields if getattr(data, k) is not None})
 
 
@@ -169,7 +170,7 @@ def _fit(method, pop_size, max_iter, use_target, data, key, target):
     bounds = _box(data.adhesion.dtype)
     scale = None
     if method == "lm":
-        out, scale, iterations, evaluations = _two_stages(_global_lm, data, key)
+        out, scale, iterations, evaluations = _two_stages(_global_lm, with_node_slips(data), key)
         theta = out.params
     else:
         out = run_until(
@@ -204,7 +205,7 @@ def _fit_many(method, pop_size, max_iter, use_target, data, keys, target):
 def _global_lm_many(data, keys, target, use_target):
     """Global LM on a stack of N datasets, both stages (module docstring), each as two work queues
     (:func:`_queued_lm`). Results equal :func:`fit_polach`'s per dataset."""
-    polish, scale, steps, evaluations = _two_stages(_queued_lm, data, keys)
+    polish, scale, steps, evaluations = _two_stages(_queued_lm, with_node_slips(data), keys)
     r = jax.vmap(polach_residual)(polish.params, data)
     mae = mean_abs(r) if data.weight is None else jax.vmap(dataset_mae)(r, data)
     reached = (mae <= target) if use_target else jnp.zeros(mae.shape, bool)
