@@ -165,6 +165,8 @@ FLAGS = [
     (["fit", "{rec}", "--pop-size", "-3"], "--pop-size"),
     (["fit", "{rec}", "--pop-size", "1"], "--pop-size"),
     (["fit", "{rec}", "--max-iter", "0"], "--max-iter"),
+    (["fit", "{rec}", "--pop-size", "100000000"], "--pop-size"),  # was XLA's RESOURCE_EXHAUSTED
+    (["fit", "{rec}", "--max-iter", "99999999999999999999"], "--max-iter"),  # was JAX's OverflowError
     (["fit", "{rec}", "--seed", "-1"], "--seed"),
     (["fit", "{rec}", "--plot", "{rec}"], "--plot"),
     # a figure folder under a file: refused before the work (was an OSError line after it, no flag)
@@ -195,6 +197,11 @@ FLAGS = [
     (["sweep", "--scenarios", "dry", *SMALL, "--out", "{tmp}/missing/s.csv"], "--out"),  # was made
     (["sweep", "--pop-size", "0", "--methods", "itlbo", "--out", "{tmp}/s.csv"], "--pop-size"),
     (["sweep", "--max-iter", "-1", "--methods", "itlbo", "--out", "{tmp}/s.csv"], "--max-iter"),
+    (
+        ["sweep", "--pop-size", "100000000", "--methods", "itlbo", *SMALL, "--out", "{tmp}/s.csv"],
+        "--pop-size",
+    ),
+    (["sweep", "--max-iter", str(2**64), "--methods", "itlbo", *SMALL, "--out", "{tmp}/s.csv"], "--max-iter"),
     (["sweep", "--chunk-size", "0", "--out", "{tmp}/s.csv"], "--chunk-size"),
     (["sweep", "--samples", "0", "--out", "{tmp}/s.csv"], "--samples"),
     (["reproduce", "table2", "--seeds", "0"], "--seeds"),

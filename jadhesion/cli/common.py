@@ -41,6 +41,27 @@ def require_seed(command: str, seed) -> None:
     require_in_range(command, 0, SEED_MAX, seed=seed)
 
 
+#: The largest ``--max-iter`` of a population method (300 by default; a fit stops earlier when
+#: its best MAE stalls): beyond int64 the loop's counter overflowed in JAX.
+MAX_ITER = 1_000_000
+#: The most memory one evaluation of a population may take, population × samples (× fits batched
+#: together) × 8 B: each evaluation makes such an array (the process's peak grew by about that,
+#: measured), and --pop-size 10**8 asked XLA for 844 GB.
+MAX_POPULATION_BYTES = 2**30
+
+
+def require_population_memory(command: str, pop_size: int, samples: int, where: str) -> None:
+    """Raise :class:`UserError` naming ``--pop-size`` when ``pop_size`` members × ``samples``
+    values (``where`` says whose) exceed :data:`MAX_POPULATION_BYTES`."""
+    need = pop_size * samples * 8
+    if need > MAX_POPULATION_BYTES:
+        raise UserError(
+            f"{command}: --pop-size {pop_size} {where} needs {need / 2**30:.3g} GiB per evaluation of the "
+            f"population, more than {MAX_POPULATION_BYTES / 2**30:g} GiB: use --pop-size "
+            f"{MAX_POPULATION_BYTES // (8 * samples)} or less"
+        )
+
+
 def require_output_dir(command: str, flag: str, value) -> None:
     """Raise :class:`UserError` unless ``--flag DIR`` (given, not None) can hold the command's
     files: a directory, or a missing one whose nearest existing ancestor is a directory. Checked

@@ -8,6 +8,7 @@ This module defines the arguments only; :mod:`.fit_run` does the work.
 from __future__ import annotations
 
 from . import COMMANDS
+from .common import MAX_ITER
 from .recording_options import add_recording_options
 
 #: Fit methods offered (the registry's names; kept literal so ``--help`` imports no JAX — a test
@@ -51,13 +52,15 @@ def register(sub) -> None:
         "--pop-size",
         type=int,
         default=None,
-        help="population size of a population method (default 50, >= 2; lm ignores it, with a warning)",
+        help="population size of a population method (default 50, >= 2, at most 1 GiB per evaluation: "
+        "size × samples × 8 B; lm ignores it, with a warning)",
     )
     p.add_argument(
         "--max-iter",
         type=int,
         default=None,
-        help="iteration cap of a population method (default 300); it stops earlier when its best MAE "
+        help=f"iteration cap of a population method (default 300, at most {MAX_ITER:,}); it stops earlier "
+        "when its best MAE "
         "stalls (lm, which stops at its own convergence test, ignores it with a warning)",
     )
     p.add_argument(

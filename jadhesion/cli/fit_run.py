@@ -23,6 +23,7 @@ import numpy as np
 
 from ..atomic import atomic_write
 from ..data.formats import RECORDING_SUFFIXES
+from ..data.length_buckets import bucket_length
 from ..data.selected import creep_sign_warning
 from ..data.sidecar import sidecar_warning
 from ..identify.batch_fit import bucketed, fit_datasets
@@ -33,7 +34,17 @@ from ..identify.trust import fit_report
 from ..memory_maps import release_if_near_limit
 from ..models.polach import PARAM_NAMES
 from ..status import status_of
-from .common import UserError, emit_json, require_at_least, require_output_dir, require_seed, table
+from .common import (
+    MAX_ITER,
+    UserError,
+    emit_json,
+    require_at_least,
+    require_in_range,
+    require_output_dir,
+    require_population_memory,
+    require_seed,
+    table,
+)
 from .fit_program import fit_polach, seed_key, to_dataset, trust_numbers
 from .loading import load_dataset, load_from_args, say_sidecar_warning
 
@@ -67,7 +78,7 @@ def _ignored_budget(args) -> str | None:
 def _check_flags(args) -> None:
     require_seed("fit", args.seed)
     require_at_least("fit", 2, pop_size=args.pop_size)
-    require_at_least("fit", 1, max_iter=args.max_iter)
+    require_in_range("fit", 1, MAX_ITER, max_iter=args.max_iter)
     if (note := _ignored_budget(args)) is not None:
         sys.stderr.write(f"jadhesion: warning: {note}\n")
     require_output_dir("fit", "plot", args.plot)
@@ -137,6 +148,18 @@ def _recording_report(recording, selection) -> dict:
         "vehicle": {k: getattr(recording.vehicle, k) for k in VEHICLE_KEYS},
         "warnings": [w for w in found if w is not None],
     }
+
+
+def _check_population(args, paths, datasets) -> None:
+    """A population method's ``--pop-size`` within :data:`.common.MAX_POPULATION_BYTES` on every
+    dataset, padded to its length bucket as it is fitted (``--pop-size 10**8`` asked XLA for
+    844 GB and ended in a RESOURCE_EXHAUSTED traceback)."""
+    pop_size = _budget(args).get("pop_size")
+    if pop_size is None:
+        return
+    for path, dataset in zip(paths, datasets, strict=True):
+        n = int(dataset.adhesion.shape[-1])
+        require_population_memory("fit", pop_size, bucket_length(n), f"on {path} ({n} samples)")
 
 
 # ---- fits -------------------------------------------------------------------------------------
@@ -335,6 +358,7 @@ def run(args) -> int:
     paths, many = expand_files(args.file)
     paths, loaded, skipped = _load_all(args, paths)  # every file checked before any fit
     datasets = [d for d, _, _ in loaded]
+    _check_population(args, paths, datasets)
     docs = _fit_all(args, datasets)
     for doc, (_, selection, report) in zip(docs, loaded, strict=True):
         doc["creep"] = args.creep

@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 
 from . import COMMANDS
+from .common import MAX_ITER
 
 #: The most ``--seeds``: a million data seeds per cell (the grid holds them all; 3e9 ran out of
 #: memory before the first fit).
@@ -41,8 +42,19 @@ def register(sub) -> None:
         default="inf",
         help="comma-separated creep ranges covered by the test, 'inf' = all samples (default inf)",
     )
-    p.add_argument("--pop-size", type=int, default=None, help="population methods: class size (default 50)")
-    p.add_argument("--max-iter", type=int, default=None, help="population methods: iterations (default 300)")
+    p.add_argument(
+        "--pop-size",
+        type=int,
+        default=None,
+        help="population methods: class size (default 50; at most 1 GiB per evaluation: size × "
+        "chunk size × samples × 8 B)",
+    )
+    p.add_argument(
+        "--max-iter",
+        type=int,
+        default=None,
+        help=f"population methods: iterations (default 300, at most {MAX_ITER:,})",
+    )
     p.add_argument("--samples", type=int, default=None, help="samples per simulated test (default 2000)")
     p.add_argument("--chunk-size", type=int, default=64, help="fits per compiled batch (default 64)")
     p.add_argument(

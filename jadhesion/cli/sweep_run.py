@@ -7,9 +7,18 @@ from pathlib import Path
 
 import jax
 
+from ..data.simulator import DEFAULT_SAMPLES
 from ..identify.polach_fit import MIN_SAMPLES
 from ..sweeps import Grid, run_sweep
-from .common import Progress, UserError, emit_json, require_at_least, require_in_range
+from .common import (
+    MAX_ITER,
+    Progress,
+    UserError,
+    emit_json,
+    require_at_least,
+    require_in_range,
+    require_population_memory,
+)
 from .sweep import MAX_SEEDS
 
 
@@ -50,9 +59,13 @@ def _initialize(args) -> None:
 def run(args) -> int:
     """Run the sweep the arguments describe; print (or ``--json``) its summary on process 0."""
     require_in_range("sweep", 1, MAX_SEEDS, seeds=args.seeds)
-    require_at_least("sweep", 1, max_iter=args.max_iter, chunk_size=args.chunk_size)
+    require_at_least("sweep", 1, chunk_size=args.chunk_size)
+    require_in_range("sweep", 1, MAX_ITER, max_iter=args.max_iter)
     require_at_least("sweep", 2, pop_size=args.pop_size)
     require_at_least("sweep", MIN_SAMPLES, samples=args.samples)
+    if args.pop_size is not None:  # a chunk's fits evaluate their populations together
+        samples = args.chunk_size * (args.samples or DEFAULT_SAMPLES)
+        require_population_memory("sweep", args.pop_size, samples, f"with --chunk-size {args.chunk_size}")
     _check_out(args.out)
     _initialize(args)
     budget = {"pop_size": args.pop_size, "max_iter": args.max_iter}
