@@ -268,3 +268,12 @@ def test_fit_keep_going_names_the_sidecar_whose_contact_is_unusable(tmp_path, ca
     doc = json.loads(out)
     assert [f["file"] for f in doc["fits"]] == [str(recording)]
     assert [s["file"] for s in doc["skipped"]] == [str(bad)] and "bad.json" in doc["skipped"][0]["error"]
+
+
+def test_kiencke_fit_says_it_draws_no_figure(tmp_path, capsys, recording):
+    """``--plot`` with ``--model kiencke`` (fit.png draws a Polach curve): a warning, not a silently
+    missing figure."""
+    argv = ["fit", recording, "--model", "kiencke", "--method", "lm", "--plot", tmp_path / "fig", "--json"]
+    code, out, err = run_main(capsys, argv)
+    assert code == 0 and json.loads(out)["params"].keys() == {"p1", "p2", "a_s"}
+    assert "--plot" in err and "kiencke" in err and not (tmp_path / "fig").exists()

@@ -67,7 +67,8 @@ def register(sub) -> None:
         "--plot",
         metavar="DIR",
         default=None,
-        help="write fit.png (data, fit and residuals) into DIR (several files: one STEM.fit.png each)",
+        help="write fit.png (data, fit and residuals) into DIR (several files: one STEM.fit.png each; "
+        "Polach fits only)",
     )
     p.add_argument(
         "--json",

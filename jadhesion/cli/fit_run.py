@@ -81,6 +81,8 @@ def _check_flags(args) -> None:
     require_in_range("fit", 1, MAX_ITER, max_iter=args.max_iter)
     if (note := _ignored_budget(args)) is not None:
         sys.stderr.write(f"jadhesion: warning: {note}\n")
+    if args.plot is not None and args.model == "kiencke":  # said, as the budget flags: never silent
+        sys.stderr.write("jadhesion: warning: --plot draws Polach fits only: no figure for --model kiencke\n")
     require_output_dir("fit", "plot", args.plot)
     if args.out is not None:
         out = Path(args.out)
