@@ -277,3 +277,17 @@ def test_kiencke_fit_says_it_draws_no_figure(tmp_path, capsys, recording):
     code, out, err = run_main(capsys, argv)
     assert code == 0 and json.loads(out)["params"].keys() == {"p1", "p2", "a_s"}
     assert "--plot" in err and "kiencke" in err and not (tmp_path / "fig").exists()
+
+
+@pytest.mark.parametrize("second", ["other/ok.csv", "ok.csv"])
+def test_fit_plot_refuses_two_files_that_would_write_one_figure(tmp_path, capsys, recording, second):
+    """Several files with ``--plot`` write ``STEM.fit.png`` each: two files of one stem (or one file
+    twice) are refused before any work, naming both; the second figure silently replaced the first."""
+    other = recording.parent / second
+    other.parent.mkdir(exist_ok=True)
+    if other != recording:
+        other.write_text(recording.read_text())
+    argv = ["fit", recording, other, "--method", "lm", "--plot", tmp_path / "fig"]
+    code, out, err = run_main(capsys, argv)
+    assert_one_line_exit_2(code, out, err, ["--plot", "ok.fit.png", str(other)])
+    assert not (tmp_path / "fig").exists()

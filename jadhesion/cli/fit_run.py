@@ -115,6 +115,22 @@ def expand_files(names) -> tuple[list[Path], bool]:
     return paths, many
 
 
+def _check_figure_names(args, paths, many: bool) -> None:
+    """Several files with ``--plot``: each writes ``STEM.fit.png``, so two with one stem (``a.csv``
+    and ``a.parquet``, or ``x/a.csv`` and ``y/a.csv``) are refused before any work; the second
+    figure silently replaced the first."""
+    if args.plot is None or args.model != "polach" or not many:
+        return
+    seen = {}
+    for path in paths:
+        if path.stem in seen:
+            raise UserError(
+                f"fit: --plot {args.plot}: {seen[path.stem]} and {path} would both write "
+                f"{path.stem}.fit.png; give each file once, and rename or fit apart files that share a name"
+            )
+        seen[path.stem] = path
+
+
 def _load(args, path):
     """``(dataset, selection, report)`` of one file: :func:`.loading.load_dataset` after a row
     count check that names no model (it serves Polach and Kiencke fits, before any observer work);
@@ -358,6 +374,7 @@ def run(args) -> int:
     trust blocks."""
     _check_flags(args)
     paths, many = expand_files(args.file)
+    _check_figure_names(args, paths, many)
     paths, loaded, skipped = _load_all(args, paths)  # every file checked before any fit
     datasets = [d for d, _, _ in loaded]
     _check_population(args, paths, datasets)
