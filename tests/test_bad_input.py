@@ -185,6 +185,7 @@ FLAGS = [
     (["posterior", "{rec}", "--seed", "-1"], "--seed"),  # was NumPy's SeedSequence traceback
     (["diagnose", "{rec}", "--seed", "-1"], "--seed"),
     (["diagnose", "{rec}", "--replicas", "-1"], "--replicas"),  # was an AxisError
+    (["diagnose", "{rec}", "--replicas", "99999999999999999999"], "--replicas"),  # never ended
     (["simulate", "--seed", "99999999999999999999999", "--out", "{tmp}/x.csv"], "--seed"),  # JAX's
     (["simulate", "--sensor-noise", "1e9", "--out", "{tmp}/x.csv"], "--sensor-noise"),
     (["simulate", "--scenario", "dry", "--out", "{tmp}/x.txt"], "--out"),

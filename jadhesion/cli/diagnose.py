@@ -17,6 +17,10 @@ from __future__ import annotations
 from . import COMMANDS
 from .recording_options import add_recording_options
 
+#: The most ``--replicas``: enough to reject at 0.1 % (p ≥ 1/(R + 1)); each replica is a fit and
+#: a torque series held in memory, and --replicas 10**20 never ended.
+MAX_REPLICAS = 999
+
 
 def register(sub) -> None:
     p = sub.add_parser("diagnose", help=COMMANDS["diagnose"])
@@ -31,7 +35,8 @@ def register(sub) -> None:
         default=19,
         metavar="R",
         help="clean re-synthesised replicas of the recording's null (default 19, the fewest that "
-        "can reject at 5 %%; 0 skips the null and decides on the held-out gain alone)",
+        f"can reject at 5 %%; at most {MAX_REPLICAS}; 0 skips the null and decides on the held-out "
+        "gain alone)",
     )
     p.add_argument(
         "--seed", type=int, default=0, help="seed of the null's replicas, 0 to 2**63 - 1 (default 0)"

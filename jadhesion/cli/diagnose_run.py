@@ -19,7 +19,8 @@ from ..data.segments import select
 from ..data.selected import zero_creep_message
 from ..diagnose import diagnose
 from ..diagnose.null import N_REPLICAS
-from .common import UserError, emit_json, require_at_least, require_output_dir, require_seed, table
+from .common import UserError, emit_json, require_in_range, require_output_dir, require_seed, table
+from .diagnose import MAX_REPLICAS
 from .loading import load_from_args
 
 
@@ -54,7 +55,7 @@ def diagnose_file(
 
 def run(args) -> int:
     require_seed("diagnose", args.seed)
-    require_at_least("diagnose", 0, replicas=args.replicas)
+    require_in_range("diagnose", 0, MAX_REPLICAS, replicas=args.replicas)
     require_output_dir("diagnose", "report", args.report)
     start = time.perf_counter()
     result, _ = diagnose_file(
