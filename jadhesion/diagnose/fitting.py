@@ -69,7 +69,9 @@ OPEN_FACTOR = 10.0
 #: :data:`WIDTH` pad their index list with it.
 PAD = ext.N_PARAMS
 _LO = np.concatenate([ext.BOUNDS[0], [-1.0]])
-_HI = np.concatenate([ext.BOUNDS[1], [1.0]])
+#: Upper bounds (P + 1,) of the box. The in-sample fits (:func:`fit_base`, the null's replicas,
+#: :func:`fit_truth`) pass their upper bounds explicitly, so they share one compiled program.
+UPPER = np.concatenate([ext.BOUNDS[1], [1.0]])
 _FOLD_FIXED = np.concatenate([ext.FOLD_FIXED, [False]])
 
 
@@ -208,12 +210,12 @@ def base_rows(sig: Signals, n_valid: int) -> tuple:
 
 
 @functools.partial(jax.jit, static_argnames="folds")
-def fit_candidates(p0, idx, actives, sig: Signals, n_valid, folds: bool = True, upper=_HI) -> FitTable:
+def fit_candidates(p0, idx, actives, sig: Signals, n_valid, folds: bool = True, upper=UPPER) -> FitTable:
     """Fit every candidate — free indices ``idx`` (C, K), effect masks ``actives`` (C, N_EXTRA),
     starts ``p0`` (C, P) — on the weighted first ``n_valid`` samples of the (padded) recording,
     then (``folds``) on each CV fold warm-started from that fit; evaluate in-sample and held-out
     errors (``heldout_mae`` NaN and ``fold_status`` converged without folds). ``upper`` (P + 1,):
-    the upper bounds (the box's, or :func:`fit_truth`'s; an argument, so the same program).
+    the upper bounds (:data:`UPPER`, or :func:`fit_truth`'s: given explicitly, the same program).
 
     Candidates and folds are solved one after another (:func:`jax.lax.map`): each LM stops at its
     own convergence test, and memory is that of one fit (linear in the samples)."""
@@ -295,7 +297,7 @@ def fit_base(sig: Signals, n_valid=None) -> tuple:
     status."""
     n_valid = sig.time.shape[0] if n_valid is None else n_valid
     starts, idx, actives = base_rows(sig, n_valid)
-    table = fit_candidates(starts, idx, actives, sig, n_valid, folds=False)
+    table = fit_candidates(starts, idx, actives, sig, n_valid, folds=False, upper=UPPER)
     sse, status = np.asarray(table.sse), np.asarray(table.status)
     ok = status == int(Status.CONVERGED)
     i = int(np.argmin(np.where(ok, sse, np.inf))) if ok.any() else int(np.argmin(sse))
@@ -315,9 +317,9 @@ def fit_truth(sig: Signals, n_valid: int, p_base) -> tuple:
     recording with μ = 0.7x/(1 + x²), i.e. Polach with μ0 = 0.35π, kS = 0, A = 1)."""
     p_base = np.asarray(p_base, float)
     edge = np.array([PARAM_NAMES.index(k) for k in OPEN_ABOVE])
-    if not np.any(p_base[edge] >= _HI[edge]):
+    if not np.any(p_base[edge] >= UPPER[edge]):
         return p_base, 0.0
-    upper = _HI.copy()
+    upper = UPPER.copy()
     upper[edge] *= OPEN_FACTOR
     starts, idx, actives = base_rows(sig, n_valid)
     starts[-1] = p_base

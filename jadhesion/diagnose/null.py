@@ -89,7 +89,7 @@ def _fit_replica(starts, idx, actives, sig, n_valid):
     """In-sample :func:`fitting.fit_candidates` (no folds) of one replica: ``(sse (C,), status (C,))``.
     Not wrapped in a jit of its own: the call reuses the base fit's compiled program (same rows and
     padded length), where a wrapper compiled the same fits again (~3 s of a cold diagnosis)."""
-    table = fitting.fit_candidates(starts, idx, actives, sig, n_valid, folds=False)
+    table = fitting.fit_candidates(starts, idx, actives, sig, n_valid, folds=False, upper=fitting.UPPER)
     return table.sse, table.status
 
 
