@@ -207,6 +207,9 @@ FLAGS = [
     (["sweep", "--samples", "0", "--out", "{tmp}/s.csv"], "--samples"),
     (["reproduce", "table2", "--seeds", "0"], "--seeds"),
     (["reproduce", "online", "--runs", "0"], "--runs"),
+    (["reproduce", "online", "--runs", "100000000"], "--runs"),  # was XLA's RESOURCE_EXHAUSTED
+    (["reproduce", "table2", "--seeds", "99999999999999999999"], "--seeds"),  # was an OverflowError
+    (["reproduce", "table2", "--mcmc-steps", "99999999999999999999"], "--mcmc-steps"),  # a ValueError
     # simulate's range: inf ran 34 s to 'fit_polach: target MAE must be >= 0, got nan'
     (["reproduce", "table2", "--sensors", "realistic", "--sensor-noise", "inf"], "--sensor-noise"),
 ]

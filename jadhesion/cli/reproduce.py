@@ -14,13 +14,26 @@ from __future__ import annotations
 from . import COMMANDS
 from .simulate import MAX_SENSOR_NOISE
 
+#: The most ``--seeds`` (Table 2 runs a cell's seeds as one batch: 1000 seeds' populations hold
+#: about 0.8 GB), ``--runs`` (the online study's runs × 1200 steps per array: 10 000 runs about
+#: 0.1 GB each) and ``--mcmc-steps`` (32 walkers' chain); beyond them a run ran out of memory
+#: (--runs 10**8 asked XLA for 960 GB) or overflowed in a traceback.
+MAX_SEEDS, MAX_RUNS, MAX_MCMC_STEPS = 1000, 10_000, 100_000
+
 
 def register(sub) -> None:
     """Add the ``reproduce`` subcommand to ``sub`` (argparse subparsers)."""
     p = sub.add_parser("reproduce", help=COMMANDS["reproduce"])
     p.add_argument("target", nargs="?", choices=("table2", "online"), default=None)
-    p.add_argument("--seeds", type=int, default=20, help="table2: data/optimiser seeds per cell")
-    p.add_argument("--runs", type=int, default=1000, help="online: Monte Carlo runs per algorithm")
+    p.add_argument(
+        "--seeds", type=int, default=20, help=f"table2: data/optimiser seeds per cell (at most {MAX_SEEDS})"
+    )
+    p.add_argument(
+        "--runs",
+        type=int,
+        default=1000,
+        help=f"online: Monte Carlo runs per algorithm (at most {MAX_RUNS:,})",
+    )
     p.add_argument(
         "--no-mcmc", action="store_true", help="table2: leave out the emcee posterior row of each scenario"
     )
@@ -29,7 +42,8 @@ def register(sub) -> None:
         type=int,
         default=None,
         metavar="S",
-        help="table2: steps of each posterior chain (default 1500; burn-in a third)",
+        help=f"table2: steps of each posterior chain (default 1500, at most {MAX_MCMC_STEPS:,}; "
+        "burn-in a third)",
     )
     p.add_argument(
         "--sensors",

@@ -5,14 +5,15 @@ from __future__ import annotations
 
 from ..experiments import online, online_text, table2, table2_text
 from ..experiments.mcmc_row import MCMC_MIN_STEPS
-from .common import Progress, emit_json, require_at_least, require_in_range, require_output_dir
-from .reproduce import MAX_SENSOR_NOISE
+from .common import Progress, emit_json, require_in_range, require_output_dir
+from .reproduce import MAX_MCMC_STEPS, MAX_RUNS, MAX_SEEDS, MAX_SENSOR_NOISE
 
 
 def run(args) -> int:
     """Reproduce the requested target(s) on the built-in defaults."""
-    require_at_least("reproduce", 1, seeds=args.seeds, runs=args.runs)
-    require_at_least("reproduce", MCMC_MIN_STEPS, mcmc_steps=args.mcmc_steps)
+    require_in_range("reproduce", 1, MAX_SEEDS, seeds=args.seeds)
+    require_in_range("reproduce", 1, MAX_RUNS, runs=args.runs)
+    require_in_range("reproduce", MCMC_MIN_STEPS, MAX_MCMC_STEPS, mcmc_steps=args.mcmc_steps)
     require_in_range("reproduce", 0.0, MAX_SENSOR_NOISE, sensor_noise=args.sensor_noise)  # simulate's
     require_output_dir("reproduce", "plot", args.plot)
     out = {}
