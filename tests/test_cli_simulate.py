@@ -118,6 +118,19 @@ def test_bad_values_exit_2_naming_the_flag(capsys, tmp_path, argv, flag):
     assert list(tmp_path.iterdir()) == [tmp_path / "BAD.json"]  # nothing written
 
 
+@pytest.mark.parametrize(
+    "vehicle", [{"wheel_radius_m": 1e-300}, {"wheel_radius_m": 1e300}, {"wheelset_inertia_kgm2": 1e300}]
+)
+def test_a_vehicle_whose_recording_fit_would_refuse_writes_nothing(capsys, tmp_path, vehicle):
+    """A sidecar vehicle far outside any locomotive: one line naming ``--vehicle`` and what a
+    reader would refuse, nothing written (a radius of 1e-300 wrote an inf adhesion column and its
+    sidecar, then ended in a NaN-truth traceback; 1e300 and the inertia wrote a file fit refuses)."""
+    (tmp_path / "v.json").write_text(json.dumps(vehicle))
+    code, _, err = _simulate(capsys, tmp_path / "x.csv", "--vehicle", tmp_path / "v.json", "--duration", "2")
+    assert code == 2 and err.count("\n") == 1 and "--vehicle" in err and "Traceback" not in err, err
+    assert list(tmp_path.iterdir()) == [tmp_path / "v.json"]
+
+
 def test_out_onto_a_directory_is_refused_before_simulating(capsys, tmp_path):
     """A directory where the recording (or its sidecar) would go: one line at once, not
     '[Errno 21] Is a directory' after the simulation."""

@@ -7,10 +7,13 @@ import json
 import math
 from pathlib import Path
 
+import numpy as np
+
 from ..data.recording import save_recording
 from ..data.scenarios import get_scenario
 from ..data.sidecar import _load_sidecar
 from ..data.simulator import DEFAULT_SAMPLES, SAMPLE_PERIOD, simulate
+from ..data.validate import MAX_SPEED, _check_finite, _check_values
 from ..data.vehicle import LOCO_22E
 from ..errors import RecordingError
 from ..models.effects import magnitudes
@@ -88,6 +91,20 @@ def _vehicle(path):
         raise UserError(f"--vehicle {exc}") from None
 
 
+def _readable(result, name: str) -> None:
+    """Raise :class:`UserError` unless the simulated columns pass the checks a reader makes of a
+    recording (finite, plausible magnitudes for its vehicle), so that simulate never writes a file
+    that fit refuses: a sidecar's wheel_radius_m of 1e-300 gave an inf adhesion column and a NaN
+    truth (a traceback after the recording and sidecar were written)."""
+    cols = {c: np.asarray(v, float) for c, v in result.columns.items()}
+    try:
+        _check_values(cols, result.vehicle, None, name, MAX_SPEED, {})
+        for col, values in cols.items():
+            _check_finite(values, col, name)
+    except RecordingError as exc:
+        raise UserError(f"{exc}: the recording would not be read back") from None
+
+
 def run(args) -> int:
     require_seed("simulate", args.seed)
     require_in_range("simulate", 0.0, MAX_SENSOR_NOISE, sensor_noise=args.sensor_noise)
@@ -110,16 +127,18 @@ def run(args) -> int:
     for path in (out.with_suffix(".json"), out.with_suffix(".truth.json")):  # its sidecar and truth
         if path.is_dir():
             raise UserError(f"--out {args.out}: {path} (written beside it) is a directory")
-    result = simulate(
-        scenario,
-        seed=args.seed,
-        effects=args.effect,
-        n_samples=n_samples,
-        vehicle=vehicle,
-        sample_period=1.0 / args.rate,
-        braking=args.test == "braking",
-        sensor_noise=args.sensor_noise,
-    )
+    with np.errstate(all="ignore"):  # an absurd vehicle's overflow is said once, by _readable
+        result = simulate(
+            scenario,
+            seed=args.seed,
+            effects=args.effect,
+            n_samples=n_samples,
+            vehicle=vehicle,
+            sample_period=1.0 / args.rate,
+            braking=args.test == "braking",
+            sensor_noise=args.sensor_noise,
+        )
+        _readable(result, "simulate" if args.vehicle is None else f"simulate --vehicle {args.vehicle}")
     save_recording(result.columns, result.vehicle, out)
     truth_path = out.with_suffix(".truth.json")
     truth_path.write_text(json.dumps(result.truth, indent=2, allow_nan=False) + "\n", encoding="utf-8")
