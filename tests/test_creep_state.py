@@ -9,9 +9,11 @@ import pytest
 from jadhesion.data import creep_state
 from jadhesion.data.creep_state import difference_sd, smooth_creep, smooth_recording
 from jadhesion.data.dataset import RAW_SIGNALS, Signals, to_dataset
+from jadhesion.data.recording import load_recording
 from jadhesion.data.sensors import SensorModel
 from jadhesion.data.simulator import simulate
 from jadhesion.data.vehicle import LOCO_22E
+from validation.foreign_generator import generate, write
 
 #: White speed noise only (2e-3 m/s): the smoother's model is then exact about the sensors.
 WHITE = SensorModel(2e-3, 0.0, 0.1, 0.0, 0.0, 0.0)
@@ -172,3 +174,40 @@ def test_to_dataset_runs_at_its_length_bucket_with_the_same_values():
     data = to_dataset(shorter)
     assert smooth_creep._cache_size() == compiled and data.creep.shape == (350,)
     np.testing.assert_array_equal(np.asarray(data.creep), np.asarray(to_dataset(shorter, pad=False).creep))
+
+
+def test_coasting_sd_scale_measures_an_understated_sd():
+    """On coasting samples the smoothed slip is its own error (after the small true slip, a line in
+    mu_hat |v|, is removed): stated sd half the true one reads a scale of 2, within the median's
+    sampling error at 2 000 samples; too few coasting samples, or an sd already right or wide, read 1."""
+    rng = np.random.default_rng(0)
+    n = 2000
+    v = np.full(n, 5.0)
+    mu = rng.uniform(-0.008, 0.008, n)
+    true_slip = 0.03 * mu * v
+    slip = true_slip + 1e-3 * rng.standard_normal(n)
+    scale, count = creep_state.coasting_sd_scale(slip, np.full(n, 5e-4), mu, v)
+    assert int(count) == n and abs(float(scale) - 2.0) < 0.15, float(scale)
+    assert float(creep_state.coasting_sd_scale(slip, np.full(n, 2e-3), mu, v)[0]) == 1.0
+    traction = mu + 0.05  # nothing coasts
+    assert float(creep_state.coasting_sd_scale(slip, np.full(n, 5e-4), traction, v)[0]) == 1.0
+    few = np.where(np.arange(n) < creep_state.COAST_MIN_SAMPLES - 1, mu, traction)
+    assert float(creep_state.coasting_sd_scale(slip, np.full(n, 5e-4), few, v)[0]) == 1.0
+    padded = np.arange(n) < n // 2  # padding takes no part
+    half, count = creep_state.coasting_sd_scale(slip, np.full(n, 5e-4), mu, v, padded)
+    assert int(count) == n // 2 and abs(float(half) - 2.0) < 0.2
+
+
+def test_to_dataset_states_the_slip_error_of_a_coasting_recording(tmp_path):
+    """The independent generator's coloured sensor noise (not in the smoother's model) makes the
+    smoother's sd 2× too small on this recording; scaled by its coasting, the stated sd is within
+    25 % of the slip's true error."""
+    made = generate(100, effect="none", sensor="mild")
+    recording = load_recording(write(made, tmp_path / "coasting.csv"))
+    data = to_dataset(recording, pad=False)
+    est = smooth_recording(recording)
+    true = np.interp(recording.columns["time"], made.latent["time"], made.latent["slip"])
+    moving = np.abs(np.asarray(data.adhesion)) >= 0.02
+    ratio = lambda sd: float(np.sqrt(np.mean(((np.asarray(data.slip) - true) / sd)[moving] ** 2)))  # noqa: E731
+    assert ratio(np.asarray(est.slip_sd)) > 1.6
+    assert 0.8 < ratio(np.asarray(data.slip_sd)) < 1.25, ratio(np.asarray(data.slip_sd))

@@ -24,7 +24,11 @@ Kalman filter's exact Gaussian log-likelihood (prediction-error decomposition) o
 ``q_v`` at that ``q_w``), each grid in one vmapped scan (2 × 13 filter passes: most of the
 smoother's cost). Noise correlated over longer than a few samples (coloured sensor noise) is not
 separable from motion in one recording; it is partly tracked as signal, and the reported standard
-deviations then understate the error (by 10–30 % at the simulator's realistic sensors).
+deviations then understate the error (by 10–30 % at the simulator's realistic sensors, 1.4–4.4× under
+the independent generator's). Where the recording coasts, :func:`coasting_sd_scale` measures that
+understatement — while coasting the true slip is a small fraction of the sensors' noise, so the
+smoothed slip there *is* its error — and :func:`jadhesion.data.dataset.to_dataset` scales the
+standard deviations by it.
 
 **Outputs** (:class:`CreepEstimate`): smoothed ``v``, ``w``, ``s = w / max(|v|, floor)``
 (:data:`jadhesion.models.kinematics.SPEED_FLOOR`, never NaN at standstill), their standard
@@ -50,6 +54,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..models.kinematics import SPEED_FLOOR
+from .segments import MIN_SPEED
 from .vehicle import GRAVITY
 
 #: log10 of the candidate process-noise densities q [m²/s⁵].
@@ -59,6 +64,16 @@ MIN_MEASUREMENT_SD = 1e-6
 #: The sensors as the states they sum (rows of ``H``), in the order they are applied: vehicle speed
 #: ``v``, wheel speed ``v + w`` (independent noises: one 2-vector update is these two scalar ones).
 _SENSORS = ((0,), (0, 2))
+
+
+#: Coasting for :func:`coasting_sd_scale`: ``|mu_hat|`` below this [-] while moving (half the
+#: selection's coasting limit :data:`.segments.MIN_DRIVE_MU`: the true slip there, ``≈ mu_hat |v| /``
+#: the curve's initial slope, is a fraction of a speed sensor's noise).
+COAST_ADHESION = 0.01
+#: Fewest coasting samples that calibrate the slip's sd (fewer: the smoother's sd as it is).
+COAST_MIN_SAMPLES = 50
+#: Median of the χ² law with one degree of freedom: ``median(z²) / 0.4549`` estimates ``E z²``.
+_CHI2_1_MEDIAN = 0.45493642311957283
 
 
 class CreepEstimate(NamedTuple):
@@ -250,6 +265,32 @@ def smooth_creep(time, wheel_speed, vehicle_speed, torque, inertia, wheel_radius
         jnp.sqrt(r),
         q,
     )
+
+
+def coasting_sd_scale(slip, slip_sd, adhesion, vehicle_speed, valid=None):
+    """``(scale, samples)``: the factor [-] by which the smoother's ``slip_sd`` understates the
+    smoothed slip's error, measured on the recording's coasting samples (``|adhesion| <``
+    :data:`COAST_ADHESION`, ``|v| ≥`` :data:`.segments.MIN_SPEED`, ``slip_sd > 0``; ``valid`` as
+    in :func:`smooth_creep`), and their count. The small true slip of coasting, ``w ≈ c · mu_hat
+    |v|`` with ``c`` the inverse initial slope, is fitted (least squares) and removed; the scale
+    is the robust RMS ``√(median(z²) / 0.4549)`` of ``z = (ŵ − c mu_hat |v|) / slip_sd``, floored at
+    1 (the smoother leaves out coloured noise; it adds none), and 1 with fewer than
+    :data:`COAST_MIN_SAMPLES` such samples. Inputs (n,) [m/s, -]; traceable.
+
+    On the independent generator's recordings with coasting (16 of 20 clean, mild and realistic
+    sensors, 20–200 Hz) the true understatement was 1.35–4.4× and this scale 1.17–5.4×: true over
+    estimated 0.80–1.49, median 0.97."""
+    real = jnp.ones(slip.shape, bool) if valid is None else jnp.asarray(valid) > 0
+    moving = jnp.abs(vehicle_speed) >= MIN_SPEED
+    coast = real & moving & (jnp.abs(adhesion) < COAST_ADHESION) & (slip_sd > 0)
+    x = jnp.where(coast, adhesion * jnp.abs(vehicle_speed), 0.0)
+    y = jnp.where(coast, slip, 0.0)
+    xx = jnp.sum(x * x)
+    c = jnp.where(xx > 0, jnp.sum(x * y) / jnp.where(xx > 0, xx, 1.0), 0.0)
+    z2 = jnp.where(coast, ((y - c * x) / jnp.where(coast, slip_sd, 1.0)) ** 2, jnp.nan)
+    count = jnp.sum(coast)
+    scale = jnp.sqrt(jnp.nanmedian(z2) / _CHI2_1_MEDIAN)
+    return jnp.where(count >= COAST_MIN_SAMPLES, jnp.maximum(scale, 1.0), 1.0), count
 
 
 def smooth_recording(recording, valid=None) -> CreepEstimate:

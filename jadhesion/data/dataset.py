@@ -27,7 +27,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..models import kinematics
-from .creep_state import smooth_recording
+from .creep_state import coasting_sd_scale, smooth_recording
 from .length_buckets import bucket_length
 from .observer import observe_adhesion
 
@@ -113,7 +113,9 @@ def to_dataset(
 
     ``creep="smoothed"`` (default): when the recording has the four raw signals (``time``, both
     speeds, ``traction_torque``), slip, creep and vehicle speed are the RTS-smoothed states of
-    :func:`jadhesion.data.creep_state.smooth_recording`; ``mu_hat`` stays the observer's. Without
+    :func:`jadhesion.data.creep_state.smooth_recording`, their standard deviations scaled by
+    :func:`jadhesion.data.creep_state.coasting_sd_scale` (1 without coasting); ``mu_hat`` stays
+    the observer's. Without
     raw signals, or with ``creep="raw"``, as follows.
 
     Without the raw signals the ``adhesion`` column is used directly: creepage from ``creepage``, else from
@@ -146,12 +148,13 @@ def to_dataset(
     if creep == "raw" or not raw_signals:
         return raw
     est = smooth_recording(recording, valid)
+    scale, _ = coasting_sd_scale(est.slip, est.slip_sd, raw.adhesion, est.vehicle_speed, valid)
     return raw._replace(
         creep=est.creep,
         slip=est.slip,
         vehicle_speed=est.vehicle_speed,
-        slip_sd=est.slip_sd,
-        creep_sd=est.creep_sd,
+        slip_sd=scale * est.slip_sd,
+        creep_sd=scale * est.creep_sd,
     )
 
 
