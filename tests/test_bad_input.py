@@ -92,6 +92,11 @@ FILES = {
         None,
         ["weak_drive.csv", "coasting", "traction_torque", "axle_load_kg"],
     ),
+    "creep_huge.csv": (  # no pair of plausible speeds gives it (was fitted; online ended nonfinite)
+        csv(*[f"{0.01 * (i + 1) if i != 7 else 1e300},0.6,0.2" for i in range(20)], header=CREEP_HEADER),
+        None,
+        ["creep_huge.csv", "creepage", "row 8"],
+    ),
     "creep_bad_adhesion.csv": (
         csv(*[f"{0.01 * (i + 1)},0.6,{'x' if i == 4 else 0.2}" for i in range(20)], header=CREEP_HEADER),
         None,

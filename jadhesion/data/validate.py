@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import RecordingError
+from ..models.kinematics import SPEED_FLOOR
 from .vehicle import Vehicle
 
 #: Columns of a raw-signal recording.
@@ -201,5 +202,17 @@ def _check_values(cols, vehicle: Vehicle, lines, name: str, max_speed: float, sh
                 f"{_where('adhesion', i, lines)}: adhesion coefficient "
                 f"{cols['adhesion'][i]:.4g} is implausible (|mu| <= {MAX_ADHESION:g}); "
                 f"a force or a percentage?",
+            )
+    # a given slip or creep no pair of plausible speeds makes (creep: slip over |v| floored at
+    # SPEED_FLOOR, as the fit computes it); creepage 1e300 ran, online ended 'nonfinite'
+    limits = {"slip_velocity": (2 * max_speed, " m/s"), "creepage": (2 * max_speed / SPEED_FLOOR, "")}
+    for col, (limit, unit) in limits.items():
+        bad = np.flatnonzero(np.abs(cols[col]) > limit) if col in cols else ()
+        if len(bad):
+            i = int(bad[0])
+            raise _fail(
+                name,
+                f"{_where(col, i, lines)}: {cols[col][i]:.4g}{unit} is implausible (|{col}| <= "
+                f"{limit:g}{unit} with both speeds within {max_speed:g} m/s)",
             )
     return notes
