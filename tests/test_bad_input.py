@@ -210,6 +210,8 @@ FLAGS = [
     (["sweep", "--max-iter", str(2**64), "--methods", "itlbo", *SMALL, "--out", "{tmp}/s.csv"], "--max-iter"),
     (["sweep", "--chunk-size", "0", "--out", "{tmp}/s.csv"], "--chunk-size"),
     (["sweep", "--samples", "0", "--out", "{tmp}/s.csv"], "--samples"),
+    (["sweep", "--samples", "1000000000", "--out", "{tmp}/s.csv"], "--samples"),  # was XLA's 4 TB
+    (["sweep", "--chunk-size", "1000000000", *SMALL, "--out", "{tmp}/s.csv"], "--chunk-size"),  # OOM-killed
     (["reproduce", "table2", "--seeds", "0"], "--seeds"),
     (["reproduce", "online", "--runs", "0"], "--runs"),
     (["reproduce", "online", "--runs", "100000000"], "--runs"),  # was XLA's RESOURCE_EXHAUSTED

@@ -55,8 +55,16 @@ def register(sub) -> None:
         default=None,
         help=f"population methods: iterations (default 300, at most {MAX_ITER:,})",
     )
-    p.add_argument("--samples", type=int, default=None, help="samples per simulated test (default 2000)")
-    p.add_argument("--chunk-size", type=int, default=64, help="fits per compiled batch (default 64)")
+    p.add_argument(
+        "--samples", type=int, default=None, help="samples per simulated test (default 2000, at most 200,000)"
+    )
+    p.add_argument(
+        "--chunk-size",
+        type=int,
+        default=64,
+        help="fits per compiled batch (default 64; at most 1 GiB per evaluation: chunk × samples "
+        "× population × 8 B)",
+    )
     p.add_argument(
         "--out",
         default="sweep.csv",

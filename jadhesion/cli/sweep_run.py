@@ -8,17 +8,19 @@ from pathlib import Path
 import jax
 
 from ..data.simulator import DEFAULT_SAMPLES
+from ..identify.methods import METHODS, POPULATION
 from ..identify.polach_fit import MIN_SAMPLES
 from ..sweeps import Grid, run_sweep
 from .common import (
     MAX_ITER,
+    MAX_POPULATION_BYTES,
     Progress,
     UserError,
     emit_json,
     require_at_least,
     require_in_range,
-    require_population_memory,
 )
+from .simulate_run import MAX_SAMPLES
 from .sweep import MAX_SEEDS
 
 
@@ -56,23 +58,45 @@ def _initialize(args) -> None:
         raise UserError(f"sweep: cannot join the multi-process run: {exc}") from None
 
 
+def _check_chunk_memory(args, methods) -> None:
+    """A chunk's fits run as one batch, padded to ``--chunk-size``: chunk × samples values (× the
+    population of a population method) per evaluation within :data:`.common.MAX_POPULATION_BYTES`.
+    --chunk-size 10**9 was killed by the kernel's OOM killer, --samples 10**9 asked XLA for 4 TB."""
+    pops = [args.pop_size or METHODS[m].defaults["pop_size"] for m in methods if m in POPULATION]
+    pop = max(pops, default=1)
+    samples = args.samples or DEFAULT_SAMPLES
+    need = args.chunk_size * samples * pop * 8
+    if need > MAX_POPULATION_BYTES:
+        members = f", populations of {pop}," if pop > 1 else ""
+        chunk = MAX_POPULATION_BYTES // (8 * samples * pop)
+        fix = (
+            f"--chunk-size {chunk} or less" + (" or a smaller --pop-size" if pop > 1 else "")
+            if chunk >= 1
+            else f"--pop-size {MAX_POPULATION_BYTES // (8 * samples)} or less and --chunk-size 1"
+        )
+        raise UserError(
+            f"sweep: --chunk-size {args.chunk_size} fits of {samples} samples{members} need "
+            f"{need / 2**30:.3g} GiB per evaluation, more than {MAX_POPULATION_BYTES / 2**30:g} GiB: "
+            f"use {fix}"
+        )
+
+
 def run(args) -> int:
     """Run the sweep the arguments describe; print (or ``--json``) its summary on process 0."""
     require_in_range("sweep", 1, MAX_SEEDS, seeds=args.seeds)
     require_at_least("sweep", 1, chunk_size=args.chunk_size)
     require_in_range("sweep", 1, MAX_ITER, max_iter=args.max_iter)
     require_at_least("sweep", 2, pop_size=args.pop_size)
-    require_at_least("sweep", MIN_SAMPLES, samples=args.samples)
-    if args.pop_size is not None:  # a chunk's fits evaluate their populations together
-        samples = args.chunk_size * (args.samples or DEFAULT_SAMPLES)
-        require_population_memory("sweep", args.pop_size, samples, f"with --chunk-size {args.chunk_size}")
+    require_in_range("sweep", MIN_SAMPLES, MAX_SAMPLES, samples=args.samples)  # simulate's range
+    methods = _list(str, "--methods", args.methods)
+    _check_chunk_memory(args, methods)
     _check_out(args.out)
     _initialize(args)
     budget = {"pop_size": args.pop_size, "max_iter": args.max_iter}
     grid = Grid(
         scenarios=_list(str, "--scenarios", args.scenarios),
         seeds=range(args.seeds),
-        methods=_list(str, "--methods", args.methods),
+        methods=methods,
         noise_scale=_list(float, "--noise", args.noise),
         creep_max=_list(float, "--creep-max", args.creep_max),
         n_samples=args.samples,
