@@ -76,6 +76,12 @@ FILES = {
         json.dumps({"shear_modulus_pa": 1e-300}),
         ["k_eps = 0", "shear_modulus_pa"],
     ),
+    # mu_hat ~ 1e293: LM 'converged' at MAE 1e293, the population methods a NaN traceback
+    "sidecar_inertia.csv": (
+        csv(*ROWS),
+        json.dumps({"wheelset_inertia_kgm2": 1e300}),
+        ["sidecar_inertia.csv", "mu_hat", "wheelset_inertia_kgm2"],
+    ),
     "three_rows.csv": (csv(*ROWS[:3]), None, ["three_rows.csv", "samples"]),
     "creep_too_few.csv": (
         csv("0.01,0.6,0.2", "0.02,0.6,0.25", header=CREEP_HEADER),

@@ -12,7 +12,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..errors import RecordingError
-from .dataset import PolachDataset, to_dataset
+from .dataset import PolachDataset, adhesion_source, to_dataset
 from .segments import (
     MIN_DRIVE_MU,
     MIN_SPEED,
@@ -22,6 +22,7 @@ from .segments import (
     select,
     slice_recording,
 )
+from .validate import MAX_ADHESION
 
 #: More than this share of the moving samples with the creep against the drive: a recording error.
 DISAGREE_SHARE = 0.5
@@ -116,6 +117,25 @@ def zero_creep_message(recording, mask) -> str | None:
     )
 
 
+def require_plausible_mu_hat(recording, adhesion) -> None:
+    """Raise :class:`RecordingError` when the observer's μ̂ on the samples used (``adhesion``) has a
+    median |μ̂| above :data:`.validate.MAX_ADHESION` (or not finite), as an ``adhesion`` column
+    with such a value is refused: the torque's unit or the sidecar's axle load, radius or wheelset
+    inertia is wrong (an inertia of 1e300 gave μ̂ ~ 1e293, a 'converged' LM fit of MAE 1e293 and
+    a NaN traceback from the population methods)."""
+    if adhesion_source(recording) != "observer":  # a column: checked as it was read
+        return
+    mu = np.abs(np.asarray(adhesion, float))
+    median = float(np.median(mu)) if mu.size else 0.0
+    if not median <= MAX_ADHESION:
+        raise RecordingError(
+            f"{recording.path}: the observer's adhesion estimate mu_hat has median |mu_hat| "
+            f"{median:.3g} on the selected samples, implausible (<= {MAX_ADHESION:g}): check "
+            "traction_torque's unit and the sidecar's axle_load_kg, wheel_radius_m and "
+            "wheelset_inertia_kgm2"
+        )
+
+
 def usable_selection(recording, phase: str) -> Selection:
     """:func:`.segments.select` of ``phase``, refused when it holds nothing to identify.
 
@@ -156,10 +176,12 @@ def tracking_dataset(recording, phase: str = "traction", creep: str = "smoothed"
     and running backwards read as traction (``sign(v)`` × −1 on braking samples, else × +1).
 
     Raises:
-        RecordingError: as :func:`usable_selection`.
+        RecordingError: as :func:`usable_selection`, or an implausible μ̂
+            (:func:`require_plausible_mu_hat`).
     """
     selection = usable_selection(recording, phase)
     data = per_stretch_dataset(recording, selection, creep=creep, build=build)
+    require_plausible_mu_hat(recording, np.asarray(data.adhesion)[selection.mask])
     v = np.asarray(recording.columns["vehicle_speed"], float)
     braking = np.where(selection.labels == "braking", -1.0, 1.0)
     orient = jnp.asarray(np.where(v < 0, -1.0, 1.0) * braking)
@@ -188,13 +210,16 @@ def selected_dataset(
     :func:`~jadhesion.data.dataset.to_dataset`; the CLI passes its cached drop-in).
 
     Raises:
-        RecordingError: as :func:`usable_selection`.
+        RecordingError: as :func:`usable_selection`, or an implausible μ̂
+            (:func:`require_plausible_mu_hat`).
     """
     selection = usable_selection(recording, phase)
     if selection.mask.size < MIN_STRETCH_SAMPLES:  # too short for the smoother: the raw
         creep = "raw"  # difference (the fit names its minimum)
     if selection.complete:
-        return build(recording, observer_variant, creep), selection
+        data = build(recording, observer_variant, creep)
+        require_plausible_mu_hat(recording, data.adhesion)
+        return data, selection
     parts = []
     for a, b in selection.stretches:
         keep = selection.mask[a:b]
@@ -209,4 +234,6 @@ def selected_dataset(
                 )
             )
         )
-    return _concatenate(parts), selection
+    data = _concatenate(parts)
+    require_plausible_mu_hat(recording, data.adhesion)
+    return data, selection
