@@ -5,11 +5,13 @@ import json
 import os
 import subprocess
 import sys
+from argparse import Namespace
 
 import numpy as np
 import pytest
 
 from jadhesion.cli import main
+from jadhesion.cli.reproduce_run import ignored_flags
 
 HEADER = "time,vehicle_speed,wheel_speed,traction_torque"
 
@@ -308,3 +310,16 @@ def test_fit_plot_refuses_two_files_that_would_write_one_figure(tmp_path, capsys
     code, out, err = run_main(capsys, argv)
     assert_one_line_exit_2(code, out, err, ["--plot", "ok.fit.png", str(other)])
     assert not (tmp_path / "fig").exists()
+
+
+def test_reproduce_says_which_flags_its_target_ignores(capsys):
+    """A flag of the other target (``--seeds`` with ``online``), ``--mcmc-steps`` with
+    ``--no-mcmc`` or ``--sensor-noise`` on clean sensors: a warning, not silently dropped."""
+    code, out, err = run_main(capsys, ["reproduce", "online", "--runs", "1", "--seeds", "3", "--json"])
+    assert code == 0 and json.loads(out) and "--seeds" in err and "ignored" in err
+    table2 = dict(target="table2", seeds=20, runs=1000, no_mcmc=False, mcmc_steps=None, sensors="clean")
+    assert ignored_flags(Namespace(**table2, sensor_noise=1.0)) == []
+    notes = ignored_flags(
+        Namespace(**{**table2, "runs": 5, "no_mcmc": True, "mcmc_steps": 40}, sensor_noise=2.0)
+    )
+    assert [n.split()[0] for n in notes] == ["--runs:", "--mcmc-steps", "--sensor-noise"]

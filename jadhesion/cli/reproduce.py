@@ -19,6 +19,8 @@ from .simulate import MAX_SENSOR_NOISE
 #: 0.1 GB each) and ``--mcmc-steps`` (32 walkers' chain); beyond them a run ran out of memory
 #: (--runs 10**8 asked XLA for 960 GB) or overflowed in a traceback.
 MAX_SEEDS, MAX_RUNS, MAX_MCMC_STEPS = 1000, 10_000, 100_000
+#: Defaults of ``--seeds`` and ``--runs``.
+DEFAULT_SEEDS, DEFAULT_RUNS = 20, 1000
 
 
 def register(sub) -> None:
@@ -26,12 +28,15 @@ def register(sub) -> None:
     p = sub.add_parser("reproduce", help=COMMANDS["reproduce"])
     p.add_argument("target", nargs="?", choices=("table2", "online"), default=None)
     p.add_argument(
-        "--seeds", type=int, default=20, help=f"table2: data/optimiser seeds per cell (at most {MAX_SEEDS})"
+        "--seeds",
+        type=int,
+        default=DEFAULT_SEEDS,
+        help=f"table2: data/optimiser seeds per cell (at most {MAX_SEEDS})",
     )
     p.add_argument(
         "--runs",
         type=int,
-        default=1000,
+        default=DEFAULT_RUNS,
         help=f"online: Monte Carlo runs per algorithm (at most {MAX_RUNS:,})",
     )
     p.add_argument(
