@@ -323,3 +323,13 @@ def test_reproduce_says_which_flags_its_target_ignores(capsys):
         Namespace(**{**table2, "runs": 5, "no_mcmc": True, "mcmc_steps": 40}, sensor_noise=2.0)
     )
     assert [n.split()[0] for n in notes] == ["--runs:", "--mcmc-steps", "--sensor-noise"]
+
+
+def test_fit_out_onto_a_recording_fitted_is_refused(tmp_path, capsys, recording):
+    """``--out`` naming the recording itself: refused, the recording kept (the table silently
+    replaced it)."""
+    copy = tmp_path / "run.csv"
+    copy.write_text(recording.read_text())
+    code, out, err = run_main(capsys, ["fit", copy, "--method", "lm", "--out", copy])
+    assert_one_line_exit_2(code, out, err, ["--out", "overwritten"])
+    assert copy.read_text() == recording.read_text()

@@ -115,6 +115,16 @@ def expand_files(names) -> tuple[list[Path], bool]:
     return paths, many
 
 
+def _check_out_is_no_input(args, paths) -> None:
+    """``--out`` naming one of the recordings fitted is refused before any work: the table
+    silently replaced the recording."""
+    if args.out is None or not Path(args.out).exists():
+        return
+    for path in paths:
+        if path.exists() and path.samefile(args.out):
+            raise UserError(f"fit: --out {args.out}: is the recording {path}; it would be overwritten")
+
+
 def _check_figure_names(args, paths, many: bool) -> None:
     """Several files with ``--plot``: each writes ``STEM.fit.png``, so two with one stem (``a.csv``
     and ``a.parquet``, or ``x/a.csv`` and ``y/a.csv``) are refused before any work; the second
@@ -374,6 +384,7 @@ def run(args) -> int:
     trust blocks."""
     _check_flags(args)
     paths, many = expand_files(args.file)
+    _check_out_is_no_input(args, paths)
     _check_figure_names(args, paths, many)
     paths, loaded, skipped = _load_all(args, paths)  # every file checked before any fit
     datasets = [d for d, _, _ in loaded]
