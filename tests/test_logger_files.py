@@ -7,6 +7,8 @@ import os
 import re
 import subprocess
 import sys
+import threading
+from pathlib import Path
 
 import jax
 import numpy as np
@@ -414,3 +416,19 @@ def test_time_in_ms_labelled_seconds_is_noted_not_refused(tmp_path):
     assert (
         notes(np.arange(1100) * 3.0) == notes(ms + 0.5 * (np.arange(1100) % 2)) == notes(cols["time"]) == ()
     )
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/zero") or not hasattr(os, "mkfifo"), reason="POSIX devices")
+def test_streams_are_read_and_an_endless_one_is_refused(tmp_path):
+    """A pipe (``/dev/stdin``, a FIFO) reads as its file does; ``/dev/zero`` is one error line after
+    one chunk (it had filled the machine's memory until the kernel killed the process)."""
+    twin = _logger_twin(_si_columns(30), tmp_path / "twin.csv")
+    fifo = tmp_path / "pipe.csv"
+    os.mkfifo(fifo)
+    writer = threading.Thread(target=fifo.write_bytes, args=(twin.read_bytes(),))
+    writer.start()
+    rec = load_recording(fifo, columns=LOGGER_MAP)
+    writer.join()
+    same = load_recording(twin, columns=LOGGER_MAP)
+    np.testing.assert_array_equal(rec.columns["time"], same.columns["time"])
+    assert _message(Path("/dev/zero")) == "/dev/zero: binary data (NUL byte at byte 0), not a text file"

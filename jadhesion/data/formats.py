@@ -164,6 +164,8 @@ def read_columns(path: Path, name: str):
         raise _fail(name, "file not found")
     if path.is_dir():
         raise _fail(name, "is a directory, not a file")
+    if not path.is_file():  # the binary readers seek: a stream cannot be one of these formats
+        raise _fail(name, "not a regular file (a device, pipe or socket); save it to a file")
     reader = _parquet if path.suffix.lower() in PARQUET_SUFFIXES else _mat
     header, columns, notes = reader(path, name)
     if not header:

@@ -24,13 +24,34 @@ _UNIT_KEYS = frozenset().union(*UNITS.values())
 _DECIMAL_COMMA = re.compile(r"^\s*[+-]?(\d*),(\d+)(?:[eE][+-]?\d+)?\s*$")
 
 
+#: Most bytes read from a stream (``/dev/stdin``, a pipe, a device) [B].
+STREAM_LIMIT = 1 << 30
+_CHUNK = 1 << 20
+
+
+def _read_stream(path: Path, name: str) -> bytes:
+    """The bytes of a file that is not a regular one, read in chunks up to :data:`STREAM_LIMIT`;
+    stops at the first chunk with a NUL byte (binary: reported by the caller), so ``/dev/zero``
+    costs one chunk instead of the machine's memory."""
+    parts, size = [], 0
+    with path.open("rb") as stream:
+        while chunk := stream.read(_CHUNK):
+            parts.append(chunk)
+            size += len(chunk)
+            if b"\x00" in chunk:
+                break
+            if size > STREAM_LIMIT:
+                raise _fail(name, f"more than {STREAM_LIMIT >> 30} GiB from a stream; save it to a file")
+    return b"".join(parts)
+
+
 def _read_text(path: Path, name: str, *, kind: str = "file") -> str:
     if not path.exists():
         raise _fail(name, f"{kind} not found")
     if path.is_dir():
         raise _fail(name, f"is a directory, not a {kind}")
     try:
-        raw = path.read_bytes()
+        raw = path.read_bytes() if path.is_file() else _read_stream(path, name)
     except OSError as exc:
         raise _fail(name, f"cannot read {kind}: {exc.strerror or exc}") from None
     nul = raw.find(b"\x00")
