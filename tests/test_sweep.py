@@ -6,6 +6,7 @@ analytic source of ``_sweep_worker.py`` and must reproduce the reference table b
 ``seconds`` column aside).
 """
 
+import argparse
 import importlib.util
 import json
 import math
@@ -22,6 +23,8 @@ import pytest
 
 from _sweep_worker import toy_grid, toy_simulate
 from jadhesion.cli import main as cli_main
+from jadhesion.cli.common import UserError
+from jadhesion.cli.sweep_run import _check_chunk_memory
 from jadhesion.data.dataset import PolachDataset
 from jadhesion.data.scenarios import SCENARIOS
 from jadhesion.errors import InputError
@@ -126,10 +129,12 @@ def workers(tmp_path_factory):
         dist = ("--coordinator", address, "--num-processes", "2", "--process-id", str(i))
         procs[f"rank{i}"] = _spawn(_worker(root / "dist.csv", *dist), 2, cache=cache)
     yield root, procs
-    for proc in procs.values():
+    for proc in procs.values():  # a worker no selected test read still holds its pipes open
         if proc.poll() is None:
             proc.kill()
-            proc.communicate()
+        proc.stdout.close()
+        proc.stderr.close()
+        proc.wait()
 
 
 @pytest.fixture(scope="module")
@@ -366,3 +371,17 @@ def test_cli_end_to_end(tmp_path):
     assert doc["fits"] == 2 and doc["processes"] == 1 and doc["out"] == str(out)
     table = read_table(out)
     assert list(table["noise_scale"]) == [1.0, 2.0] and np.all(np.isfinite(table["kA"]))
+
+
+def test_default_chunk_shrinks_to_fit_a_given_one_is_checked():
+    """Without --chunk-size a chunk is 64 fits, or as many as keep one evaluation within 1 GiB
+    (200 000 samples of improved TLBO, populations of 50: 13); a given --chunk-size beyond that
+    is refused naming the largest that fits."""
+    big = argparse.Namespace(chunk_size=None, pop_size=None, samples=200_000)
+    _check_chunk_memory(big, ["itlbo"])
+    assert big.chunk_size == 13
+    small = argparse.Namespace(chunk_size=None, pop_size=None, samples=2000)
+    _check_chunk_memory(small, ["itlbo", "lm"])
+    assert small.chunk_size == 64
+    with pytest.raises(UserError, match="use --chunk-size 13 or less"):
+        _check_chunk_memory(argparse.Namespace(chunk_size=64, pop_size=None, samples=200_000), ["itlbo"])

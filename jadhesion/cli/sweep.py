@@ -61,9 +61,9 @@ def register(sub) -> None:
     p.add_argument(
         "--chunk-size",
         type=int,
-        default=64,
-        help="fits per compiled batch (default 64; at most 1 GiB per evaluation: chunk × samples "
-        "× population × 8 B)",
+        default=None,
+        help="fits per compiled batch (default 64, or fewer to keep 1 GiB per evaluation; at most "
+        "1 GiB: chunk × samples × population × 8 B)",
     )
     p.add_argument(
         "--out",

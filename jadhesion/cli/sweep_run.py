@@ -58,13 +58,20 @@ def _initialize(args) -> None:
         raise UserError(f"sweep: cannot join the multi-process run: {exc}") from None
 
 
+#: Fits per compiled batch when ``--chunk-size`` is not given (fewer where they would not fit).
+DEFAULT_CHUNK = 64
+
+
 def _check_chunk_memory(args, methods) -> None:
     """A chunk's fits run as one batch, padded to ``--chunk-size``: chunk × samples values (× the
     population of a population method) per evaluation within :data:`.common.MAX_POPULATION_BYTES`.
-    --chunk-size 10**9 was killed by the kernel's OOM killer, --samples 10**9 asked XLA for 4 TB."""
+    Without ``--chunk-size``, :data:`DEFAULT_CHUNK` or the largest chunk within it. --chunk-size
+    10**9 was killed by the kernel's OOM killer, --samples 10**9 asked XLA for 4 TB."""
     pops = [args.pop_size or METHODS[m].defaults["pop_size"] for m in methods if m in POPULATION]
     pop = max(pops, default=1)
     samples = args.samples or DEFAULT_SAMPLES
+    if args.chunk_size is None:
+        args.chunk_size = max(1, min(DEFAULT_CHUNK, MAX_POPULATION_BYTES // (8 * samples * pop)))
     need = args.chunk_size * samples * pop * 8
     if need > MAX_POPULATION_BYTES:
         members = f", populations of {pop}," if pop > 1 else ""
