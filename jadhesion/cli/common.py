@@ -62,6 +62,19 @@ def require_population_memory(command: str, pop_size: int, samples: int, where: 
         )
 
 
+def require_output_file(command: str, value, suffixes=(".csv",)) -> None:
+    """Raise :class:`UserError` unless ``--out FILE`` names a file of one of ``suffixes`` (``.csv``
+    in any case, others exactly, as the writers match them) in an existing directory, and not a
+    directory. ``command`` prefixes the message (``""``: none)."""
+    out, prefix = Path(value), f"{command}: " if command else ""
+    if not (out.suffix in suffixes or (".csv" in suffixes and out.suffix.lower() == ".csv")):
+        raise UserError(f"{prefix}--out {value}: expected a {' or '.join(suffixes)} file name")
+    if not out.parent.is_dir():
+        raise UserError(f"{prefix}--out {value}: directory {str(out.parent)!r} does not exist")
+    if out.is_dir():
+        raise UserError(f"{prefix}--out {value}: is a directory")
+
+
 def require_output_dir(command: str, flag: str, value) -> None:
     """Raise :class:`UserError` unless ``--flag DIR`` (given, not None) can hold the command's
     files: a directory, or a missing one whose nearest existing ancestor is a directory. Checked

@@ -41,6 +41,7 @@ from .common import (
     require_at_least,
     require_in_range,
     require_output_dir,
+    require_output_file,
     require_population_memory,
     require_seed,
     table,
@@ -85,13 +86,7 @@ def _check_flags(args) -> None:
         sys.stderr.write("jadhesion: warning: --plot draws Polach fits only: no figure for --model kiencke\n")
     require_output_dir("fit", "plot", args.plot)
     if args.out is not None:
-        out = Path(args.out)
-        if out.suffix.lower() != ".csv":
-            raise UserError(f"fit: --out {args.out}: must name a .csv file")
-        if not out.parent.is_dir():
-            raise UserError(f"fit: --out {args.out}: directory {out.parent} does not exist")
-        if out.is_dir():
-            raise UserError(f"fit: --out {args.out}: is a directory")
+        require_output_file("fit", args.out)
 
 
 # ---- which files ------------------------------------------------------------------------------

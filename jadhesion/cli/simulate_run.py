@@ -18,7 +18,7 @@ from ..data.vehicle import LOCO_22E
 from ..errors import RecordingError
 from ..models.effects import magnitudes
 from ..models.polach import PARAM_NAMES
-from .common import UserError, emit_json, require_in_range, require_seed
+from .common import UserError, emit_json, require_in_range, require_output_file, require_seed
 from .simulate import MAX_SENSOR_NOISE
 
 #: Accepted ranges of ``--params`` values (physical validity, not the fit's box): name → (lo, hi,
@@ -117,13 +117,8 @@ def run(args) -> int:
     n_samples = _samples(args.duration, args.rate)
     vehicle = _vehicle(args.vehicle)
     magnitudes(args.effect)  # validate before any work
+    require_output_file("", args.out)
     out = Path(args.out)
-    if out.suffix.lower() != ".csv":
-        raise UserError(f"--out {args.out}: expected a .csv file name")
-    if not out.parent.is_dir():
-        raise UserError(f"--out {args.out}: directory {str(out.parent)!r} does not exist")
-    if out.is_dir():
-        raise UserError(f"--out {args.out}: is a directory")
     for path in (out.with_suffix(".json"), out.with_suffix(".truth.json")):  # its sidecar and truth
         if path.is_dir():
             raise UserError(f"--out {args.out}: {path} (written beside it) is a directory")

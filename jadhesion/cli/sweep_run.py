@@ -3,8 +3,6 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import jax
 
 from ..data.simulator import DEFAULT_SAMPLES
@@ -19,6 +17,7 @@ from .common import (
     emit_json,
     require_at_least,
     require_in_range,
+    require_output_file,
 )
 from .simulate_run import MAX_SAMPLES
 from .sweep import MAX_SEEDS
@@ -33,17 +32,6 @@ def _list(kind, flag: str, text: str) -> list:
         return [kind(t) for t in items]
     except ValueError:
         raise UserError(f"sweep: {flag} {text!r}: cannot read it as {kind.__name__}s") from None
-
-
-def _check_out(name: str) -> None:
-    """``--out``: a ``.csv`` or ``.parquet`` file (the writer's formats) in an existing directory."""
-    out = Path(name)
-    if not (out.suffix.lower() == ".csv" or out.suffix == ".parquet"):
-        raise UserError(f"sweep: --out {name}: expected a .csv or .parquet file name")
-    if not out.parent.is_dir():
-        raise UserError(f"sweep: --out {name}: directory {str(out.parent)!r} does not exist")
-    if out.is_dir():
-        raise UserError(f"sweep: --out {name}: is a directory")
 
 
 def _initialize(args) -> None:
@@ -97,7 +85,7 @@ def run(args) -> int:
     require_in_range("sweep", MIN_SAMPLES, MAX_SAMPLES, samples=args.samples)  # simulate's range
     methods = _list(str, "--methods", args.methods)
     _check_chunk_memory(args, methods)
-    _check_out(args.out)
+    require_output_file("sweep", args.out, (".csv", ".parquet"))  # the table writer's formats
     _initialize(args)
     budget = {"pop_size": args.pop_size, "max_iter": args.max_iter}
     grid = Grid(
