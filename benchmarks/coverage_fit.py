@@ -26,9 +26,10 @@ Runs before 2026-11-24 (``coverage_fit.json`` at 8d588e4, ``coverage_fit_robust.
 ``coverage_fit_truncated.json``) fitted every sample (:func:`jadhesion.data.dataset.to_dataset`),
 standstill and coasting included, which ``jadhesion fit`` never does.
 ``results/coverage_fit_conditional.json`` is the same run before the trust block stopped
-conditioning on parameters at a bound (commit 26731cc). The JSON records the git commit, every
-setting and ``os.getloadavg()``; the figure plots, per
-creep option, the median relative error of the slope and of μ0 and the 90 % coverage of kS and μ0
+conditioning on parameters at a bound (commit 26731cc). ``--slip-law population`` fits with the
+population slip law (:mod:`jadhesion.identify.slip_law`; ``coverage_fit_slip_law_*.json``). The
+JSON records the git commit, every setting and ``os.getloadavg()``; the figure plots, per creep
+option, the median relative error of the slope and of μ0 and the 90 % coverage of kS and μ0
 against the speed-sensor noise sd (and of μ_max where the run recorded the peak).
 """
 
@@ -58,6 +59,7 @@ from jadhesion.data.selected import selected_dataset  # noqa: E402
 from jadhesion.data.sensors import CLEAN, REALISTIC  # noqa: E402
 from jadhesion.data.simulator import simulate_many  # noqa: E402
 from jadhesion.identify.batch_fit import fit_datasets  # noqa: E402
+from jadhesion.identify.likelihood import SLIP_LAWS, with_slip_law  # noqa: E402
 from jadhesion.identify.peak import DERIVED  # noqa: E402
 from jadhesion.identify.polach_fit import fit_polach_batch  # noqa: E402
 from jadhesion.identify.trust import fit_report  # noqa: E402
@@ -103,13 +105,13 @@ def _fits(datasets):
     return [r.fit for r in fit_datasets(datasets, "lm", jax.random.key(0))]
 
 
-def score(recordings, truths, k_eps=None, creeps=CREEPS):
+def score(recordings, truths, k_eps=None, creeps=CREEPS, slip_law="normal"):
     """Per creep option: per-recording estimates, stderrs and hac lags of one set, and the report's
     peak (``derived``) beside the true curve's peak at the same speed (``k_eps``: the generator's
     true gradient constants, default the dataset's)."""
     out = {}
     for creep in creeps:
-        datasets = [selected_dataset(r, PHASE, creep=creep)[0] for r in recordings]
+        datasets = [with_slip_law(selected_dataset(r, PHASE, creep=creep)[0], slip_law) for r in recordings]
         fits = _fits(datasets)
         rows = []
         for i, (d, f, t) in enumerate(zip(datasets, fits, truths, strict=True)):
@@ -251,6 +253,7 @@ def main(argv=None):
     p.add_argument("--save", default=str(RESULTS / "coverage_fit.json"))
     p.add_argument("--figure", default=str(RESULTS / "coverage_fit.png"))
     p.add_argument("--creeps", default=",".join(CREEPS), help="creep options to fit")
+    p.add_argument("--slip-law", default="normal", choices=SLIP_LAWS, help="the fit's --slip-law")
     p.add_argument("--replot", action="store_true")
     args = p.parse_args(argv)
     if args.replot:
@@ -260,7 +263,7 @@ def main(argv=None):
     start = time.perf_counter()
 
     def record(key, recordings, truths, noise_sd, k_eps=None):
-        scored = score(recordings, truths, k_eps, tuple(args.creeps.split(",")))
+        scored = score(recordings, truths, k_eps, tuple(args.creeps.split(",")), args.slip_law)
         for creep, rows in scored.items():
             doc["results"][f"{key}/{creep}"] = rows
             doc["summary"][f"{key}/{creep}"] = {"noise_sd": noise_sd, **summarise(rows)}

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from . import COMMANDS
 from .common import MAX_ITER
-from .recording_options import add_recording_options
+from .recording_options import add_recording_options, add_slip_law_option
 
 #: Fit methods offered (the registry's names; kept literal so ``--help`` imports no JAX — a test
 #: keeps this equal to :data:`jadhesion.identify.methods.NAMES`).
@@ -47,6 +47,7 @@ def register(sub) -> None:
         default="smoothed",
         help="creep from the Kalman/RTS-smoothed speeds (default) or their raw difference",
     )
+    add_slip_law_option(p)
     p.add_argument("--seed", type=int, default=0, help="optimiser seed (default 0)")
     p.add_argument(
         "--pop-size",

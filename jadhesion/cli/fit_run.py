@@ -47,7 +47,7 @@ from .common import (
     table,
 )
 from .fit_program import fit_polach, seed_key, to_dataset, trust_numbers
-from .loading import load_dataset, load_from_args, say_sidecar_warning
+from .loading import load_dataset, load_from_args, say_sidecar_warning, slip_law_used
 
 
 def _given_budget(args) -> dict:
@@ -385,8 +385,9 @@ def run(args) -> int:
     datasets = [d for d, _, _ in loaded]
     _check_population(args, paths, datasets)
     docs = _fit_all(args, datasets)
-    for doc, (_, selection, report) in zip(docs, loaded, strict=True):
+    for doc, (dataset, selection, report) in zip(docs, loaded, strict=True):
         doc["creep"] = args.creep
+        doc["slip_law"] = slip_law_used(args, dataset, args.model == "polach")
         doc["selection"] = selection.document()
         doc["vehicle"] = report["vehicle"]
         doc["warnings"] = report["warnings"] + doc.get("warnings", [])  # the recording's first

@@ -11,6 +11,7 @@ from ..data.segments import trim
 from ..data.selected import selected_dataset
 from ..data.sidecar import sidecar_warning
 from ..errors import VehicleError
+from ..identify.likelihood import with_slip_law
 
 
 def load_from_args(args, path) -> Recording:
@@ -40,7 +41,8 @@ def load_dataset(args, path, build=to_dataset, *, recording: Recording | None = 
     of ``--phase`` (:func:`jadhesion.data.selected.selected_dataset`, observer and smoother per
     stretch between gaps; ``--creep`` when the command has it). ``build`` makes one stretch's
     dataset (default :func:`jadhesion.data.dataset.to_dataset`); ``recording``: the one
-    :func:`load_from_args` already gave, when the caller has it."""
+    :func:`load_from_args` already gave, when the caller has it. With ``--slip-law population``
+    the dataset carries that law's nodes (:func:`jadhesion.identify.likelihood.with_slip_law`)."""
     if recording is None:
         recording = load_from_args(args, path)
     try:
@@ -49,4 +51,17 @@ def load_dataset(args, path, build=to_dataset, *, recording: Recording | None = 
         )
     except VehicleError as error:  # several files: say which sidecar
         raise VehicleError(f"{recording.path.with_suffix('.json')}: {error}") from None
-    return recording, dataset, selection
+    return recording, with_slip_law(dataset, getattr(args, "slip_law", "normal")), selection
+
+
+def slip_law_used(args, dataset, applies: bool = True) -> str | None:
+    """The JSON's ``slip_law``: ``--slip-law``, or ``None`` where the fit has no slip law (raw
+    creep, a creepage file, a model without the errors-in-variables curve: ``applies`` false); a
+    population law asked for there is said on stderr, not silently dropped."""
+    law = getattr(args, "slip_law", "normal")
+    if applies and dataset.slip_sd is not None:
+        return law
+    if law != "normal":
+        why = "the creep has no uncertainty (raw, or a creepage column) or the model no slip law"
+        sys.stderr.write(f"jadhesion: warning: --slip-law {law} has no effect here: {why}\n")
+    return None

@@ -39,7 +39,7 @@ This module defines the arguments only; :mod:`.posterior_run` does the work.
 from __future__ import annotations
 
 from . import COMMANDS
-from .recording_options import add_recording_options
+from .recording_options import add_recording_options, add_slip_law_option
 
 #: ``--walkers``: an even ensemble of 12 to 512 (16× the default; every step evaluates the
 #: likelihood on walkers × samples values: 52 s for 200 steps of 512 walkers on a 4000-sample
@@ -90,6 +90,7 @@ def register(sub) -> None:
         help="smoothed (default): creep as a smoothed state with its uncertainty in the "
         "likelihood (errors in variables); raw: the difference of the speeds",
     )
+    add_slip_law_option(p)
     p.add_argument("--seed", type=int, default=0, help="0 to 2**63 - 1 (default 0)")
     p.add_argument("--json", action="store_true", help="one JSON document on stdout")
     add_recording_options(p)

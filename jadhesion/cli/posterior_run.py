@@ -29,7 +29,7 @@ from ..identify.trust import data_warnings as trust_data_warnings
 from ..models.polach import PARAM_NAMES
 from ..plots.posterior import corner_plot, predictive_plot
 from .common import Progress, UserError, emit_json, require_output_dir, require_seed, table
-from .loading import load_dataset, load_from_args, say_sidecar_warning
+from .loading import load_dataset, load_from_args, say_sidecar_warning, slip_law_used
 from .posterior import MAX_CHAIN_BYTES, MAX_WALKERS, MIN_WALKERS
 
 #: Without ``--steps``: the chain's first length, and the most it is extended to while it holds
@@ -215,6 +215,7 @@ def run(args) -> int:
         predictive_plot(result, data).savefig(out / "posterior_predictive.png", dpi=110)
     doc = _document(result, theta0, note, "smoothed" if data.slip_sd is not None else "raw")
     doc["tempering"] = tempering
+    doc["slip_law"] = slip_law_used(args, data)
     doc["selection"] = selection.document()
     found = data_warnings(recording, selection, data, result)
     doc["warnings"] = ([] if sidecar is None else [sidecar]) + found  # the chain's: diagnostics

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 #: Phases offered (:data:`jadhesion.data.segments.PHASES`; literal so ``--help`` imports no data code).
 PHASES = ("traction", "braking", "both")
+#: Laws of the true slip offered (:data:`jadhesion.identify.likelihood.SLIP_LAWS`; literal, as PHASES).
+SLIP_LAWS = ("normal", "population")
 
 
 def add_recording_options(parser) -> None:
@@ -52,4 +54,17 @@ def add_recording_options(parser) -> None:
         help="samples used: traction (default: moving, torque driving), braking "
         "(negative torque and creep) or both; standstill, coasting, direction "
         "changes and stretches between gaps too short are excluded and reported",
+    )
+
+
+def add_slip_law_option(parser) -> None:
+    """Add ``--slip-law`` (:data:`SLIP_LAWS`) to a command that fits Polach's curve."""
+    parser.add_argument(
+        "--slip-law",
+        choices=SLIP_LAWS,
+        default="normal",
+        help="law of the true slip given the smoothed one in the errors-in-variables curve: normal "
+        "(default) about the smoothed slip, sign-truncated; population: the recording's own slips "
+        "(deconvolved) as the prior, for steady runs whose slips crowd within a few of their sds "
+        "(README: 'Which slip law'); no effect with --creep raw",
     )

@@ -78,11 +78,12 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..data.dataset import PolachDataset
+from ..data.dataset import PolachDataset, cut
 from ..models.kinematics import SPEED_FLOOR
 from ..models.polach import polach_adhesion
+from .batch_fit import bucketed
 from .observer_view import ObserverTerms, lowpass
-from .slip_law import GH_WEIGHTS, slip_nodes
+from .slip_law import GH_WEIGHTS, posterior_nodes, slip_nodes
 
 LIKELIHOODS = ("gauss", "laplace", "ar1", "observer", "student")
 #: Likelihoods with an AR(1) noise coefficient ``rho`` (the last sampled coordinate).
@@ -104,18 +105,45 @@ def noise_names(likelihood: str, fixed_scale: bool = False) -> tuple:
     return scale + (("rho",) if likelihood in AUTOREGRESSIVE else ())
 
 
-def with_node_slips(data: PolachDataset) -> PolachDataset:
+#: The laws of the true slip given the smoothed one (:mod:`.slip_law`): ``"normal"`` (the default:
+#: normal about the smoothed slip, sign-truncated; the smoother's error taken as Berkson) and
+#: ``"population"`` (:func:`.slip_law.posterior_nodes`: classical error, the recording's own slips
+#: as the prior).
+SLIP_LAWS = ("normal", "population")
+
+
+def with_node_slips(data: PolachDataset, law: str = "normal") -> PolachDataset:
     """``data`` with ``node_slips`` (n, :data:`.slip_law.GH_NODES`): the slip [m/s] at each node of
-    the expectation (:func:`.slip_law.slip_nodes`), a function of the data alone. Evaluating those
-    nodes (inverse normal CDFs) was two thirds of :func:`curve_moments`'s time (2 000 rows: 0.41
-    ms, 0.12 ms from stored nodes), so every fit and sampler sets them once where it starts.
-    Unchanged without ``slip_sd`` or with the nodes set; a stack of datasets (leading axis) too."""
+    the expectation under slip law ``law`` (:data:`SLIP_LAWS`), a function of the data alone.
+    Evaluating the normal law's nodes (inverse normal CDFs) was two thirds of
+    :func:`curve_moments`'s time (2 000 rows: 0.41 ms, 0.12 ms from stored nodes), so every fit and
+    sampler sets them once where it starts. Unchanged without ``slip_sd`` or with the nodes set; a
+    stack of datasets (leading axis) too."""
+    if law not in SLIP_LAWS:
+        raise ValueError(f"slip law must be one of {SLIP_LAWS}, got {law!r}")
     if data.slip_sd is None or data.node_slips is not None:
         return data
     if data.slip.ndim > 1:
-        return jax.vmap(with_node_slips)(data)
+        return jax.vmap(partial(with_node_slips, law=law))(data)
+    if law == "population":
+        return data._replace(node_slips=posterior_nodes(data.slip, data.slip_sd, data.adhesion, data.weight))
     nodes = data.slip[None, :] + data.slip_sd[None, :] * slip_nodes(data.slip, data.slip_sd, data.adhesion)
     return data._replace(node_slips=nodes.T)
+
+
+_stored_nodes = jax.jit(with_node_slips, static_argnames="law")
+
+
+def with_slip_law(data: PolachDataset, law: str) -> PolachDataset:
+    """:func:`with_node_slips` for eager callers (the CLI, before a fit or sampler): computed on
+    ``data`` padded to its length bucket (:func:`.batch_fit.bucketed`: one program per bucket),
+    then cut back to its rows. The normal law's nodes are left to the fit, which sets them."""
+    if law not in SLIP_LAWS:
+        raise ValueError(f"slip law must be one of {SLIP_LAWS}, got {law!r}")
+    if law == "normal" or data.slip_sd is None or data.node_slips is not None:
+        return data
+    padded = _stored_nodes(bucketed(data), law=law)
+    return cut(padded, data.adhesion.shape[0])._replace(weight=data.weight)
 
 
 def curve_moments(theta, data: PolachDataset):
