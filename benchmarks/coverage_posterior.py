@@ -17,7 +17,8 @@ and likelihood: the share of 90 % intervals holding the truth of kA, kS, μ0 and
 the prior box is left out of that parameter's share and counted), the median interval width, the
 median |posterior median − truth|, and per recording the truth, the interval, the median and the
 ``tempering`` block (κ, tail check); per recording, the maximum-likelihood Student-t ν of the
-residuals at the truth (``tails_at_truth``). The JSON records the git commit, the settings and
+residuals at the truth (``tails_at_truth``; on the normal slip law). ``--slip-law`` is passed to
+every run. The JSON records the git commit, the settings and
 ``os.getloadavg()``.
 """
 
@@ -97,10 +98,11 @@ def tails_at_truth(path: Path, truth: dict) -> dict:
     return {"nu_ml": float(nu), "scale_ml": float(scale)}
 
 
-def _run(path: Path, entry: str, steps: int, walkers: int) -> dict | None:
+def _run(path: Path, entry: str, steps: int, walkers: int, slip_law: str = "normal") -> dict | None:
     buf = io.StringIO()
     likelihood, _, mode = entry.partition(":")
     args = ["posterior", str(path), "--json", "--steps", str(steps), "--walkers", str(walkers)]
+    args += ["--slip-law", slip_law]
     args += ["--likelihood", likelihood] + (["--temper"] if mode == "tempered" else [])
     with contextlib.redirect_stdout(buf), contextlib.redirect_stderr(io.StringIO()):
         code = cli(args)
@@ -153,6 +155,7 @@ def main(argv=None):
     p.add_argument("--steps", type=int, default=2000)
     p.add_argument("--walkers", type=int, default=32)
     p.add_argument("--likelihoods", default="gauss:tempered,student:tempered")
+    p.add_argument("--slip-law", default="normal", choices=("normal", "population"))
     p.add_argument(
         "--save", default=str(Path(__file__).parent / "results" / "coverage_posterior_student.json")
     )
@@ -167,7 +170,7 @@ def main(argv=None):
         for gen, label, path, truth in cases:
             doc["tails_at_truth"].append({"generator": gen, "case": label, **tails_at_truth(path, truth)})
             for lik in args.likelihoods.split(","):
-                res = _run(path, lik, args.steps, args.walkers)
+                res = _run(path, lik, args.steps, args.walkers, args.slip_law)
                 row = {"generator": gen, "case": label, "likelihood": lik, "truth": truth, "hit": None}
                 if res is not None:
                     row["truth"] = truth = {**truth, **_derived_truth(truth, path, res["vehicle_speed"])}
