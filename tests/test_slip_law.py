@@ -16,8 +16,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import stats
 
+from jadhesion.cli.recording_options import SLIP_LAWS as OFFERED_LAWS
 from jadhesion.data.scenarios import SCENARIOS
 from jadhesion.data.vehicle import LOCO_22E
+from jadhesion.identify.likelihood import SLIP_LAWS
 from jadhesion.identify.slip_law import (
     GH_NODES,
     GH_WEIGHTS,
@@ -209,3 +211,8 @@ def test_population_nodes_at_the_limits():
         jnp.concatenate([jnp.ones(slip.size), jnp.zeros(50)]),
     )
     np.testing.assert_allclose(np.asarray(padded)[: slip.size], nodes, rtol=1e-9, atol=1e-15)
+
+
+def test_the_command_line_offers_the_likelihoods_laws():
+    """The literal list of ``--slip-law`` (no JAX at ``--help``) is the likelihood's."""
+    assert OFFERED_LAWS == SLIP_LAWS

@@ -31,7 +31,8 @@ Measured coverage: ``benchmarks/results/coverage_posterior.json`` and
 ``--creep smoothed`` (the default) estimates creep as a smoothed state when the file has the raw
 signals (:mod:`jadhesion.data.creep_state`) and the likelihood integrates its uncertainty (errors in
 variables, :mod:`jadhesion.identify.likelihood`); ``--creep raw`` uses the speed difference. The
-JSON's ``creep`` says which one ran.
+JSON's ``creep`` says which one ran; ``--slip-law`` (``slip_law``) the law of the true slip
+given the smoothed one (:mod:`jadhesion.identify.slip_law`).
 
 This module defines the arguments only; :mod:`.posterior_run` does the work.
 """

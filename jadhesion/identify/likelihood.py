@@ -48,9 +48,11 @@ autoregressive two):
 **Errors in variables.** When the dataset carries ``slip_sd`` (the smoother's posterior standard
 deviation of the slip, :mod:`jadhesion.data.creep_state`), the true slip of sample i is
 ``N(w_i, sd_i²)`` given the recording, truncated to the sign of the adhesion force
-(:mod:`.slip_law`: why, and the nodes), and the curve is predicted by its expectation under that
-law, by Gauss–Hermite quadrature mapped onto the truncated normal (:func:`.slip_law.slip_nodes`:
-standardised nodes ``e_ij``, weights ``ω_j``; creep ``s = w / max(|v|, floor)`` at each node):
+(:mod:`.slip_law`: why, and the nodes; with the ``"population"`` law of :func:`with_node_slips`,
+its posterior under the recording's own slips as the prior), and the curve is predicted by its
+expectation under that law, by Gauss–Hermite quadrature mapped onto the truncated normal
+(:func:`.slip_law.slip_nodes`: standardised nodes ``e_ij``, weights ``ω_j``; creep
+``s = w / max(|v|, floor)`` at each node):
 
     m_i = Σ_j ω_j mu_adh(w_i + sd_i e_j),    V_i = Σ_j ω_j mu_adh(w_i + sd_i e_j)² − m_i²
 
