@@ -219,6 +219,7 @@ FLAGS = [
     (["sweep", "--chunk-size", "0", "--out", "{tmp}/s.csv"], "--chunk-size"),
     (["sweep", "--samples", "0", "--out", "{tmp}/s.csv"], "--samples"),
     (["sweep", "--samples", "1000000000", "--out", "{tmp}/s.csv"], "--samples"),  # was XLA's 4 TB
+    (["sweep", "--noise", "0.5,1e300", *SMALL, "--out", "{tmp}/s.csv"], "--noise"),  # ran, "converged"
     (["sweep", "--chunk-size", "1000000000", *SMALL, "--out", "{tmp}/s.csv"], "--chunk-size"),  # OOM-killed
     (["reproduce", "table2", "--seeds", "0"], "--seeds"),
     (["reproduce", "online", "--runs", "0"], "--runs"),

@@ -35,7 +35,7 @@ def register(sub) -> None:
     p.add_argument(
         "--noise",
         default="1",
-        help="comma-separated noise scales around the true curve (default 1 = as simulated)",
+        help="comma-separated noise scales around the true curve, each 0 to 10 (default 1 = as simulated)",
     )
     p.add_argument(
         "--creep-max",

@@ -9,6 +9,7 @@ from ..data.simulator import DEFAULT_SAMPLES
 from ..identify.methods import METHODS, POPULATION
 from ..identify.polach_fit import MIN_SAMPLES
 from ..sweeps import Grid, run_sweep
+from ..sweeps.grid import MAX_NOISE_SCALE
 from .common import (
     MAX_ITER,
     MAX_POPULATION_BYTES,
@@ -84,6 +85,9 @@ def run(args) -> int:
     require_at_least("sweep", 2, pop_size=args.pop_size)
     require_in_range("sweep", MIN_SAMPLES, MAX_SAMPLES, samples=args.samples)  # simulate's range
     methods = _list(str, "--methods", args.methods)
+    noise = _list(float, "--noise", args.noise)
+    for scale in noise:  # the grid's own check, said with the flag's name
+        require_in_range("sweep", 0.0, MAX_NOISE_SCALE, noise=scale)
     _check_chunk_memory(args, methods)
     require_output_file("sweep", args.out, (".csv", ".parquet"))  # the table writer's formats
     _initialize(args)
@@ -92,7 +96,7 @@ def run(args) -> int:
         scenarios=_list(str, "--scenarios", args.scenarios),
         seeds=range(args.seeds),
         methods=methods,
-        noise_scale=_list(float, "--noise", args.noise),
+        noise_scale=noise,
         creep_max=_list(float, "--creep-max", args.creep_max),
         n_samples=args.samples,
         fit_options={k: v for k, v in budget.items() if v is not None},

@@ -34,6 +34,11 @@ def _tuple(name, values, kind):
         raise InputError(f"sweep grid: '{name}' must hold {kind.__name__} values: {exc}") from None
 
 
+#: Largest noise scale of a grid point: 10× the simulator's μ̂ noise (0.1–0.2) is already the
+#: size of the curve; ``1e300`` had run and reported "converged" fits.
+MAX_NOISE_SCALE = 10.0
+
+
 @dataclasses.dataclass(frozen=True)
 class Grid:
     """The sweep's coordinates; their Cartesian product is the set of fits.
@@ -82,8 +87,11 @@ class Grid:
             raise InputError(f"sweep grid: unknown method '{bad}' (known: {', '.join(METHODS)})")
         if any(s < 0 for s in self.seeds):
             raise InputError("sweep grid: seeds must be non-negative")
-        if any(not (math.isfinite(x) and x >= 0) for x in self.noise_scale):
-            raise InputError(f"sweep grid: noise_scale must be finite and >= 0, got {self.noise_scale}")
+        if any(not 0 <= x <= MAX_NOISE_SCALE for x in self.noise_scale):
+            raise InputError(
+                f"sweep grid: noise_scale must be in [0, {MAX_NOISE_SCALE:g}] (the simulator's "
+                f"noise times it), got {self.noise_scale}"
+            )
         if any(not x > 0 for x in self.creep_max):
             raise InputError(f"sweep grid: creep_max must be > 0, got {self.creep_max}")
 
