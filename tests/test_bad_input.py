@@ -93,7 +93,12 @@ FILES = {
     "zero_creep.csv": (  # vehicle speed taken from this wheel: no creep to identify
         csv(*(",".join([*r.split(",")[:2], r.split(",")[1], r.split(",")[3]]) for r in ROWS)),
         None,
-        ["zero_creep.csv", "creep", "exactly 0", "vehicle_speed"],
+        ["zero_creep.csv", "creep", "is 0", "vehicle_speed"],
+    ),
+    "subnormal_creep.csv": (  # a creep of 1e-310 was fitted, every parameter "at_bound"
+        csv(*[f"1e-310,0.6,{0.2 + 0.001 * i}" for i in range(40)], header=CREEP_HEADER),
+        None,
+        ["subnormal_creep.csv", "creep", "is 0"],
     ),
     "weak_drive.csv": (  # every moving sample below the coasting drive: say what to check
         csv(*(",".join([*r.split(",")[:3], "1000"]) for r in ROWS)),
@@ -151,7 +156,7 @@ def test_malformed_file(tmp_path, capsys, name, command):
         (  # long enough for the diagnosis's own minimum, but no creep at all
             "zero_creep.csv",
             csv(*(",".join([*r.split(",")[:2], r.split(",")[1], r.split(",")[3]]) for r in good_rows(80))),
-            ["zero_creep.csv", "exactly 0"],
+            ["zero_creep.csv", "is 0"],
         ),
     ],
 )

@@ -102,18 +102,24 @@ def no_samples_message(recording, selection: Selection) -> str:
     )
 
 
+#: |creep| [-] below which a recorded creep counts as 0 (no sensor resolves 1e-12; a creep of
+#: 1e-310 had been fitted, every parameter "at_bound").
+ZERO_CREEP = 1e-12
+
+
 def zero_creep_message(recording, mask) -> str | None:
-    """One line when the recorded creep is exactly 0 on every sample of ``mask`` (bool (n,), the
-    samples used: nothing to identify; typically a vehicle speed computed from this wheel's own
-    speed), else ``None``."""
+    """One line when the recorded creep is 0 (below :data:`ZERO_CREEP`) on every sample of
+    ``mask`` (bool (n,), the samples used: nothing to identify; typically a vehicle speed computed
+    from this wheel's own speed), else ``None``."""
     cols = recording.columns
     v = np.asarray(cols["vehicle_speed"], float)
-    if np.any(raw_creep(cols, v)[mask] != 0.0):
+    if np.any(np.abs(raw_creep(cols, v)[mask]) >= ZERO_CREEP):
         return None
     source = next((c for c in ("creepage", "slip_velocity") if c in cols), "wheel_speed − vehicle_speed")
     return (
-        f"{recording.path}: the creep ({source}) is exactly 0 on all {int(np.sum(mask))} selected "
-        "samples: nothing to identify (is vehicle_speed computed from this wheel's own speed?)"
+        f"{recording.path}: the creep ({source}) is 0 (|creep| < {ZERO_CREEP:g}) on all "
+        f"{int(np.sum(mask))} selected samples: nothing to identify "
+        "(is vehicle_speed computed from this wheel's own speed?)"
     )
 
 
