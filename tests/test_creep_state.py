@@ -8,7 +8,7 @@ import pytest
 
 from jadhesion.data import creep_state
 from jadhesion.data.creep_state import difference_sd, smooth_creep, smooth_recording
-from jadhesion.data.dataset import RAW_SIGNALS, Signals, to_dataset
+from jadhesion.data.dataset import RAW_SIGNALS, Signals, sd_scale_summary, to_dataset
 from jadhesion.data.recording import load_recording
 from jadhesion.data.sensors import SensorModel
 from jadhesion.data.simulator import simulate
@@ -211,3 +211,10 @@ def test_to_dataset_states_the_slip_error_of_a_coasting_recording(tmp_path):
     ratio = lambda sd: float(np.sqrt(np.mean(((np.asarray(data.slip) - true) / sd)[moving] ** 2)))  # noqa: E731
     assert ratio(np.asarray(est.slip_sd)) > 1.6
     assert 0.8 < ratio(np.asarray(data.slip_sd)) < 1.25, ratio(np.asarray(data.slip_sd))
+    # the dataset says by how much (the fit's and posterior's JSON report it: sd_scale_summary)
+    np.testing.assert_allclose(
+        np.asarray(data.slip_sd), np.asarray(data.slip_sd_scale) * np.asarray(est.slip_sd)
+    )
+    summary = sd_scale_summary(data)
+    assert summary["min"] == summary["max"] > 1.6
+    assert sd_scale_summary(to_dataset(recording, creep="raw")) is None

@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from ..atomic import atomic_write
+from ..data.dataset import sd_scale_summary
 from ..data.formats import RECORDING_SUFFIXES
 from ..data.length_buckets import bucket_length
 from ..data.selected import creep_sign_warning
@@ -388,6 +389,7 @@ def run(args) -> int:
     for doc, (dataset, selection, report) in zip(docs, loaded, strict=True):
         doc["creep"] = args.creep
         doc["slip_law"] = slip_law_used(args, dataset, args.model == "polach")
+        doc["slip_sd_scale"] = sd_scale_summary(dataset)
         doc["selection"] = selection.document()
         doc["vehicle"] = report["vehicle"]
         doc["warnings"] = report["warnings"] + doc.get("warnings", [])  # the recording's first

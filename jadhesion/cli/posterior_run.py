@@ -15,6 +15,7 @@ from pathlib import Path
 import jax
 import numpy as np
 
+from ..data.dataset import sd_scale_summary
 from ..data.selected import creep_sign_warning
 from ..identify.batch_fit import valid_mask
 from ..identify.ensemble import ChainTooShortWarning
@@ -216,6 +217,7 @@ def run(args) -> int:
     doc = _document(result, theta0, note, "smoothed" if data.slip_sd is not None else "raw")
     doc["tempering"] = tempering
     doc["slip_law"] = slip_law_used(args, data)
+    doc["slip_sd_scale"] = sd_scale_summary(data)
     doc["selection"] = selection.document()
     found = data_warnings(recording, selection, data, result)
     doc["warnings"] = ([] if sidecar is None else [sidecar]) + found  # the chain's: diagnostics

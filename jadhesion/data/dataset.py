@@ -59,6 +59,9 @@ class PolachDataset(NamedTuple):
             needed). A function of the data alone, set once by
             :func:`jadhesion.identify.likelihood.with_node_slips` where a fit or a sampler starts,
             so that its residual does not evaluate the nodes' inverse normal CDFs at every step.
+        slip_sd_scale: the factor [-] ``slip_sd`` and ``creep_sd`` were scaled by, per sample
+            (one per stretch the smoother ran on: :func:`jadhesion.data.creep_state.coasting_sd_scale`,
+            1 without enough coasting), shape (n,), or None (no smoother).
     """
 
     creep: jax.Array
@@ -71,11 +74,21 @@ class PolachDataset(NamedTuple):
     weight: Optional[jax.Array] = None
     residual_scale: Optional[jax.Array] = None
     node_slips: Optional[jax.Array] = None
+    slip_sd_scale: Optional[jax.Array] = None
 
 
 #: Fields with one row per sample (axis 0); ``k_eps`` is one per dataset, ``weight`` the padding's
 #: mask.
-SAMPLE_FIELDS = ("creep", "slip", "adhesion", "vehicle_speed", "slip_sd", "creep_sd", "node_slips")
+SAMPLE_FIELDS = (
+    "creep",
+    "slip",
+    "adhesion",
+    "vehicle_speed",
+    "slip_sd",
+    "creep_sd",
+    "node_slips",
+    "slip_sd_scale",
+)
 
 CREEP_OPTIONS = ("smoothed", "raw")
 RAW_SIGNALS = ("time", "vehicle_speed", "wheel_speed", "traction_torque")
@@ -155,6 +168,7 @@ def to_dataset(
         vehicle_speed=est.vehicle_speed,
         slip_sd=scale * est.slip_sd,
         creep_sd=scale * est.creep_sd,
+        slip_sd_scale=jnp.full_like(est.slip_sd, scale),
     )
 
 
@@ -207,3 +221,16 @@ def _raw_dataset(recording, observer_variant: str, k_eps=None) -> PolachDataset:
         vehicle_speed=jnp.asarray(v),
         k_eps=jnp.asarray(k_eps),
     )
+
+
+def sd_scale_summary(data: PolachDataset) -> dict | None:
+    """The JSON's ``slip_sd_scale``: ``{min, median, max}`` [-] over the dataset's samples (the
+    padding left out) of the factor the smoother's sds were scaled by where the recording coasts
+    (1: not scaled: fewer than 50 coasting samples, or the smoother's sd not short), or ``None``
+    without a smoother (raw creep, a creepage file)."""
+    if data.slip_sd_scale is None:
+        return None
+    scale = np.asarray(data.slip_sd_scale, float)
+    if data.weight is not None:
+        scale = scale[np.asarray(data.weight) > 0]
+    return {"min": float(scale.min()), "median": float(np.median(scale)), "max": float(scale.max())}

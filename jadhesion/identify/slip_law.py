@@ -32,7 +32,9 @@ posterior of sample i, ``∝ g(s) N(ŵ_i; s, sd_i²)``, is evaluated on a local 
 and its quantiles at ``Φ(z_j)`` are the nodes: where ``g`` is flat over ``±sd_i`` they are the
 truncated normal's. Measured (README, "Which slip law"): on our dry starts μ0's 90 % interval held
 the truth in 10 of 12 instead of 3; where the error is partly Berkson (sand) it shrinks too far
-and the initial slope comes out low.
+and the initial slope comes out low. Cost, compiled, once per fit: 25 ms on 2 000 rows, 89 ms on
+36 000, 0.6 s on 360 000 (the normal law's nodes 0.4, 4.4 and 43 ms; a 2-core CPU under load),
+linear beyond :data:`PRIOR_ROWS`.
 
 Two forms of the sign-truncated normal:
 
