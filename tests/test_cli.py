@@ -362,6 +362,7 @@ def test_fit_slip_law_population_on_a_steady_start(env, tmp_path):
         for law in ("normal", "population")
     }
     assert {law: d["slip_law"] for law, d in docs.items()} == {"normal": "normal", "population": "population"}
+    assert all("crowded_slips" in {w["code"] for w in d["warnings"]} for d in docs.values())
     error = {law: abs(d["params"]["mu0"] - mu0) for law, d in docs.items()}
     assert error["population"] < 0.6 * error["normal"], error
     raw = jadhesion(env, "fit", rec, "--method", "lm", "--json", "--creep", "raw", "--slip-law", "population")

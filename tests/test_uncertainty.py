@@ -12,8 +12,9 @@ from scipy.signal import lfilter
 from jadhesion.data.dataset import to_dataset
 from jadhesion.data.scenarios import get_scenario
 from jadhesion.data.simulator import simulate_many
+from jadhesion.identify.batch_fit import pad_dataset
 from jadhesion.identify.polach_fit import LM_RESIDUAL, fit_polach_batch, scaled
-from jadhesion.identify.trust import fit_report
+from jadhesion.identify.trust import crowded_slips, data_warnings, fit_report
 from jadhesion.identify.uncertainty import Z95, bandwidth, colour_factor, covariance
 from jadhesion.models.polach import PARAM_NAMES, adhesion_peak
 
@@ -155,3 +156,21 @@ def test_colour_factor_is_the_ar1_long_run_variance_ratio(rho):
     assert float(kappa) == pytest.approx(max(bartlett, 1.0), rel=0.15)
     assert float(kappa) == pytest.approx(expected, rel=0.15 if rho < 0.9 else 0.25)
     assert float(kappa) >= 1.0
+
+
+def test_crowded_slips_are_warned_where_the_slip_law_matters():
+    """The warning's statistic separates the two generators' recordings (our steady starts
+    0.37–0.85, the independent generator's 0–0.24, trust.CROWDED_SLIPS's docstring); here, on
+    synthetic slips: a crowd 1 mm/s wide at sd 0.6 mm/s is warned, the same sd on slips spread over
+    30 mm/s is not, and neither is a dataset without slip sds or the padding of one."""
+    rng = np.random.default_rng(2)
+    n = 800
+    base = to_dataset(simulate_many("dry", [0], n_samples=n)[0], creep="raw")
+    sd = jnp.full(n, 6e-4)
+    crowd = base._replace(slip=jnp.asarray(rng.normal(3e-3, 1e-3, n)), slip_sd=sd, creep_sd=sd)
+    spread = crowd._replace(slip=jnp.asarray(rng.uniform(0.0, 0.03, n)))
+    warned = crowded_slips(crowd)
+    assert warned["code"] == "crowded_slips" and {"kA", "kS", "mu0"} <= set(warned["params"])
+    assert crowded_slips(spread) is None and crowded_slips(base) is None
+    assert crowded_slips(pad_dataset(spread, 1200)) is None
+    assert "crowded_slips" in {w["code"] for w in data_warnings(crowd)}

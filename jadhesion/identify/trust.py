@@ -133,7 +133,44 @@ def data_warnings(data) -> list:
                 ),
             )
         )
+    if (note := crowded_slips(data)) is not None:
+        out.append(note)
     return out
+
+
+#: Crowding of the micro-slip samples' smoothed slips (their median sd over their robust spread,
+#: :func:`crowded_slips`) above which the errors-in-variables curve depends on the slip law: our
+#: simulator's steady starts 0.37–0.85, the independent generator's starts 0–0.24 (12 recordings
+#: per set, 1×/2× noise and clean/mild/realistic sensors).
+CROWDED_SLIPS = 0.3
+
+
+def crowded_slips(data):
+    """The ``crowded_slips`` warning, or ``None``: among the samples whose |smoothed slip| is at
+    most its 75th percentile (the micro-slip ones), the median ``slip_sd`` over the smoothed slips'
+    robust spread (1.4826 MAD) is above :data:`CROWDED_SLIPS`. The true slip given the smoothed
+    one then depends on whether the smoother's error is Berkson or classical (not measurable from
+    one recording), and with it the curve's initial slope and μ0: ``--slip-law normal`` and
+    ``population`` take the two views (README, "Which slip law")."""
+    if data.slip_sd is None:
+        return None
+    keep = valid_mask(data)
+    slip, sd = np.asarray(data.slip, float)[keep], np.asarray(data.slip_sd, float)[keep]
+    micro = np.abs(slip) <= np.quantile(np.abs(slip), 0.75)
+    spread = 1.4826 * np.median(np.abs(slip[micro] - np.median(slip[micro])))
+    ratio = np.median(sd[micro]) / spread if spread > 0 else np.inf
+    if not ratio > CROWDED_SLIPS:
+        return None
+    return _warning(
+        "crowded_slips",
+        ("kA", "kS", "mu0", *DERIVED),
+        (
+            f"the micro-slip samples' smoothed slips spread over only {1 / ratio:.2g} of their sds "
+            f"(sd/spread {ratio:.2f} > {CROWDED_SLIPS:g}): the initial slope and mu0 depend on whether "
+            "the smoother's error is Berkson (--slip-law normal) or classical (--slip-law population), "
+            "which one recording cannot tell: compare both"
+        ),
+    )
 
 
 def fit_report(data, fit, numbers=None) -> dict:
