@@ -186,6 +186,10 @@ FLAGS = [
     (["fit", "{rec}", "--pop-size", "100000000"], "--pop-size"),  # was XLA's RESOURCE_EXHAUSTED
     (["fit", "{rec}", "--max-iter", "99999999999999999999"], "--max-iter"),  # was JAX's OverflowError
     (["fit", "{rec}", "--seed", "-1"], "--seed"),
+    (
+        ["fit", "{rec}", "--end", "-inf"],
+        "--end",
+    ),  # was argparse's "expected one argument" (exponent form too)
     (["fit", "{rec}", "--plot", "{rec}"], "--plot"),
     # a figure folder under a file: refused before the work (was an OSError line after it, no flag)
     (["fit", "{rec}", "--plot", "{rec}/sub"], "--plot"),

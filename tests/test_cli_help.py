@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from jadhesion.cli import COMMANDS, main, sweep
+from jadhesion.cli import COMMANDS, attach_negative_numbers, main, sweep
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -72,3 +72,16 @@ def test_a_handler_that_fails_to_import_is_an_error(monkeypatch):
     monkeypatch.setattr(sweep, "register", register)
     with pytest.raises(ModuleNotFoundError, match="jadhesion.cli.no_such_module"):
         main(["sweep"])
+
+
+def test_negative_numbers_in_exponent_form_are_option_values():
+    """argparse reads ``--start -1e3`` as two options ("expected one argument"); the command line
+    passes it as ``--start=-1e3``. ``-1``, ``-1.5``, names and ``--flag=value`` stay as they are."""
+    assert attach_negative_numbers(["fit", "a.csv", "--start", "-1e3", "--end", "-inf"]) == [
+        "fit",
+        "a.csv",
+        "--start=-1e3",
+        "--end=-inf",
+    ]
+    kept = ["fit", "--start", "-1.5", "--end", "-2", "--start=-1e3", "-h", "--column", "-x=y"]
+    assert attach_negative_numbers(kept) == kept

@@ -23,6 +23,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import re
 import sys
 
 from ..config import enable_compilation_cache, enable_x64
@@ -64,9 +65,34 @@ def _handler(args):
     return getattr(importlib.import_module(module), name)
 
 
+def _negative_number(token: str) -> bool:
+    """Whether ``token`` is a negative number argparse reads as an option: exponent or
+    non-finite forms (``-1e3``, ``-inf``); ``-1`` and ``-1.5`` it reads as numbers itself."""
+    if not token.startswith("-") or token.startswith("--"):
+        return False
+    try:
+        float(token)
+    except ValueError:
+        return False
+    return not re.fullmatch(r"-\d+|-\d*\.\d+", token)
+
+
+def attach_negative_numbers(argv: list) -> list:
+    """``--flag -1e3`` as ``--flag=-1e3``: argparse takes a value in exponent form for an option
+    and answers "expected one argument" (``--start -1e3``); a flag without a value then says
+    "ignored explicit argument", naming it."""
+    out = []
+    for token in argv:
+        if out and out[-1].startswith("--") and "=" not in out[-1] and _negative_number(token):
+            out[-1] = f"{out[-1]}={token}"
+        else:
+            out.append(token)
+    return out
+
+
 def main(argv=None) -> int:
     """Parse ``argv`` (default ``sys.argv[1:]``), run the command; returns the exit code."""
-    argv = sys.argv[1:] if argv is None else list(argv)
+    argv = attach_negative_numbers(sys.argv[1:] if argv is None else list(argv))
     command = argv[0] if argv and argv[0] in COMMANDS else None
     args = build_parser(command).parse_args(argv)
     enable_x64()
