@@ -188,8 +188,8 @@ FLAGS = [
     (["fit", "{rec}", "--seed", "-1"], "--seed"),
     (
         ["fit", "{rec}", "--end", "-inf"],
-        "--end",
-    ),  # was argparse's "expected one argument" (exponent form too)
+        "--end -inf: expected a finite time",
+    ),  # was argparse's "expected one argument" (exponent form too), which the check never saw
     (["fit", "{rec}", "--plot", "{rec}"], "--plot"),
     # a figure folder under a file: refused before the work (was an OSError line after it, no flag)
     (["fit", "{rec}", "--plot", "{rec}/sub"], "--plot"),
