@@ -377,3 +377,5 @@ def test_keep_going_fits_the_usable_files_and_lists_the_others(files, capsys, tm
     out_csv.unlink()
     code, out, err = _fit(capsys, bad, tmp_path / "missing.csv", "--keep-going", "--out", out_csv)
     assert code == 2 and out == "" and "none of the 2 files" in err and not out_csv.exists()
+    code, out, err = _fit(capsys, bad, "--keep-going", "--out", out_csv)  # one file: its own one line
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1 and str(bad) in err

@@ -358,13 +358,13 @@ def _load_all(args, paths) -> tuple[list, list, list]:
     """``(paths, loaded, skipped)``: :func:`_load` of each file. Without ``--keep-going`` the first
     file that cannot be used stops the call (its one-line error); with it, each such file is
     reported on stderr and in ``skipped`` [{``file``, ``error``}], and the call stops only when
-    none can be used."""
+    none can be used (a single file: its own one line, as without the flag)."""
     kept, loaded, skipped = [], [], []
     for path in paths:
         try:
             loaded.append(_load(args, path))
         except UserError as error:
-            if not args.keep_going:
+            if not args.keep_going or len(paths) == 1:  # one file: its one line, nothing to go on to
                 raise
             skipped.append({"file": str(path), "error": str(error)})
             sys.stderr.write(f"jadhesion: skipped: {error}\n")
