@@ -12,7 +12,7 @@ import jax
 import numpy as np
 
 from ..data.selected import tracking_dataset
-from ..identify.kiencke_fit import A_S_LOG10_BOUNDS
+from ..identify.kiencke_fit import A_S_LOG10_BOUNDS, MIN_SAMPLES
 from ..identify.online import (
     extrapolated_warning,
     hold_warning,
@@ -39,6 +39,9 @@ def run(args) -> int:
     require_output_dir("online", "plot", args.plot)
     recording = load_from_args(args, args.file)
     sidecar = say_sidecar_warning(recording)
+    rows = min((len(c) for c in recording.columns.values()), default=0)
+    if rows < MIN_SAMPLES:  # before the observer and smoother are compiled (2-9 s)
+        raise UserError(f"{args.file}: {rows} samples; online identification needs at least {MIN_SAMPLES}")
     data, selection = tracking_dataset(recording, args.phase)
     out = track_dataset(data, args.algorithm, args.a_s, jax.random.key(args.seed))
     used = np.asarray(out.used)
@@ -46,7 +49,7 @@ def run(args) -> int:
     if status.name == "NOT_RUN":
         raise UserError(
             f"{args.file}: only {int(used.sum())} informative samples of --phase {args.phase} "
-            "(|v| >= 0.1 m/s, |adhesion| >= 0.02); online identification needs at least 10"
+            f"(|v| >= 0.1 m/s, |adhesion| >= 0.02); online identification needs at least {MIN_SAMPLES}"
         )
     cols = recording.columns
     time = np.asarray(cols["time"]) if "time" in cols else np.arange(used.size, dtype=float)
