@@ -29,6 +29,7 @@ from ..data.selected import creep_sign_warning
 from ..data.sidecar import sidecar_warning
 from ..identify.batch_fit import bucketed, fit_datasets
 from ..identify.kiencke_fit import fit_document, fit_kiencke
+from ..identify.likelihood import with_slip_law
 from ..identify.methods import METHODS
 from ..identify.polach_fit import MIN_SAMPLES, RECOMMENDED_SAMPLES, require_samples, scaled
 from ..identify.trust import fit_report
@@ -145,13 +146,15 @@ def _load(args, path):
     said on stderr at once, before anything they may explain goes wrong."""
     recording = load_from_args(args, path)
     say_sidecar_warning(recording)
-    rows = min((len(c) for c in recording.columns.values()), default=0)
+    rows = recording.n_samples
     if rows < MIN_SAMPLES:
         raise UserError(
             f"{path}: {rows} samples cannot identify the model "
             f"(at least {MIN_SAMPLES} needed, {RECOMMENDED_SAMPLES} recommended)"
         )
     _, dataset, selection = load_dataset(args, path, to_dataset, recording=recording)
+    if args.model == "polach":  # --slip-law population: that law's nodes (Kiencke has no slip law)
+        dataset = with_slip_law(dataset, args.slip_law)
     require_samples(dataset, str(path))
     release_if_near_limit()  # programs are per length bucket; many buckets still add up
     return dataset, selection, _recording_report(recording, selection)

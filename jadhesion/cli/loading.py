@@ -11,7 +11,6 @@ from ..data.segments import trim
 from ..data.selected import selected_dataset
 from ..data.sidecar import sidecar_warning
 from ..errors import VehicleError
-from ..identify.likelihood import with_slip_law
 
 
 def load_from_args(args, path) -> Recording:
@@ -41,8 +40,7 @@ def load_dataset(args, path, build=to_dataset, *, recording: Recording | None = 
     of ``--phase`` (:func:`jadhesion.data.selected.selected_dataset`, observer and smoother per
     stretch between gaps; ``--creep`` when the command has it). ``build`` makes one stretch's
     dataset (default :func:`jadhesion.data.dataset.to_dataset`); ``recording``: the one
-    :func:`load_from_args` already gave, when the caller has it. With ``--slip-law population``
-    the dataset carries that law's nodes (:func:`jadhesion.identify.likelihood.with_slip_law`)."""
+    :func:`load_from_args` already gave, when the caller has it."""
     if recording is None:
         recording = load_from_args(args, path)
     try:
@@ -51,7 +49,7 @@ def load_dataset(args, path, build=to_dataset, *, recording: Recording | None = 
         )
     except VehicleError as error:  # several files: say which sidecar
         raise VehicleError(f"{recording.path.with_suffix('.json')}: {error}") from None
-    return recording, with_slip_law(dataset, getattr(args, "slip_law", "normal")), selection
+    return recording, dataset, selection
 
 
 def slip_law_used(args, dataset, applies: bool = True) -> str | None:

@@ -20,7 +20,7 @@ from ..data.selected import creep_sign_warning
 from ..identify.batch_fit import valid_mask
 from ..identify.ensemble import ChainTooShortWarning
 from ..identify.laplace import colour_check, initial_spread, lm_optimum
-from ..identify.likelihood import noise_names
+from ..identify.likelihood import noise_names, with_slip_law
 from ..identify.mcmc import sample_posterior
 from ..identify.observer_view import recording_observer_terms
 from ..identify.peak import extrapolation_warning
@@ -166,6 +166,7 @@ def run(args) -> int:
     recording = load_from_args(args, args.file)
     sidecar = say_sidecar_warning(recording)
     recording, data, selection = load_dataset(args, args.file, recording=recording)
+    data = with_slip_law(data, args.slip_law)  # --slip-law population: that law's nodes
     require_samples(data, args.file)
     if args.likelihood == "observer" and not selection.complete:
         raise UserError(
