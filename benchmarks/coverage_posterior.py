@@ -43,7 +43,7 @@ from jadhesion.cli import build_parser
 from jadhesion.cli import main as cli
 from jadhesion.cli.loading import load_dataset
 from jadhesion.data.recording import load_recording
-from jadhesion.identify.likelihood import curve_moments
+from jadhesion.identify.likelihood import SLIP_LAWS, curve_moments
 from jadhesion.models.polach import PARAM_NAMES, adhesion_peak
 from validation import foreign_generator
 
@@ -155,7 +155,7 @@ def main(argv=None):
     p.add_argument("--steps", type=int, default=2000)
     p.add_argument("--walkers", type=int, default=32)
     p.add_argument("--likelihoods", default="gauss:tempered,student:tempered")
-    p.add_argument("--slip-law", default="normal", choices=("normal", "population"))
+    p.add_argument("--slip-law", default="normal", choices=SLIP_LAWS)
     p.add_argument(
         "--save", default=str(Path(__file__).parent / "results" / "coverage_posterior_student.json")
     )

@@ -72,10 +72,15 @@ PRIOR_ROWS, PRIOR_ITERATIONS = 4096, 30
 LOCAL_WIDTH, LOCAL_POINTS, LOCAL_BLOCK = 6.0, 49, 8192
 
 
+def _sign(adhesion):
+    """The force's sign (n,): ``sign(mu_hat)`` where ``|mu_hat| ≥`` :data:`SLIP_SIGN_MIN`, else 0."""
+    return jnp.where(jnp.abs(adhesion) >= SLIP_SIGN_MIN, jnp.sign(adhesion), 0.0)
+
+
 def _bound(slip, slip_sd, adhesion):
     """``(σ, a)``: the sign of the force (0: untruncated) and the standardised bound ``−σ ŵ/sd``
     (finite: ``sd`` floored at the dtype's smallest normal)."""
-    sign = jnp.where(jnp.abs(adhesion) >= SLIP_SIGN_MIN, jnp.sign(adhesion), 0.0)
+    sign = _sign(adhesion)
     tiny = jnp.finfo(slip.dtype).tiny
     a = jnp.clip(-sign * slip / jnp.maximum(slip_sd, tiny), -1.0 / tiny, 1.0 / tiny)
     return sign, a
@@ -105,10 +110,6 @@ def truncated_mean(slip, slip_sd, adhesion):
     beyond = sign * slip_sd * (1.0 / far - 2.0 / far**3 + 10.0 / far**5)  # = slip + σ sd mills
     mean = jnp.where(a <= TAIL, slip + sign * slip_sd * mills, beyond)
     return jnp.where((sign == 0) | (slip_sd <= 0), slip, mean)
-
-
-def _sign(adhesion):
-    return jnp.where(jnp.abs(adhesion) >= SLIP_SIGN_MIN, jnp.sign(adhesion), 0.0)
 
 
 def _allowed(sign, slip):
