@@ -39,7 +39,7 @@ def run(args) -> int:
     require_output_dir("online", "plot", args.plot)
     recording = load_from_args(args, args.file)
     sidecar = say_sidecar_warning(recording)
-    rows = min((len(c) for c in recording.columns.values()), default=0)
+    rows = recording.n_samples
     if rows < MIN_SAMPLES:  # before the observer and smoother are compiled (2-9 s)
         raise UserError(f"{args.file}: {rows} samples; online identification needs at least {MIN_SAMPLES}")
     data, selection = tracking_dataset(recording, args.phase)
