@@ -54,6 +54,7 @@ from .validate import (
     _check_values,
     _convert_column,
     _fail,
+    convert_time_column,
 )
 from .vehicle import LOCO_22E, SIDECAR_KEYS, Vehicle
 
@@ -237,11 +238,19 @@ def load_recording(path, *, columns=(), axle=None, max_speed: float = MAX_SPEED)
     for j, col in enumerate(renamed):
         if col is None:
             continue
-        values = (
-            parsed[j]
-            if fast is not None
-            else _convert_column(cells[:, j], shown.get(col, col), lines, name, strict=col in required)
-        )
+        if fast is not None:
+            values = parsed[j]
+        elif col == "time":
+            values, time_notes = convert_time_column(cells[:, j], shown.get(col, col), lines, name)
+            notes += time_notes
+            if time_notes and specs.get(col) is not None and specs[col].unit not in (None, "s"):
+                raise _fail(
+                    name,
+                    f"column {shown[col]!r} holds date-times, read in seconds: map it without "
+                    f"the unit [{specs[col].unit}]",
+                )
+        else:
+            values = _convert_column(cells[:, j], shown.get(col, col), lines, name, strict=col in required)
         if values is None and lines is None and col in required:
             raise _fail(name, f"column {shown.get(col, col)!r}: not numeric")
         if values is None:

@@ -3,6 +3,8 @@ Messages name the user's column (``shown``: canonical → source name), the row 
 
 from __future__ import annotations
 
+from datetime import datetime, timezone
+
 import numpy as np
 
 from ..errors import RecordingError
@@ -84,6 +86,38 @@ def _convert_column(cells: np.ndarray, col: str, lines, name: str, strict: bool)
     if strict:
         _check_finite(values, col, name, lines, cells)
     return values
+
+
+def _date_seconds(cell: str) -> float | None:
+    """Seconds since the Unix epoch of an ISO 8601 date-time cell (``2026-05-01T08:00:00.010``,
+    ``… 08:00:00Z``, ``…+01:00``; without an offset read as UTC), or ``None`` when it is not one."""
+    try:
+        stamp = datetime.fromisoformat(cell.strip())
+    except ValueError:
+        return None
+    return (stamp if stamp.tzinfo else stamp.replace(tzinfo=timezone.utc)).timestamp()
+
+
+def convert_time_column(cells: np.ndarray, col: str, lines, name: str) -> tuple:
+    """``(values [s], notes)`` of a CSV's time column: numbers as they are, or ISO 8601 date-times
+    as seconds since the Unix epoch (as Parquet timestamps are read), with a note. The first bad
+    cell raises a RecordingError naming its row and line."""
+    values = _convert_column(cells, col, lines, name, strict=False)
+    first = _date_seconds(cells[0]) if values is None else None
+    if first is None:
+        return _convert_column(cells, col, lines, name, strict=True), ()
+    seconds = np.empty(len(cells))
+    for i, cell in enumerate(cells.tolist()):
+        value = _date_seconds(cell)
+        if value is None:
+            raise _fail(
+                name,
+                f"column {col!r}, row {i + 1} (line {lines[i]}): {_show(cell)} is not an ISO 8601 "
+                f"date-time (row 1 is one, {_show(str(cells[0]))})",
+            )
+        seconds[i] = value
+    note = f"{name}: column {col!r} read as ISO 8601 date-times (seconds since 1970-01-01 UTC)"
+    return seconds, (note,)
 
 
 def _check_finite(values, col: str, name: str, lines=None, cells=None):
