@@ -7,6 +7,7 @@ import pytest
 from logger_data import stretches_si, swapped_stretches, write_logger_file
 
 from jadhesion.cli import main
+from jadhesion.cli.inspect_run import _excluded_line, _grouped
 from jadhesion.data.inspection import MU_IMPLAUSIBLE, identifiability, implausible_adhesion, sampling
 from jadhesion.data.recording import save_recording
 from jadhesion.data.vehicle import LOCO_22E
@@ -108,4 +109,26 @@ def test_inspect_notes_a_misspelled_sidecar_key_with_the_key_it_likely_meant(tmp
     assert json.loads(capsys.readouterr().out)["notes"] == [
         f"{path.with_suffix('.json')}: unknown key 'axle_lod_kg' ignored (did you mean 'axle_load_kg'?)",
         f"{path.with_suffix('.json')}: unknown key 'comment' ignored",
+    ]
+
+
+def test_text_groups_close_runs_of_one_reason():
+    """Runs of one reason less than GROUP_WITHIN_S apart share a line with their count; a farther
+    run of that reason, and other reasons in between, keep their own."""
+    runs = [
+        {"reason": "standstill", "start": 0.0, "end": 0.4, "samples": 41},
+        {"reason": "torque and creep disagree", "start": 0.5, "end": 0.5, "samples": 1},
+        {"reason": "standstill", "start": 0.6, "end": 0.6, "samples": 1},
+        {"reason": "torque and creep disagree", "start": 0.9, "end": 0.95, "samples": 2},
+        {"reason": "torque and creep disagree", "start": 2.0, "end": 2.0, "samples": 1},
+        {"reason": "coasting", "start": 5.0, "end": 8.0, "samples": 301},
+        {"reason": "coasting", "start": 9.5, "end": 9.7, "samples": 21},
+    ]
+    lines = [_excluded_line(g, 0.01) for g in _grouped(runs)]
+    assert lines == [
+        "  excluded standstill: 0–0.6 s, 42 samples in 2 stretches",
+        "  excluded torque and creep disagree: 0.5–0.95 s, 3 samples in 2 stretches",
+        "  excluded torque and creep disagree: 2–2 s, 1 sample",
+        "  excluded coasting: 5–8 s, 301 samples",
+        "  excluded coasting: 9.5–9.7 s, 21 samples",
     ]

@@ -24,6 +24,34 @@ def _time(t: float, step: float | None) -> str:
     return f"{t:.{digits}g}"
 
 
+#: Excluded runs of one reason less than this apart [s] share one line of the text (a noisy
+#: walking-pace start excludes dozens of one- and two-sample runs; the JSON lists each).
+GROUP_WITHIN_S = 1.0
+
+
+def _grouped(runs) -> list:
+    """``(reason, start, end, samples, runs)`` per group of same-reason runs (time order) each less
+    than :data:`GROUP_WITHIN_S` after the previous one, ordered by start."""
+    groups, open_by_reason = [], {}
+    for run in runs:
+        group = open_by_reason.get(run["reason"])
+        if group is not None and run["start"] - group[2] < GROUP_WITHIN_S:
+            group[2], group[3], group[4] = run["end"], group[3] + run["samples"], group[4] + 1
+        else:
+            group = [run["reason"], run["start"], run["end"], run["samples"], 1]
+            open_by_reason[run["reason"]] = group
+            groups.append(group)
+    return groups
+
+
+def _excluded_line(group, step) -> str:
+    reason, start, end, samples, runs = group
+    counted = f"{samples} sample{'s' if samples != 1 else ''}"
+    return f"  excluded {reason}: {_time(start, step)}–{_time(end, step)} s, " + (
+        counted if runs == 1 else f"{counted} in {runs} stretches"
+    )
+
+
 def _text(doc) -> str:
     s, r, sel = doc["sampling"], doc["ranges"], doc["selection"]
     step = s["step_s"]["median"] if s["step_s"] else None
@@ -39,11 +67,7 @@ def _text(doc) -> str:
         f"selected: {sel['used']} of {sel['samples']} samples ({sel['phase']}); "
         f"{len(sel['stretches'])} stretch(es)"
     )
-    for e in sel["excluded"]:
-        lines.append(
-            f"  excluded {e['reason']}: {_time(e['start'], step)}–{_time(e['end'], step)} s, "
-            f"{e['samples']} samples"
-        )
+    lines += [_excluded_line(g, step) for g in _grouped(sel["excluded"])]
     if not sel["excluded_listed_all"]:
         lines.append(
             "  (more excluded stretches; counts: "
