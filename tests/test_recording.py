@@ -249,7 +249,7 @@ CASES = {
         _raw_text(
             30, lambda rows: [r.__setitem__(0, f"2026-05-01T08:00:{i:02d}") for i, r in enumerate(rows)]
         ).replace("08:00:07", "08:00:7x"),
-        ["column 'time', row 8 (line 9)", "'2026-05-01T08:00:7x' is not an ISO 8601 date-time"],
+        ["column 'time', row 8 (line 9)", "'2026-05-01T08:00:7x' is not an ISO 8601 date-time like row 1's"],
     ),
 }
 
@@ -265,16 +265,17 @@ def test_validation_message_names_file_column_row(tmp_path, case):
         assert part in msg, msg
 
 
-def test_iso_date_times_are_seconds_since_the_epoch(tmp_path):
+def test_iso_time_stamps_are_seconds(tmp_path):
     """A logger's ISO 8601 time stamps (with or without an offset; none: UTC) read as seconds since
-    1970 UTC, as Parquet timestamps are: the same steps as the numeric file, and a note. A unit
-    on such a column is refused."""
+    1970 UTC, as Parquet timestamps are, and times of day as seconds since midnight: the same steps
+    as the numeric file, and a note. A unit on such a column is refused."""
     plain = tmp_path / "plain.csv"
     plain.write_text(_raw_text(30), encoding="utf-8")
     ref = load_recording(plain)
-    for stamp, epoch in (
-        ("2026-05-01T08:00:{:09.6f}", 1777622400.0),
-        ("2026-05-01 10:00:{:09.6f}+02:00", 1777622400.0),
+    for stamp, epoch, kind in (
+        ("2026-05-01T08:00:{:09.6f}", 1777622400.0, "date-times"),
+        ("2026-05-01 10:00:{:09.6f}+02:00", 1777622400.0, "date-times"),
+        ("08:00:{:09.6f}", 28800.0, "times of day"),
     ):
         dated = tmp_path / "dated.csv"
         rows = _raw_text(30).splitlines()
@@ -284,9 +285,9 @@ def test_iso_date_times_are_seconds_since_the_epoch(tmp_path):
         np.testing.assert_allclose(rec.columns["time"] - epoch, ref.columns["time"], atol=1e-6)
         for col in ("vehicle_speed", "wheel_speed", "traction_torque"):
             np.testing.assert_array_equal(rec.columns[col], ref.columns[col])
-        assert any("ISO 8601 date-times" in n for n in rec.notes)
+        assert any(f"read as ISO 8601 {kind}" in n for n in rec.notes)
     with pytest.raises(
-        RecordingError, match=r"holds date-times, read in seconds: map it without the unit \[ms\]"
+        RecordingError, match=r"holds time stamps, read in seconds: map it without the unit \[ms\]"
     ):
         load_recording(dated, columns=("time=time[ms]",))
 

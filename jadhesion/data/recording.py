@@ -246,7 +246,7 @@ def load_recording(path, *, columns=(), axle=None, max_speed: float = MAX_SPEED)
             if time_notes and specs.get(col) is not None and specs[col].unit not in (None, "s"):
                 raise _fail(
                     name,
-                    f"column {shown[col]!r} holds date-times, read in seconds: map it without "
+                    f"column {shown[col]!r} holds time stamps, read in seconds: map it without "
                     f"the unit [{specs[col].unit}]",
                 )
         else:

@@ -3,7 +3,7 @@ Messages name the user's column (``shown``: canonical → source name), the row 
 
 from __future__ import annotations
 
-from datetime import datetime, timezone
+from datetime import datetime, time, timezone
 
 import numpy as np
 
@@ -98,26 +98,41 @@ def _date_seconds(cell: str) -> float | None:
     return (stamp if stamp.tzinfo else stamp.replace(tzinfo=timezone.utc)).timestamp()
 
 
+def _clock_seconds(cell: str) -> float | None:
+    """Seconds since midnight of an ISO 8601 time of day (``08:00:00.010``; an offset is ignored),
+    or ``None`` when it is not one."""
+    try:
+        clock = time.fromisoformat(cell.strip())
+    except ValueError:
+        return None
+    return clock.hour * 3600.0 + clock.minute * 60.0 + clock.second + clock.microsecond * 1e-6
+
+
+#: Time stamps a CSV's time column may hold instead of numbers: (parser, what they are, seconds since).
+_STAMPS = ((_date_seconds, "date-times", "1970-01-01 UTC"), (_clock_seconds, "times of day", "midnight"))
+
+
 def convert_time_column(cells: np.ndarray, col: str, lines, name: str) -> tuple:
-    """``(values [s], notes)`` of a CSV's time column: numbers as they are, or ISO 8601 date-times
-    as seconds since the Unix epoch (as Parquet timestamps are read), with a note. The first bad
-    cell raises a RecordingError naming its row and line."""
+    """``(values [s], notes)`` of a CSV's time column: numbers as they are; ISO 8601 date-times as
+    seconds since the Unix epoch (as Parquet timestamps are read) or times of day as seconds since
+    midnight, the kind row 1 holds, with a note. The first bad cell raises a RecordingError naming
+    its row and line (a day change in times of day: time not increasing)."""
     values = _convert_column(cells, col, lines, name, strict=False)
-    first = _date_seconds(cells[0]) if values is None else None
-    if first is None:
+    kind = None if values is not None else next((k for k in _STAMPS if k[0](cells[0]) is not None), None)
+    if kind is None:
         return _convert_column(cells, col, lines, name, strict=True), ()
+    parse, what, since = kind
     seconds = np.empty(len(cells))
     for i, cell in enumerate(cells.tolist()):
-        value = _date_seconds(cell)
+        value = parse(cell)
         if value is None:
             raise _fail(
                 name,
                 f"column {col!r}, row {i + 1} (line {lines[i]}): {_show(cell)} is not an ISO 8601 "
-                f"date-time (row 1 is one, {_show(str(cells[0]))})",
+                f"{what[:-1]} like row 1's {_show(str(cells[0]))}",
             )
         seconds[i] = value
-    note = f"{name}: column {col!r} read as ISO 8601 date-times (seconds since 1970-01-01 UTC)"
-    return seconds, (note,)
+    return seconds, (f"{name}: column {col!r} read as ISO 8601 {what} (seconds since {since})",)
 
 
 def _check_finite(values, col: str, name: str, lines=None, cells=None):
