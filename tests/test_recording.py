@@ -290,6 +290,12 @@ def test_iso_time_stamps_are_seconds(tmp_path):
         RecordingError, match=r"holds time stamps, read in seconds: map it without the unit \[ms\]"
     ):
         load_recording(dated, columns=("time=time[ms]",))
+    bad = dated.read_text().replace("08:00:00.100000", "08:00:00.1x")
+    dated.write_text(bad, encoding="utf-8")
+    with pytest.raises(
+        RecordingError, match=r"row 6 \(line 7\): '08:00:00.1x' is not an ISO 8601 time of day like"
+    ):
+        load_recording(dated)
 
 
 def test_missing_file_and_directory(tmp_path):

@@ -108,8 +108,11 @@ def _clock_seconds(cell: str) -> float | None:
     return clock.hour * 3600.0 + clock.minute * 60.0 + clock.second + clock.microsecond * 1e-6
 
 
-#: Time stamps a CSV's time column may hold instead of numbers: (parser, what they are, seconds since).
-_STAMPS = ((_date_seconds, "date-times", "1970-01-01 UTC"), (_clock_seconds, "times of day", "midnight"))
+#: Time stamps a CSV's time column may hold instead of numbers: (parser, one, several, seconds since).
+_STAMPS = (
+    (_date_seconds, "date-time", "date-times", "1970-01-01 UTC"),
+    (_clock_seconds, "time of day", "times of day", "midnight"),
+)
 
 
 def convert_time_column(cells: np.ndarray, col: str, lines, name: str) -> tuple:
@@ -118,10 +121,13 @@ def convert_time_column(cells: np.ndarray, col: str, lines, name: str) -> tuple:
     midnight, the kind row 1 holds, with a note. The first bad cell raises a RecordingError naming
     its row and line (a day change in times of day: time not increasing)."""
     values = _convert_column(cells, col, lines, name, strict=False)
-    kind = None if values is not None else next((k for k in _STAMPS if k[0](cells[0]) is not None), None)
+    if values is not None:
+        _check_finite(values, col, name, lines, cells)
+        return values, ()
+    kind = next((k for k in _STAMPS if k[0](cells[0]) is not None), None)
     if kind is None:
-        return _convert_column(cells, col, lines, name, strict=True), ()
-    parse, what, since = kind
+        return _convert_column(cells, col, lines, name, strict=True), ()  # raises at the first bad cell
+    parse, one, several, since = kind
     seconds = np.empty(len(cells))
     for i, cell in enumerate(cells.tolist()):
         value = parse(cell)
@@ -129,10 +135,10 @@ def convert_time_column(cells: np.ndarray, col: str, lines, name: str) -> tuple:
             raise _fail(
                 name,
                 f"column {col!r}, row {i + 1} (line {lines[i]}): {_show(cell)} is not an ISO 8601 "
-                f"{what[:-1]} like row 1's {_show(str(cells[0]))}",
+                f"{one} like row 1's {_show(str(cells[0]))}",
             )
         seconds[i] = value
-    return seconds, (f"{name}: column {col!r} read as ISO 8601 {what} (seconds since {since})",)
+    return seconds, (f"{name}: column {col!r} read as ISO 8601 {several} (seconds since {since})",)
 
 
 def _check_finite(values, col: str, name: str, lines=None, cells=None):
