@@ -37,8 +37,10 @@ from .signals import Signals
 N_FOLDS = 5
 #: LM step caps (full-data fit; folds warm-start from it) and tolerances. A cap is a cap: a fit
 #: stops at its convergence test (relative cost change ≤ FTOL with a step ≤ XTOL, or a projected
-#: gradient ≤ GTOL); one that reaches the cap is reported as ``max_steps``, never ranked.
-MAX_STEPS, MAX_STEPS_FOLD = 200, 100
+#: gradient ≤ GTOL); one that reaches the cap is reported as ``max_steps``, never ranked. The folds
+#: get the full fit's cap: at 100, rail-change folds (the step's size refitted with its time held)
+#: stopped at the cap on recordings where they converge in 100–200 steps, and so went untested.
+MAX_STEPS, MAX_STEPS_FOLD = 200, 200
 #: Smallest noise sd [-] of the target in :func:`eiv_weights` (noise-free recordings).
 MIN_TARGET_SD = 1e-6
 OPTIONS = BoxLMOptions(ftol=1e-9, xtol=1e-7, gtol=1e-10)
