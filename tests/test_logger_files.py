@@ -216,6 +216,17 @@ def test_torque_unit_spellings(tmp_path, unit):
     np.testing.assert_allclose(rec.columns["traction_torque"], cols["traction_torque"], rtol=1e-14)
 
 
+@pytest.mark.parametrize(
+    ("unit", "per_second"), [("us", 1e6), ("µs", 1e6), ("μs", 1e6), ("min", 1 / 60), ("h", 1 / 3600)]
+)
+def test_time_units(tmp_path, unit, per_second):
+    """Loggers that count microseconds, or minutes and hours: read as seconds."""
+    cols = _si_columns(30)
+    path = save_recording(dict(cols, time=cols["time"] * per_second), LOCO_22E, tmp_path / "log.csv")
+    rec = load_recording(path, columns=[f"time=time[{unit}]"])
+    np.testing.assert_allclose(rec.columns["time"], cols["time"], rtol=1e-12, atol=1e-12)
+
+
 def _renamed(cols, names, path, **extra):
     """``cols`` (SI) saved under ``names`` (canonical -> header), each in its header's unit."""
     rpm = 60 / (2 * math.pi * R)
