@@ -396,7 +396,6 @@ def diagnose(
             "method": "effective-variance weights 1/sqrt(target_sd^2 + slope^2 slip_sd^2)",
             "target_sd": target_sd,
             "slip_sd_median_m_s": float(np.median(latent[2][keep])),
-            "slip_sd_scale": latent[3],
         },
     }
     result["warnings"] = _warnings(result)

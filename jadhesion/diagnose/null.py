@@ -58,7 +58,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
-from ..data.creep_state import coasting_sd_scale, difference_sd, smooth_creep
+from ..data.creep_state import difference_sd, smooth_creep
 from ..data.vehicle import GRAVITY, Vehicle
 from ..status import Status
 from . import extensions as ext
@@ -132,13 +132,9 @@ def grid_step(x) -> float:
 
 
 def latent_speeds(columns: dict, vehicle: Vehicle) -> tuple:
-    """``(v̂, v̂_w, sd_w, scale)``: the Kalman/RTS smoother's latent vehicle and wheel speeds [m/s],
-    the regressors of every diagnosis fit, and the slip's standard deviation [m/s] scaled by what
-    the recording's coasting shows the smoother to understate (``scale`` [-],
-    :func:`jadhesion.data.creep_state.coasting_sd_scale`, 1 without enough coasting: the scale
-    :func:`jadhesion.data.dataset.to_dataset` gives fit and posterior). On the independent
-    generator's seed-31 clean recordings the scaled sd took 2 of 5 false alarms away and 2 of 4
-    radius errors of 0.6–1.1 % too (README, Diagnosis)."""
+    """``(v̂, v̂_w, sd_w)`` [m/s]: the Kalman/RTS smoother's latent vehicle and wheel speeds and the
+    slip's standard deviation (:func:`jadhesion.data.creep_state.smooth_creep`), the regressors
+    of every diagnosis fit."""
     est = smooth_creep(
         *(np.asarray(columns[k], float) for k in ("time", "wheel_speed", "vehicle_speed", "traction_torque")),
         vehicle.wheelset_inertia_kgm2,
@@ -146,8 +142,7 @@ def latent_speeds(columns: dict, vehicle: Vehicle) -> tuple:
         vehicle.axle_load_kg,
     )
     v = np.asarray(est.vehicle_speed)
-    scale = float(coasting_sd_scale(est.slip, est.slip_sd, est.adhesion, est.vehicle_speed)[0])
-    return v, v + np.asarray(est.slip), scale * np.asarray(est.slip_sd), scale
+    return v, v + np.asarray(est.slip), np.asarray(est.slip_sd)
 
 
 def local_mean(x, half: int) -> np.ndarray:

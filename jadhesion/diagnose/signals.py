@@ -85,7 +85,7 @@ def from_columns(
     """Build :class:`Signals` from raw recording columns (time, vehicle_speed, wheel_speed,
     traction_torque) and the vehicle's constants; ``mask`` (n,) bool marks the samples the fits use
     (default all; the diagnosis passes its errors-in-variables weights instead, zero where
-    excluded); ``regressors = (v, v_w, slip_sd, …)`` [m/s] replace the measured speeds as the models'
+    excluded); ``regressors = (v, v_w, slip_sd)`` [m/s] replace the measured speeds as the models'
     inputs (speed, wheel speed, slip, power, acceleration) and give the slip's standard deviation
     (the diagnosis passes the smoother's latent speeds, :func:`jadhesion.diagnose.null.
     latent_speeds`). The target's wheel-acceleration term ``J ω̇`` is then the derivative of the
@@ -124,7 +124,7 @@ def torque_builder(columns: dict, vehicle: Vehicle, name: str = "recording", mas
     )
     deriv_mu, slip_sd = observer_deriv, np.zeros(t.size)
     if regressors is not None:
-        v, vw, slip_sd = (np.asarray(x, float) for x in regressors[:3])
+        v, vw, slip_sd = (np.asarray(x, float) for x in regressors)
         deriv_mu = vehicle.wheelset_inertia_kgm2 * np.gradient(vw, t) / (vehicle.wheel_radius_m * scale)
     slip = np.abs(np.asarray(kinematics.slip_velocity(vw, v)))
     dt = float(np.median(np.diff(t)))
