@@ -87,6 +87,12 @@ N_PARAMS = len(PARAM_NAMES) + N_EXTRA
 NEUTRAL = np.array([p.neutral for p in PARAMS])
 #: (N_PARAMS,) the entries that cross-validation folds keep at the full-data fit (``Param.fold_fixed``).
 FOLD_FIXED = np.array([False] * len(PARAM_NAMES) + [p.fold_fixed for p in PARAMS])
+#: (N_PARAMS,) the entries of an effect placed in time (one with a ``fold_fixed`` parameter): a fold
+#: whose training samples all lie on one side of that time cannot size the effect either.
+PLACED = np.array(
+    [False] * len(PARAM_NAMES)
+    + [any(q.fold_fixed for q in e.extension) for e in EFFECTS for _ in e.extension]
+)
 BOUNDS = (
     np.concatenate([POLACH_BOUNDS[0], np.array([p.lower for p in PARAMS])]),
     np.concatenate([POLACH_BOUNDS[1], np.array([p.upper for p in PARAMS])]),
@@ -108,6 +114,15 @@ def unpack(params, active):
     return params[:5], dict(zip(EXTRA_NAMES, extra, strict=True))
 
 
+#: Index of the rail change's time (a fraction of the duration) in the parameter vector.
+U_CHANGE = len(PARAM_NAMES) + EXTRA_NAMES.index("u_change")
+
+
+def change_time(u, sig: Signals):
+    """The rail change's time [s] at ``u_change = u`` [-] of the recording's duration."""
+    return sig.time[0] + u * sig.duration
+
+
 @jax.jit
 def predict(params, active, sig: Signals):
     """``(target, prediction)`` of the observed adhesion [-], each shape (n,) (module docstring);
@@ -116,8 +131,7 @@ def predict(params, active, sig: Signals):
     target = sig.adhesion + e["delay_s"] * sig.torque_rate
     gain_r = 1.0 + e["delta_r"]
     slip = sig.wheel_speed * gain_r - sig.speed
-    t_change = sig.time[0] + e["u_change"] * sig.duration
-    step = jax.nn.sigmoid((sig.time - t_change) / (STEP_WIDTH * sig.duration))
+    step = jax.nn.sigmoid((sig.time - change_time(e["u_change"], sig)) / (STEP_WIDTH * sig.duration))
     scale = (
         (1.0 - e["drop"] * step)
         * (1.0 - e["slope"] * (sig.speed - sig.speed_ref) / sig.speed_ref)
