@@ -186,6 +186,19 @@ def test_unconverged_candidate_is_never_ranked():
     assert select.effects_from(rows, None) == ([], [])
 
 
+def test_a_better_held_out_candidate_that_fails_bic_vetoes_nothing():
+    """The best held-out gain with ΔBIC ≥ 0 is not accepted, and the next candidate that passes
+    every test is (the independent generator's radius error 300010 behind a rail change)."""
+    rows = [
+        {"name": "rail_change", "gain": 0.244, "delta_bic": 1.08, "status": "converged"},
+        {"name": "wheel_radius_error", "gain": 0.237, "delta_bic": -2.57, "status": "converged"},
+        {"name": "torque_offset", "gain": 0.055, "delta_bic": 0.34, "status": "converged"},
+    ]
+    assert select.effects_from(rows, None) == (["wheel_radius_error"], [])
+    rows[1]["gain"] = 0.5 * select.GAIN_THRESHOLD
+    assert select.effects_from(rows, None) == ([], [])
+
+
 def test_warnings_say_what_was_not_tested():
     """An unconverged candidate above the null's critical value opens the verdict; a null at γ = 0
     and an unconverged base fit are named."""
