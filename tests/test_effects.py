@@ -158,6 +158,16 @@ def test_extended_fit_recovers_the_magnitude(name):
     assert abs(est - magnitude) <= TOL.get(name, 0.1) * abs(magnitude), (est, magnitude)
 
 
+def _base_and_effect_with_folds(name, p0, sig):
+    """Fit table (with CV folds) of the plain model and of ``name``'s extension, both from ``p0``."""
+    rows = (
+        np.stack([p0, p0]),
+        np.array([fitting.free_indices(()), fitting.free_indices((name,))]),
+        np.stack([np.zeros(ext.N_EXTRA, bool), np.asarray(ext.active_mask([name]))]),
+    )
+    return fitting.fit_candidates(*rows, fitting.pad_signals(sig), N, folds=True)
+
+
 @pytest.mark.parametrize("name", [n for n in EFFECT_NAMES if any(p.fold_fixed for p in EFFECTS[n].extension)])
 def test_folds_converge_when_one_holds_out_the_effects_place(name):
     """A parameter that places an effect in time is kept at the full-data fit in the CV folds, so
@@ -170,12 +180,7 @@ def test_folds_converge_when_one_holds_out_the_effects_place(name):
     p0 = np.concatenate([list(sim.truth["params"].values()), ext.NEUTRAL])
     for p in EFFECTS[name].extension[1:]:  # the place starts off the truth (0.5), inside block 2
         p0[5 + ext.EXTRA_NAMES.index(p.name)] = 0.45 if p.fold_fixed else p.neutral
-    rows = (
-        np.stack([p0, p0]),
-        np.array([fitting.free_indices(()), fitting.free_indices((name,))]),
-        np.stack([np.zeros(ext.N_EXTRA, bool), np.asarray(ext.active_mask([name]))]),
-    )
-    table = fitting.fit_candidates(*rows, fitting.pad_signals(sig), N, folds=True)
+    table = _base_and_effect_with_folds(name, p0, sig)
     assert [int(s) for s in table.status] == [Status.CONVERGED] * 2
     assert [int(s) for s in table.fold_status] == [Status.CONVERGED] * 2
     assert float(table.heldout_mae[1]) < 0.9 * float(table.heldout_mae[0])  # measured 0.76
@@ -193,12 +198,7 @@ def test_a_fold_that_sees_one_side_of_a_change_keeps_its_size():
     sig = from_columns({k: np.asarray(sim.columns[k])[keep] for k in RAW}, sim.vehicle)
     p0 = np.concatenate([list(sim.truth["params"].values()), ext.NEUTRAL])
     p0[ext.U_CHANGE] = 0.88
-    rows = (
-        np.stack([p0, p0]),
-        np.array([fitting.free_indices(()), fitting.free_indices((name,))]),
-        np.stack([np.zeros(ext.N_EXTRA, bool), np.asarray(ext.active_mask([name]))]),
-    )
-    table = fitting.fit_candidates(*rows, fitting.pad_signals(sig), N, folds=True)
+    table = _base_and_effect_with_folds(name, p0, sig)
     assert [int(s) for s in table.fold_status] == [Status.CONVERGED] * 2
     assert 0.85 < float(table.params[1, ext.U_CHANGE]) < 0.95
     assert float(table.heldout_mae[1]) < 0.7 * float(table.heldout_mae[0])
