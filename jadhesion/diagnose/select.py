@@ -9,10 +9,10 @@ confirms, and a threshold calibrated on clean simulated recordings bounds the fa
   reported with their status.
 * An effect is accepted when it has the best held-out error among the candidates with
   ``gain ≥ GAIN_THRESHOLD``, ``ΔBIC < 0`` and, when the recording's null was run (:mod:`.null`), a
-  max-T p-value of at most :data:`ALPHA` (one with a better held-out error that fails ΔBIC does not
-  veto it: it had left a radius error of the independent generator unnamed behind a rail change
-  with ΔBIC +1.1) (the null, not the threshold, is what holds the false alarms on recordings
-  from other generators and sensors; the second effect of round 2 has no null of its own).
+  max-T p-value of at most :data:`ALPHA`. The null, not the threshold, is what holds the false
+  alarms on recordings from other generators and sensors; the second effect of round 2 has no null
+  of its own. A candidate with a better held-out error that fails a test vetoes nothing (one rail
+  change with ΔBIC +1.1 had left a radius error of the independent generator unnamed).
   Other candidates with ``gain ≥ AMBIGUITY · gain_best``, or with a positive held-out gain and a
   ``ΔBIC`` within :data:`BIC_SEPARATION` of the best's (the recording's evidence between the two is
   not strong), are reported with it as a set the recording cannot separate, with the run that
