@@ -15,9 +15,8 @@ from pathlib import Path
 import jax
 import numpy as np
 
-from ..data.dataset import sd_scale_summary
+from ..data.dataset import sd_scale_summary, valid_mask
 from ..data.selected import creep_sign_warning
-from ..identify.batch_fit import valid_mask
 from ..identify.ensemble import ChainTooShortWarning
 from ..identify.laplace import colour_check, initial_spread, lm_optimum
 from ..identify.likelihood import noise_names, with_slip_law

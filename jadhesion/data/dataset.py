@@ -223,6 +223,13 @@ def _raw_dataset(recording, observer_variant: str, k_eps=None) -> PolachDataset:
     )
 
 
+def valid_mask(data: PolachDataset) -> np.ndarray:
+    """(n,) bool: the samples that count — all of them, or the mask's ones (not the padding)."""
+    if data.weight is None:
+        return np.ones(data.adhesion.shape[-1], bool)
+    return np.asarray(data.weight) > 0
+
+
 def sd_scale_summary(data: PolachDataset) -> dict | None:
     """The JSON's ``slip_sd_scale``: ``{min, median, max}`` [-] over the dataset's samples (the
     padding left out) of the factor the smoother's sds were scaled by where the recording coasts
@@ -230,7 +237,5 @@ def sd_scale_summary(data: PolachDataset) -> dict | None:
     without a smoother (raw creep, a creepage file)."""
     if data.slip_sd_scale is None:
         return None
-    scale = np.asarray(data.slip_sd_scale, float)
-    if data.weight is not None:
-        scale = scale[np.asarray(data.weight) > 0]
+    scale = np.asarray(data.slip_sd_scale, float)[valid_mask(data)]
     return {"min": float(scale.min()), "median": float(np.median(scale)), "max": float(scale.max())}

@@ -31,7 +31,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..data.dataset import SAMPLE_FIELDS, PolachDataset
+from ..data.dataset import SAMPLE_FIELDS, PolachDataset, valid_mask
 from ..data.length_buckets import bucket_length
 
 # No module-level import of the fits (:mod:`.polach_fit` pulls in optimistix/equinox): the
@@ -65,13 +65,6 @@ def bucketed(data: PolachDataset) -> PolachDataset:
     ``weight`` (padded already): what the fit and its trust block compute on, one compiled program
     per bucket."""
     return data if data.weight is not None else pad_dataset(data)
-
-
-def valid_mask(data: PolachDataset) -> np.ndarray:
-    """(n,) bool: the samples that count — all of them, or the mask's ones (not the padding)."""
-    if data.weight is None:
-        return np.ones(data.adhesion.shape[-1], bool)
-    return np.asarray(data.weight) > 0
 
 
 def valid_samples(data: PolachDataset) -> int:

@@ -49,10 +49,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..data.dataset import valid_mask
 from ..data.inspection import implausible_adhesion
 from ..models.polach import PARAM_NAMES
 from ..status import status_of
-from .batch_fit import bucketed, valid_mask, valid_samples
+from .batch_fit import bucketed, valid_samples
 from .peak import DERIVED, peak_numbers, peak_report, reference_speed
 from .polach_fit import LM_RESIDUAL, RECOMMENDED_SAMPLES, scaled
 from .uncertainty import Z95, correlation, covariance, determined, undetermined_warning
