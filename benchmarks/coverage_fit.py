@@ -27,7 +27,10 @@ Runs before 2026-11-24 (``coverage_fit.json`` at 8d588e4, ``coverage_fit_robust.
 standstill and coasting included, which ``jadhesion fit`` never does.
 ``results/coverage_fit_conditional.json`` is the same run before the trust block stopped
 conditioning on parameters at a bound (commit 26731cc). ``--slip-law population`` fits with the
-population slip law (:mod:`jadhesion.identify.slip_law`; ``coverage_fit_slip_law_*.json``). The
+population slip law (:mod:`jadhesion.identify.slip_law`; ``coverage_fit_slip_law_*.json``);
+``both`` (the default, as ``jadhesion fit``) with the normal law, each interval joined to the
+population law's LM fit's (:func:`jadhesion.identify.trust.join_slip_laws`;
+``coverage_fit_slip_law_both.json``). The
 JSON records the git commit, every setting and ``os.getloadavg()``; the figure plots, per creep
 option, the median relative error of the slope and of μ0 and the 90 % coverage of kS and μ0
 against the speed-sensor noise sd (and of μ_max where the run recorded the peak).
@@ -59,10 +62,10 @@ from jadhesion.data.selected import selected_dataset  # noqa: E402
 from jadhesion.data.sensors import CLEAN, REALISTIC  # noqa: E402
 from jadhesion.data.simulator import simulate_many  # noqa: E402
 from jadhesion.identify.batch_fit import fit_datasets  # noqa: E402
-from jadhesion.identify.likelihood import SLIP_LAWS, with_slip_law  # noqa: E402
+from jadhesion.identify.likelihood import SLIP_LAWS, as_slip_law, with_slip_law  # noqa: E402
 from jadhesion.identify.peak import DERIVED  # noqa: E402
 from jadhesion.identify.polach_fit import fit_polach_batch  # noqa: E402
-from jadhesion.identify.trust import fit_report  # noqa: E402
+from jadhesion.identify.trust import fit_report, joined_interval  # noqa: E402
 from jadhesion.models.polach import PARAM_NAMES, adhesion_peak  # noqa: E402
 from validation.foreign_generator import generate, write  # noqa: E402
 
@@ -105,52 +108,93 @@ def _fits(datasets):
     return [r.fit for r in fit_datasets(datasets, "lm", jax.random.key(0))]
 
 
+def _rows(datasets, truths, k_eps):
+    """Per dataset: the LM fit's estimate, stderrs, hac lags and the report's peak (``derived``)
+    beside the true curve's peak at the same speed (``k_eps``: the generator's true gradient
+    constants, default the dataset's)."""
+    rows = []
+    for i, (d, f, t) in enumerate(zip(datasets, _fits(datasets), truths, strict=True)):
+        rep = fit_report(d, f)
+        true_k = d.k_eps if k_eps is None else k_eps[i]
+        peak = adhesion_peak(jnp.asarray(t, float), true_k, rep["vehicle_speed"])
+        rows.append(
+            {
+                "truth": [float(x) for x in t],
+                "estimate": np.asarray(f.params, float).tolist(),
+                "stderr": [rep["uncertainty"][p]["stderr"] for p in PARAM_NAMES],
+                "hac_lags": rep["hac_lags"],
+                "converged": bool(int(f.status) == 0),
+                "vehicle_speed": rep["vehicle_speed"],
+                "derived": rep["derived"],
+                "derived_truth": dict(zip(DERIVED, (float(x) for x in peak), strict=True)),
+                "peak_extrapolated": any(w["code"] == "peak_extrapolated" for w in rep["warnings"]),
+            }
+        )
+    return rows
+
+
 def score(recordings, truths, k_eps=None, creeps=CREEPS, slip_law="normal"):
-    """Per creep option: per-recording estimates, stderrs and hac lags of one set, and the report's
-    peak (``derived``) beside the true curve's peak at the same speed (``k_eps``: the generator's
-    true gradient constants, default the dataset's)."""
+    """Per creep option, the :func:`_rows` of one set; with ``slip_law`` ``"both"`` (``jadhesion
+    fit``'s default) the normal law's, each with the population law's fit as ``other`` (its
+    ``estimate``, ``stderr``, ``derived``, ``converged``), whose intervals :func:`summarise` joins."""
     out = {}
     for creep in creeps:
-        datasets = [with_slip_law(selected_dataset(r, PHASE, creep=creep)[0], slip_law) for r in recordings]
-        fits = _fits(datasets)
-        rows = []
-        for i, (d, f, t) in enumerate(zip(datasets, fits, truths, strict=True)):
-            rep = fit_report(d, f)
-            true_k = d.k_eps if k_eps is None else k_eps[i]
-            peak = adhesion_peak(jnp.asarray(t, float), true_k, rep["vehicle_speed"])
-            rows.append(
-                {
-                    "truth": [float(x) for x in t],
-                    "estimate": np.asarray(f.params, float).tolist(),
-                    "stderr": [rep["uncertainty"][p]["stderr"] for p in PARAM_NAMES],
-                    "hac_lags": rep["hac_lags"],
-                    "converged": bool(int(f.status) == 0),
-                    "vehicle_speed": rep["vehicle_speed"],
-                    "derived": rep["derived"],
-                    "derived_truth": dict(zip(DERIVED, (float(x) for x in peak), strict=True)),
-                    "peak_extrapolated": any(w["code"] == "peak_extrapolated" for w in rep["warnings"]),
-                }
-            )
+        base = [selected_dataset(r, PHASE, creep=creep)[0] for r in recordings]
+        law = "normal" if slip_law == "both" else slip_law
+        rows = _rows([with_slip_law(d, law) for d in base], truths, k_eps)
+        if slip_law == "both" and base[0].slip_sd is not None:
+            others = _rows([as_slip_law(d, "population") for d in base], truths, k_eps)
+            keys = ("estimate", "stderr", "derived", "converged")
+            rows = [{**r, "other": {k: o[k] for k in keys}} for r, o in zip(rows, others, strict=True)]
         out[creep] = rows
     return out
 
 
-def _covered(est, se, truth, z):
-    if se is None:  # fixed on a bound: the interval is the bound itself
-        return abs(est - truth) <= 1e-6
-    lo, hi = max(est - z * se, 0.0), min(est + z * se, 1.0)
-    return lo <= truth <= hi
+def _interval(est, se, z, lo=0.0, hi=1.0):
+    """``est ± z·se`` clipped to ``[lo, hi]``; the point ``est`` where ``se`` is ``None`` (fixed on a
+    bound: the interval is the bound itself)."""
+    if se is None:
+        return [est, est]
+    return [max(est - z * se, lo), min(est + z * se, hi)]
 
 
-def _derived_covered(entry, truth, z, name):
-    """Whether the report's ``z`` interval of a derived quantity holds ``truth`` (``creep_opt`` on
-    the log scale, as :mod:`jadhesion.identify.peak` builds it; no interval counts as a miss)."""
+def _derived_interval(entry, z, name):
+    """The report's ``z`` interval of a derived quantity (``creep_opt`` on the log scale, as
+    :mod:`jadhesion.identify.peak` builds it); ``None`` without one."""
     value, se = entry["value"], entry["stderr"]
     if se is None or not np.isfinite(se):
-        return False
+        return None
     if name == "creep_opt":
-        return value * np.exp(-z * se / value) <= truth <= value * np.exp(z * se / value)
-    return max(value - z * se, 0.0) <= truth <= value + z * se
+        return [value * np.exp(-z * se / value), value * np.exp(z * se / value)]
+    return _interval(value, se, z, hi=np.inf)
+
+
+def _holds(interval, truth):
+    """Whether ``interval`` holds ``truth`` (a point interval: within 1e-6); ``None`` is a miss."""
+    if interval is None:
+        return False
+    if interval[0] == interval[1]:
+        return abs(interval[0] - truth) <= 1e-6
+    return interval[0] <= truth <= interval[1]
+
+
+def _param_interval(row, j, z):
+    """Parameter ``j``'s ``z`` interval of a row, joined to its ``other`` law's where it has one
+    (:func:`jadhesion.identify.trust.joined_interval`, the fit's rule: a bound stays a bound)."""
+    own = _interval(row["estimate"][j], row["stderr"][j], z)
+    if "other" not in row or row["stderr"][j] is None:
+        return own
+    o = row["other"]
+    theirs = None if o["stderr"][j] is None else _interval(o["estimate"][j], o["stderr"][j], z)
+    return joined_interval(own, theirs, o["estimate"][j])
+
+
+def _peak_interval(row, z, name):
+    own = _derived_interval(row["derived"][name], z, name)
+    if "other" not in row:
+        return own
+    o = row["other"]["derived"][name]
+    return joined_interval(own, _derived_interval(o, z, name), o["value"])
 
 
 def summarise(rows):
@@ -170,7 +214,7 @@ def summarise(rows):
         se = [r["stderr"][j] for r in rows]
         for lv, z in Z.items():
             out[f"{p}_coverage{lv}"] = float(
-                np.mean([_covered(e, s, t, z) for e, s, t in zip(est[:, j], se, truth[:, j], strict=True)])
+                np.mean([_holds(_param_interval(r, j, z), r["truth"][j]) for r in rows])
             )
         zs = np.array(
             [(e - t) / s for e, s, t in zip(est[:, j], se, truth[:, j], strict=True) if s and np.isfinite(s)]
@@ -183,7 +227,7 @@ def summarise(rows):
         if not have:
             continue
         for lv, z in Z.items():
-            hits = [_derived_covered(r["derived"][name], r["derived_truth"][name], z, name) for r in have]
+            hits = [_holds(_peak_interval(r, z, name), r["derived_truth"][name]) for r in have]
             out[f"{name}_coverage{lv}"] = float(np.mean(hits))
         rel = [r["derived"][name]["value"] / r["derived_truth"][name] - 1 for r in have]
         out[f"{name}_rel_error_median"] = float(np.median(np.abs(rel)))
@@ -253,7 +297,13 @@ def main(argv=None):
     p.add_argument("--save", default=str(RESULTS / "coverage_fit.json"))
     p.add_argument("--figure", default=str(RESULTS / "coverage_fit.png"))
     p.add_argument("--creeps", default=",".join(CREEPS), help="creep options to fit")
-    p.add_argument("--slip-law", default="normal", choices=SLIP_LAWS, help="the fit's --slip-law")
+    p.add_argument(
+        "--slip-law",
+        default="both",
+        choices=(*SLIP_LAWS, "both"),
+        help="the fit's --slip-law; both (default, as jadhesion fit): normal, intervals joined to "
+        "the population law's",
+    )
     p.add_argument("--replot", action="store_true")
     args = p.parse_args(argv)
     if args.replot:

@@ -68,7 +68,10 @@ def test_fit_json_contract_and_accuracy(env, recording):
     mu0 = doc["uncertainty"]["mu0"]
     assert 0 < mu0["stderr"] < 0.01  # μ0 is the best-determined parameter of a dry test
     assert mu0["ci95"][0] < doc["params"]["mu0"] < mu0["ci95"][1]
-    assert mu0["ci95"][1] - mu0["ci95"][0] == pytest.approx(2 * 1.959964 * mu0["stderr"], rel=1e-6)
+    hac = mu0["ci95_hac"]  # this law's own interval; ci95 joins the other slip law's (slip_law_check)
+    assert hac[1] - hac[0] == pytest.approx(2 * 1.959964 * mu0["stderr"], rel=1e-6)
+    assert mu0["ci95"][0] <= hac[0] and hac[1] <= mu0["ci95"][1]
+    assert doc["slip_law_check"]["law"] == "population"
     corr = doc["correlation"]
     assert len(corr) == 5 and all(len(row) == 5 for row in corr)
     for i, row in enumerate(corr):
@@ -353,7 +356,9 @@ def test_fit_slip_law_population_on_a_steady_start(env, tmp_path):
     """Our simulator's dry start at its realistic sensors: the slips crowd within ~1.7 of their sds
     and the smoother's error there is classical (its mean over one true slip ~0), so the normal
     law draws LM's μ0 up (seed 700: 0.3666 against a true 0.3555, measured) and the population law
-    much less (0.3597). ``--creep raw`` has no slip law: said on stderr, ``slip_law`` null."""
+    much less (0.3597). Each fit also fits the other law by LM and joins its 95 % intervals to
+    that law's, which then hold the true μ0; ``--single-law`` skips that. ``--creep raw`` has no
+    slip law: said on stderr, ``slip_law`` null, no check."""
     rec = tmp_path / "dry.csv"
     jadhesion(env, "simulate", "--scenario", "dry", "--seed", "700", "--out", rec)
     mu0 = json.loads(rec.with_name("dry.truth.json").read_text())["params"]["mu0"]
@@ -365,6 +370,19 @@ def test_fit_slip_law_population_on_a_steady_start(env, tmp_path):
     assert all("crowded_slips" in {w["code"] for w in d["warnings"]} for d in docs.values())
     error = {law: abs(d["params"]["mu0"] - mu0) for law, d in docs.items()}
     assert error["population"] < 0.6 * error["normal"], error
+    # each fit checks the other law by the same LM: its 95 % intervals join both, and hold the truth
+    for law, other in (("normal", "population"), ("population", "normal")):
+        check = docs[law]["slip_law_check"]
+        assert check["law"] == other and check["status"] == "converged"
+        assert check["params"] == pytest.approx(docs[other]["params"], rel=1e-9)
+        u = docs[law]["uncertainty"]["mu0"]
+        assert u["ci95"][0] <= min(u["ci95_hac"][0], check["params"]["mu0"]), u
+        assert u["ci95"][1] >= max(u["ci95_hac"][1], check["params"]["mu0"]), u
+        assert u["ci95"][0] <= mu0 <= u["ci95"][1], (law, u)
+    assert not docs["normal"]["uncertainty"]["mu0"]["ci95_hac"][0] <= mu0  # the normal law's alone misses it
+    single = json.loads(jadhesion(env, "fit", rec, "--method", "lm", "--json", "--single-law").stdout)
+    assert "slip_law_check" not in single and single["params"] == docs["normal"]["params"]
+    assert single["uncertainty"]["mu0"]["ci95"] == docs["normal"]["uncertainty"]["mu0"]["ci95_hac"]
     raw = jadhesion(env, "fit", rec, "--method", "lm", "--json", "--creep", "raw", "--slip-law", "population")
-    assert json.loads(raw.stdout)["slip_law"] is None
+    assert json.loads(raw.stdout)["slip_law"] is None and "slip_law_check" not in json.loads(raw.stdout)
     assert "--slip-law population has no effect" in raw.stderr

@@ -48,6 +48,12 @@ def register(sub) -> None:
         help="creep from the Kalman/RTS-smoothed speeds (default) or their raw difference",
     )
     add_slip_law_option(p)
+    p.add_argument(
+        "--single-law",
+        action="store_true",
+        help="95 %% intervals under --slip-law alone: skip the LM fit under the other slip law whose "
+        "intervals they join by default (smoothed creep, Polach: the data cannot tell which law holds)",
+    )
     p.add_argument("--seed", type=int, default=0, help="optimiser seed (default 0)")
     p.add_argument(
         "--pop-size",

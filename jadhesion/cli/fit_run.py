@@ -29,10 +29,10 @@ from ..data.selected import creep_sign_warning
 from ..data.sidecar import sidecar_warning
 from ..identify.batch_fit import bucketed, fit_datasets
 from ..identify.kiencke_fit import fit_document, fit_kiencke
-from ..identify.likelihood import with_slip_law
+from ..identify.likelihood import as_slip_law, other_slip_law, with_slip_law
 from ..identify.methods import METHODS
 from ..identify.polach_fit import MIN_SAMPLES, RECOMMENDED_SAMPLES, require_samples, scaled
-from ..identify.trust import fit_report
+from ..identify.trust import fit_report, join_slip_laws
 from ..memory_maps import release_if_near_limit
 from ..models.polach import PARAM_NAMES
 from ..status import status_of
@@ -218,6 +218,12 @@ def _describe(doc) -> str:
         f"standard errors: Newey–West (HAC, {doc['hac_lags']} lags), robust to the "
         "observer's coloured residuals"
     )
+    if (check := doc.get("slip_law_check")) is not None:
+        p = ", ".join(f"{k} {v:.4g}" for k, v in check["params"].items())
+        lines.append(
+            f"95% intervals join both slip laws' (the smoother's error Berkson or classical: one "
+            f"recording cannot tell); {check['law']} law by LM: {p} ({check['status']})"
+        )
     lines.append(
         f"peak of the curve at {doc['vehicle_speed']:.3g} m/s (median speed): " + _peak_text(doc["derived"])
     )
@@ -234,14 +240,29 @@ def _peak_text(derived) -> str:
     return ", ".join(parts)
 
 
-def _polach_doc(args, dataset, fit, seconds) -> dict:
+def _trust(dataset, fit) -> dict:
+    """:func:`fit_report` of a fit, its covariance from the dataset padded to its length bucket,
+    as the fit (one trust program per bucket)."""
+    return fit_report(dataset, fit, numbers=trust_numbers(fit.params, scaled(bucketed(dataset), fit)))
+
+
+def _params(fit) -> dict:
+    return dict(zip(PARAM_NAMES, np.asarray(fit.params).tolist(), strict=True))
+
+
+def _polach_doc(args, dataset, fit, seconds, check=None) -> dict:
     """One file's document (``fit.mae``/``sse`` over its own samples; the trust block from the
-    unpadded dataset)."""
+    unpadded dataset); ``check``: its :func:`_slip_law_checks` entry, whose intervals the trust
+    block's join (:func:`jadhesion.identify.trust.join_slip_laws`)."""
     status = status_of(fit.status)
+    params = _params(fit)
+    report = _trust(dataset, fit)
+    if check is not None:
+        report = join_slip_laws(report, params, check)
     return {
         "model": "polach",
         "method": args.method,
-        "params": dict(zip(PARAM_NAMES, np.asarray(fit.params).tolist(), strict=True)),
+        "params": params,
         "mae": float(fit.mae),
         "iterations": int(fit.iterations),
         "evaluations": int(fit.evaluations),
@@ -250,14 +271,44 @@ def _polach_doc(args, dataset, fit, seconds) -> dict:
         "converged": status.converged,
         # LM's robust sd of mu_hat about the curve (its standardised residual's scale); None else
         "noise_scale": None if fit.residual_scale is None else float(fit.residual_scale),
-        # padded to its length bucket, as the fit: one trust program per bucket
-        **fit_report(dataset, fit, numbers=trust_numbers(fit.params, scaled(bucketed(dataset), fit))),
+        **report,
+        **({} if check is None else {"slip_law_check": check}),
     }
+
+
+def _slip_law_checks(args, datasets) -> list:
+    """Per dataset, the LM fit under the other slip law (:func:`.likelihood.other_slip_law`) and
+    its trust block (``law``, ``method``, ``params``, ``mae``, ``status``, ``converged``,
+    ``seconds``, ``uncertainty``, ``derived``), or ``None``: for raw creep and creepage files (no
+    slip sd) and with ``--single-law``."""
+    todo = [i for i, d in enumerate(datasets) if d.slip_sd is not None and not args.single_law]
+    checks = [None] * len(datasets)
+    if not todo:
+        return checks
+    law = other_slip_law(args.slip_law)
+    others = [as_slip_law(datasets[i], law) for i in todo]
+    fitted = fit_datasets(others, "lm", seed_key(args.seed), fit=fit_polach)
+    for i, data, f in zip(todo, others, fitted, strict=True):
+        status = status_of(f.fit.status)
+        report = _trust(data, f.fit)
+        checks[i] = {
+            "law": law,
+            "method": "lm",
+            "params": _params(f.fit),
+            "mae": float(f.fit.mae),
+            "status": status.label,
+            "converged": status.converged,
+            "seconds": f.seconds,
+            "uncertainty": report["uncertainty"],
+            "derived": report["derived"],
+        }
+    return checks
 
 
 def _fit_all(args, datasets) -> list[dict]:
     """Every dataset fitted padded to its length bucket (:func:`.batch_fit.fit_datasets`: one
-    compiled program per method and bucket, Polach's kept)."""
+    compiled program per method and bucket, Polach's kept); Polach's also under the other slip law
+    (:func:`_slip_law_checks`)."""
     fitted = fit_datasets(
         datasets,
         args.method,
@@ -267,7 +318,10 @@ def _fit_all(args, datasets) -> list[dict]:
     )
     if args.model == "kiencke":
         return [{"method": args.method, **fit_document(f.fit), "seconds": f.seconds} for f in fitted]
-    return [_polach_doc(args, d, f.fit, f.seconds) for d, f in zip(datasets, fitted, strict=True)]
+    checks = _slip_law_checks(args, datasets)
+    return [
+        _polach_doc(args, d, f.fit, f.seconds, c) for d, f, c in zip(datasets, fitted, checks, strict=True)
+    ]
 
 
 def _plot(args, path, dataset, doc, many: bool) -> None:

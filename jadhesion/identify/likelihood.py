@@ -148,6 +148,19 @@ def with_slip_law(data: PolachDataset, law: str) -> PolachDataset:
     return cut(padded, data.adhesion.shape[0])._replace(weight=data.weight)
 
 
+def other_slip_law(law: str) -> str:
+    """The slip law a fit under ``law`` is checked against (:data:`SLIP_LAWS` has two)."""
+    if law not in SLIP_LAWS:
+        raise ValueError(f"slip law must be one of {SLIP_LAWS}, got {law!r}")
+    return SLIP_LAWS[1 - SLIP_LAWS.index(law)]
+
+
+def as_slip_law(data: PolachDataset, law: str) -> PolachDataset:
+    """:func:`with_slip_law` of ``data`` whatever law its nodes were set for (they are dropped
+    first: the normal law's are then left to the fit)."""
+    return with_slip_law(data._replace(node_slips=None), law)
+
+
 def curve_moments(theta, data: PolachDataset):
     """Mean and variance (n,) of ``mu_adh`` over the slip's uncertainty (module docstring), from
     the dataset's ``node_slips`` (:func:`with_node_slips`; computed here when not set);
