@@ -18,7 +18,7 @@ from jadhesion.cli import main
 from jadhesion.data.recording import save_recording
 from jadhesion.experiments.mcmc_row import table2_row
 from jadhesion.identify.ensemble import ChainTooShortWarning, Diagnostics, run_ensemble
-from jadhesion.identify.laplace import laplace_covariance, lm_optimum
+from jadhesion.identify.laplace import POSTERIOR_SAMPLES, laplace_covariance, lm_optimum, thinning
 from jadhesion.identify.likelihood import (
     LOG_SCALE_BOUNDS,
     ar1_log_likelihood,
@@ -417,3 +417,18 @@ def test_ar1_posterior_names_and_no_retrace(data):
     assert res.names[-2:] == ("sigma", "rho") and res.samples.shape[1] == 7
     assert np.all(res.samples[:, 5] > 0) and np.all(np.abs(res.samples[:, 6]) <= 0.99)
     assert blp._cache_size() == before
+
+
+@pytest.mark.parametrize(
+    ("samples", "kappa", "every"),
+    [
+        (POSTERIOR_SAMPLES, 100.0, 1),  # few enough: all samples
+        (23_436, 59.0, 12),  # a 1 kHz recording: ceil(n / 2000) = 12 ≤ κ/4 = 14.75
+        (23_436, 20.0, 5),  # κ/4 bounds it: thinner would lose information
+        (50_000, 7.9, 1),  # residuals nearly white: every sample counts
+    ],
+)
+def test_thinning_keeps_the_effective_samples(samples, kappa, every):
+    """The tempered posterior thins only where the residuals are correlated over at least 4·d
+    samples and there are more than POSTERIOR_SAMPLES of them."""
+    assert thinning(samples, kappa) == every

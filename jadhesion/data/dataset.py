@@ -184,6 +184,16 @@ def cut(data: PolachDataset, n: int) -> PolachDataset:
     )
 
 
+def thinned(data: PolachDataset, every: int) -> PolachDataset:
+    """Every ``every``-th row of a dataset (rows 0, every, 2·every, …), sliced on the host as
+    :func:`cut`."""
+
+    def rows(a):
+        return a[::every] if isinstance(a, np.ndarray) else jnp.asarray(np.asarray(a)[::every])
+
+    return data._replace(**{f: rows(getattr(data, f)) for f in SAMPLE_FIELDS if getattr(data, f) is not None})
+
+
 def adhesion_source(recording) -> str:
     """``"observer"`` when the recording has the raw signals (an ``adhesion`` column is then
     ignored), else ``"column"``: the module docstring's one rule for an ``adhesion`` column."""

@@ -72,6 +72,22 @@ def _laplace_covariance(theta_hat, data, obs):
     return covariance(jac, r, hac=False)[0]
 
 
+#: Samples above which the tempered posterior samples a thinned dataset (:func:`thinning`).
+POSTERIOR_SAMPLES = 2000
+
+
+def thinning(samples: int, kappa: float) -> int:
+    """Every how many samples the posterior tempered by 1/κ evaluates (1: all): as few as bring
+    ``samples`` to :data:`POSTERIOR_SAMPLES`, and never more than κ/4. Residuals correlated over
+    many samples (an oversampled recording: κ ≈ twice the correlation length for AR(1)) carry
+    about n/κ samples' information whether all or every d-th are kept while d ≤ κ/4 (an AR(1)'s
+    effective samples then drop by under 3 %), and the likelihood costs d times less: a 1 kHz
+    recording of 23 436 samples (κ = 59) took 590 s in full."""
+    if samples <= POSTERIOR_SAMPLES:
+        return 1
+    return int(max(1, min(np.ceil(samples / POSTERIOR_SAMPLES), np.floor(kappa / 4.0))))
+
+
 def initial_spread(
     theta_hat, data: PolachDataset, floor: float = 1e-4, cap: float = 0.05, obs: ObserverTerms | None = None
 ):
