@@ -1,12 +1,14 @@
 """``jadhesion fit``'s fast start: the command's JAX work as kept exported programs.
 
-Three programs, each exported once (``jax.export``) and kept in the program cache
+Four programs, each exported once (``jax.export``) and kept in the program cache
 (:func:`jadhesion.config.program_cache_dir`, :mod:`jadhesion.programs`) under its shapes, options
 and code: ``polach_dataset`` (observer, kinematics and Kalman/RTS creep smoother of a recording's
-raw signals padded to their length bucket: :func:`to_dataset`), ``polach_fit`` (the fit of a padded
-dataset: :func:`fit_polach`) and ``polach_trust`` (the Jacobian of LM's residual over every row,
-the HAC covariance and the curve's peak with its gradient: :func:`trust_numbers`). Each is a
-drop-in for its library function with the same results, bit for bit. A process that finds them
+raw signals padded to their length bucket: :func:`to_dataset`), ``polach_slip_nodes`` (the slip
+law's nodes: :func:`slip_nodes`), ``polach_fit`` (the fit of a padded dataset: :func:`fit_polach`)
+and ``polach_trust`` (the Jacobian of LM's residual over every row, the HAC covariance and the
+curve's peak with its gradient: :func:`trust_numbers`). Each is a drop-in for its library function
+with the same results, bit for bit; a program used twice in a process (the fit under both slip
+laws) is loaded once. A process that finds them
 deserialises and calls them, with the compiled executables from the persistent compilation cache:
 it traces and lowers nothing, and imports no optimistix or equinox (the fit's LM is the projected
 LM of :mod:`jadhesion.identify.box_lm`). On a miss the library function is exported, kept and
@@ -33,6 +35,7 @@ import numpy as np
 from ..config import program_cache_dir
 from ..data import dataset as _dataset
 from ..data.length_buckets import bucket_length
+from ..identify.batch_fit import bucketed
 from ..programs import ProgramCache, code_key
 
 #: jadhesion sources that define the exported fit, and the libraries it is built from.
@@ -138,19 +141,50 @@ def _trust_program():
     return lambda params, data: trust_numbers(params, data)._asdict()
 
 
+#: The programs this process has loaded or exported, by key: a second call (the fit under the
+#: other slip law, the next file of a bucket) runs the one JAX compiled, instead of loading it again.
+_LOADED = {}
+
+
 def _kept(name, make_fn, args, static, sources=None):
     """``make_fn()``'s function called on ``args`` through the kept program ``name`` (exported
     and kept now on a miss; a kept program this process cannot run is rebuilt, never fatal);
     ``sources``: the code it is keyed on (default the fit's)."""
     code = _code(FIT_SOURCES, FIT_DISTRIBUTIONS) if sources is None else _code(sources)
     cache = _cache()
-    program = cache.load(name, args, static=static, code=code)
+    memo = cache.path(cache.key(name, args, static=static, code=code))
+    program = _LOADED.get(memo) or cache.load(name, args, static=static, code=code)
     if program is not None:
         try:
-            return program(*args)
+            out = program(*args)
+            _LOADED[memo] = program
+            return out
         except Exception:  # rebuilt below
             pass
-    return cache.export(name, make_fn(), args, static=static, code=code)(*args)
+    _LOADED[memo] = cache.export(name, make_fn(), args, static=static, code=code)
+    return _LOADED[memo](*args)
+
+
+def _nodes_program(law):
+    """The function kept as program ``polach_slip_nodes``: ``padded dataset -> node slips``."""
+    from ..identify.likelihood import with_node_slips  # on a miss only, as the fit's
+
+    return lambda data: with_node_slips(data, law).node_slips
+
+
+def slip_nodes(dataset, law: str):
+    """``dataset`` (with a slip sd) with the node slips of slip law ``law`` set
+    (:func:`jadhesion.identify.likelihood.with_node_slips` on the dataset padded to its length
+    bucket, cut back to its rows) through the kept program ``polach_slip_nodes``: set for either
+    law, so the fits and trust blocks under both laws are one program each."""
+    n = dataset.adhesion.shape[0]
+    padded = bucketed(dataset._replace(node_slips=None))
+    if not _enabled():
+        nodes = jax.jit(_nodes_program(law))(padded)
+    else:
+        make = functools.partial(_nodes_program, law)
+        nodes = _kept("polach_slip_nodes", make, (padded,), {"law": law})
+    return dataset._replace(node_slips=jnp.asarray(np.asarray(nodes)[:n]))
 
 
 def seed_key(seed: int):

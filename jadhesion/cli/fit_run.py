@@ -29,7 +29,7 @@ from ..data.selected import creep_sign_warning
 from ..data.sidecar import sidecar_warning
 from ..identify.batch_fit import bucketed, fit_datasets
 from ..identify.kiencke_fit import fit_document, fit_kiencke
-from ..identify.likelihood import as_slip_law, other_slip_law, with_slip_law
+from ..identify.likelihood import other_slip_law
 from ..identify.methods import METHODS
 from ..identify.polach_fit import MIN_SAMPLES, RECOMMENDED_SAMPLES, require_samples, scaled
 from ..identify.trust import fit_report, join_slip_laws
@@ -48,7 +48,7 @@ from .common import (
     require_seed,
     table,
 )
-from .fit_program import fit_polach, seed_key, to_dataset, trust_numbers
+from .fit_program import fit_polach, seed_key, slip_nodes, to_dataset, trust_numbers
 from .loading import load_dataset, load_from_args, say_sidecar_warning, slip_law_used
 
 
@@ -153,8 +153,8 @@ def _load(args, path):
             f"(at least {MIN_SAMPLES} needed, {RECOMMENDED_SAMPLES} recommended)"
         )
     _, dataset, selection = load_dataset(args, path, to_dataset, recording=recording)
-    if args.model == "polach":  # --slip-law population: that law's nodes (Kiencke has no slip law)
-        dataset = with_slip_law(dataset, args.slip_law)
+    if args.model == "polach" and dataset.slip_sd is not None:  # Kiencke has no slip law
+        dataset = slip_nodes(dataset, args.slip_law)  # either law's: one fit program for both
     require_samples(dataset, str(path))
     release_if_near_limit()  # programs are per length bucket; many buckets still add up
     return dataset, selection, _recording_report(recording, selection)
@@ -286,7 +286,7 @@ def _slip_law_checks(args, datasets) -> list:
     if not todo:
         return checks
     law = other_slip_law(args.slip_law)
-    others = [as_slip_law(datasets[i], law) for i in todo]
+    others = [slip_nodes(datasets[i], law) for i in todo]
     fitted = fit_datasets(others, "lm", seed_key(args.seed), fit=fit_polach)
     for i, data, f in zip(todo, others, fitted, strict=True):
         status = status_of(f.fit.status)
