@@ -27,6 +27,7 @@ from ..data.creep_state import difference_sd
 from ..data.observer import lowpass_foh
 from ..data.vehicle import Vehicle
 from ..errors import InputError
+from ..models.effect_spec import IMPLAUSIBLE_BEYOND
 from ..models.effects import EFFECTS as REGISTRY
 from ..models.polach import PARAM_NAMES
 from ..status import Status
@@ -50,6 +51,12 @@ def _row(params, active, sig, tau_th: float) -> dict:
     if "softening" in out:
         out["tau_th_s"] = tau_th
     return out
+
+
+def _plausible(name: str, params: dict) -> bool:
+    """Whether the fitted size of effect ``name`` is one it has (:meth:`.EffectSpec.plausible`)."""
+    spec = REGISTRY[name]
+    return spec.plausible(params[spec.magnitude_param])
 
 
 def _extra_rows(sets) -> list:
@@ -154,6 +161,22 @@ def _warnings(result: dict) -> list:
                 ),
                 "candidates": [c["name"] for c in untested],
                 "above_critical": strong,
+            }
+        )
+    beyond = [c for c in result["candidates"] if not c["plausible"] and select.passes(c)]
+    if beyond:
+        out.append(
+            {
+                "code": "implausible_size",
+                "message": ", ".join(
+                    f"{c['name']} ({REGISTRY[c['name']].magnitude_param} "
+                    f"{c['params'][REGISTRY[c['name']].magnitude_param]:.3g}, typical up to "
+                    f"{REGISTRY[c['name']].typical[1]:g})"
+                    for c in beyond
+                )
+                + f" passed every test with a fitted size beyond {IMPLAUSIBLE_BEYOND:g}× the effect's "
+                "typical range: taken for the base model's misfit (e.g. a walking-pace start's), not named",
+                "candidates": [c["name"] for c in beyond],
             }
         )
     replicas = result["null"]["replicas"]
@@ -301,10 +324,12 @@ def diagnose(
     candidates = []
     for i in np.argsort(t1["heldout_mae"][1:]) + 1:
         signal = features.REVEALING_SIGNAL[names1[i]]
+        row = _row(t1["params"][i], act1[i], sig, tau_th)
         candidates.append(
             {
                 "name": names1[i],
-                "params": _row(t1["params"][i], act1[i], sig, tau_th),
+                "params": row,
+                "plausible": _plausible(names1[i], row),
                 "mae": float(t1["mae"][i]),
                 "heldout_mae": float(t1["heldout_mae"][i]),
                 "delta_bic": float(dbic1[i]),
@@ -335,6 +360,7 @@ def diagnose(
                     "delta_bic": float(dbic2[j + 1]),
                     "heldout_mae": float(t2["heldout_mae"][j + 1]),
                     "status": _status(t2, j + 1),
+                    "plausible": _plausible(n, _row(t2["params"][j + 1], act2[j + 1], sig, tau_th)),
                 }
                 for j, n in enumerate(others)
             ],

@@ -13,6 +13,9 @@ confirms, and a threshold calibrated on clean simulated recordings bounds the fa
   alarms on recordings from other generators and sensors; the second effect of round 2 has no null
   of its own. A candidate with a better held-out error that fails a test vetoes nothing (one rail
   change with ΔBIC +1.1 had left a radius error of the independent generator unnamed).
+  A candidate whose fitted size lies beyond 1.5× its effect's typical range
+  (:meth:`jadhesion.models.effect_spec.EffectSpec.plausible`) is not ranked: it fits the base
+  model's misfit.
   Other candidates with ``gain ≥ AMBIGUITY · gain_best``, or with a positive held-out gain and a
   ``ΔBIC`` within :data:`BIC_SEPARATION` of the best's (the recording's evidence between the two is
   not strong), are reported with it as a set the recording cannot separate, with the run that
@@ -90,17 +93,23 @@ def decide(names, gain, dbic, threshold: float = GAIN_THRESHOLD) -> tuple:
     return names[i], close
 
 
+def _tested(c: dict) -> bool:
+    """Converged, with a p-value ≤ :data:`ALPHA` where the null ran."""
+    return c.get("status", "converged") == "converged" and (c.get("p_value") is None or c["p_value"] <= ALPHA)
+
+
+def passes(c: dict, threshold: float = GAIN_THRESHOLD) -> bool:
+    """Whether a candidate passes every test: :func:`_tested`, ``gain ≥ threshold``, ``ΔBIC < 0``."""
+    return _tested(c) and c["gain"] >= threshold and c["delta_bic"] < 0.0
+
+
 def effects_from(candidates: list, second_round, threshold: float = GAIN_THRESHOLD) -> tuple:
     """Accepted effects (0–2, greedy) and the set indistinguishable from the first, from the
-    candidate lists of a diagnosis (each entry with ``name``, ``gain``, ``delta_bic``)."""
+    candidate lists of a diagnosis (each entry with ``name``, ``gain``, ``delta_bic``; one with
+    ``plausible`` false, a fitted size the effect does not have, is not ranked)."""
 
     def pick(rows):
-        rows = [
-            c
-            for c in rows
-            if c.get("status", "converged") == "converged"
-            and (c.get("p_value") is None or c["p_value"] <= ALPHA)
-        ]
+        rows = [c for c in rows if _tested(c) and c.get("plausible", True)]
         if not rows:
             return None, []
         return decide(
