@@ -17,6 +17,7 @@ from jadhesion.diagnose import EFFECT_NAMES, diagnose, diagnosis, fitting, null,
 from jadhesion.diagnose import extensions as ext
 from jadhesion.diagnose.explain import explain
 from jadhesion.diagnose.signals import from_columns, torque_builder
+from jadhesion.models.effects import EFFECTS
 from jadhesion.status import Status
 
 STATUS_LABELS = {s.label for s in Status}
@@ -197,6 +198,49 @@ def test_a_better_held_out_candidate_that_fails_bic_vetoes_nothing():
     assert select.effects_from(rows, None) == (["wheel_radius_error"], [])
     rows[1]["gain"] = 0.5 * select.GAIN_THRESHOLD
     assert select.effects_from(rows, None) == ([], [])
+
+
+def test_a_size_the_effect_does_not_have_is_not_named():
+    """The independent generator's clean start 11031: a rail change fitted as μ0 rising 109 % in
+    the first 2.7 s passes the null, BIC and the held-out test; beyond 1.5× the effect's typical
+    range it is taken for the base model's misfit: not ranked, and said in ``implausible_size``.
+    The next candidate that passes every test is named instead."""
+    drop = -1.088
+    rail = {
+        "name": "rail_change",
+        "gain": 0.025,
+        "delta_bic": -8.0,
+        "status": "converged",
+        "p_value": 0.05,
+        "sse_reduction": 0.8,
+        "params": {"drop": drop, "u_change": 0.09},
+        "plausible": EFFECTS["rail_change"].plausible(drop),
+    }
+    assert not rail["plausible"] and EFFECTS["rail_change"].plausible(-0.4)
+    offset = {
+        "name": "torque_offset",
+        "gain": 0.02,
+        "delta_bic": -1.0,
+        "status": "converged",
+        "p_value": 0.05,
+    }
+    assert select.effects_from([rail], None) == ([], [])
+    assert select.effects_from([rail, {**offset, "plausible": True}], None) == (["torque_offset"], [])
+    inside = {"params": {"mu0": 0.4}, "sse_reduction": 0.0, "delta_bic": 0.0}
+    result = {
+        "base": {"status": "converged"},
+        "null": {"critical_sse_reduction": 0.3, "noise": {"gamma": 0.5}, "replicas": 19, "truth": inside},
+        "candidates": [rail],
+    }
+    (warning,) = diagnosis._warnings(result)
+    assert warning["code"] == "implausible_size" and warning["candidates"] == ["rail_change"]
+    assert "drop -1.09, typical up to 0.5" in warning["message"]
+    result.update(
+        effects=[], warnings=[warning], generic={"used": False}, sensitivity={}, extended={"params": {}}
+    )
+    text = explain(result, LOCO_22E)
+    assert text.startswith("No catalogue effect is found: rail change (+2.5%, p = 0.05) passed every test")
+    assert "beyond the effect's typical range" in text and "no other candidate" in text
 
 
 def test_warnings_say_what_was_not_tested():

@@ -16,6 +16,7 @@ from jadhesion.diagnose import extensions as ext
 from jadhesion.diagnose import features, fitting, select
 from jadhesion.diagnose.explain import effect_sentence
 from jadhesion.diagnose.signals import from_columns
+from jadhesion.models.effect_spec import IMPLAUSIBLE_BEYOND
 from jadhesion.models.effects import EFFECT_NAMES, EFFECTS
 from jadhesion.models.kinematics import creepage
 from jadhesion.models.polach import polach_adhesion
@@ -105,6 +106,11 @@ def test_registry_record_is_complete(name, clean):
     assert len(spec.exposing_run) > 20 and len(spec.factor) > 20
     for threshold in (spec.detection.top1, spec.detection.in_set):
         assert threshold is None or lo <= threshold <= hi, (name, threshold)
+    # a fitted size is plausible across the typical range and a margin, not far beyond it
+    assert all(spec.plausible(s * m) for s in (1, -1) for m in (lo, hi, IMPLAUSIBLE_BEYOND * hi))
+    assert not spec.plausible(1.01 * IMPLAUSIBLE_BEYOND * hi) and not spec.plausible(
+        -2 * IMPLAUSIBLE_BEYOND * hi
+    )
 
 
 @pytest.mark.parametrize("name", EFFECT_NAMES)

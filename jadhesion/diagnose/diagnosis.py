@@ -163,7 +163,7 @@ def _warnings(result: dict) -> list:
                 "above_critical": strong,
             }
         )
-    beyond = [c for c in result["candidates"] if not c["plausible"] and select.passes(c)]
+    beyond = [c for c in result["candidates"] if not c.get("plausible", True) and select.passes(c)]
     if beyond:
         out.append(
             {

@@ -40,6 +40,11 @@ def _blind_spots(sensitivity: dict) -> str:
     )
 
 
+def _implausible(result: dict) -> list:
+    """The candidates the ``implausible_size`` warning names (passed every test, sized beyond)."""
+    return [n for w in result.get("warnings", []) if w["code"] == "implausible_size" for n in w["candidates"]]
+
+
 def explain(result: dict, vehicle: Vehicle) -> str:
     """The diagnosis in words: the verdict, what it means, the fit's improvement, ambiguities and
     the effects this recording cannot see."""
@@ -57,13 +62,28 @@ def explain(result: dict, vehicle: Vehicle) -> str:
             if strong
             else "No catalogue effect is found: "
         )
-        text = (
-            opening + "no catalogue effect lowers the held-out "
-            "error beyond the calibrated threshold and beyond what clean re-synthesised "
-            f"versions of this recording show (best {'converged ' if ranked else ''}candidate "
-            f"{best['name']}, "
-            f"{best['gain']:+.1%}" + ("" if p is None else f", p = {p:.2f}") + ")."
+        beyond = [c for c in result["candidates"] if c["name"] in _implausible(result)]
+        if beyond:
+            text = opening + (
+                " and ".join(
+                    f"{c['name'].replace('_', ' ')} ({c['gain']:+.1%}, p = {c['p_value']:.2f})"
+                    for c in beyond
+                )
+                + " passed every test only at a size beyond the effect's typical range: the base model's "
+                "misfit (a walking-pace start's, typically), not the effect; no other candidate "
+            )
+        else:
+            text = opening + "no catalogue effect "
+        text += (
+            "lowers the held-out error beyond the calibrated threshold and beyond what clean "
+            "re-synthesised versions of this recording show"
         )
+        if not beyond:
+            text += (
+                f" (best {'converged ' if ranked else ''}candidate {best['name']}, "
+                f"{best['gain']:+.1%}" + ("" if p is None else f", p = {p:.2f}") + ")"
+            )
+        text += "."
         if result["generic"]["used"]:
             text += _GENERIC.format(signal=result["strongest_signal"], gain=result["generic"]["gain"])
         return text + _blind_spots(result["sensitivity"])
