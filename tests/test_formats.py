@@ -111,8 +111,11 @@ def test_bad_values_name_file_column_row(tmp_path):
         load_recording(path, columns=LOGGER_MAP)
     assert str(info.value) == (
         f"{path}: column 'v_Lok_kmh', row 17: nan is not a finite number "
-        f"(NaN, a missing value, and inf are not allowed)"
+        f"(NaN, a missing value, and inf are not allowed; --missing skip leaves such rows out (gaps in time))"
     )
+    skipped = load_recording(path, columns=LOGGER_MAP, missing="skip")  # the row left out, as in a CSV
+    assert len(skipped.columns["time"]) == len(cols["t_ms"]) - 1
+    assert any("1 of" in n and "row 17, column 'v_Lok_kmh'" in n for n in skipped.notes), skipped.notes
     cols = logger_columns(stretches_si())
     path = write_mat5(cols, tmp_path / "kmh.mat")
     with pytest.raises(

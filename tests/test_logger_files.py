@@ -362,7 +362,10 @@ def test_a_row_of_dashes_is_missing_values_not_units(tmp_path):
     twin = _logger_twin(_si_columns(30), tmp_path / "twin.csv").read_text().splitlines()
     path = tmp_path / "dashes.csv"
     path.write_text("\n".join([twin[0], ",".join("-" * len(twin[0].split(","))), *twin[1:]]) + "\n")
-    assert _message(path, LOGGER_MAP) == f"{path}: column 't_ms', row 1 (line 2): '-' is not a number"
+    assert _message(path, LOGGER_MAP) == (
+        f"{path}: column 't_ms', row 1 (line 2): '-' is not a number "
+        "(a missing value; --missing skip leaves such rows out (gaps in time))"
+    )
 
 
 def _quoted(lines, decimal=","):

@@ -298,6 +298,39 @@ def test_iso_time_stamps_are_seconds(tmp_path):
         load_recording(dated)
 
 
+def test_missing_values_are_skipped_as_gaps_on_request(tmp_path):
+    """A logger's dropouts (an empty cell, NaN, NA, null, '-') stop the load by default, naming the
+    first; with ``missing="skip"`` each such row is left out (a gap in time), the rest read exactly
+    as written, a note counts them and names the first. A column the recording does not use may
+    have holes either way; inf stays an error; a file of holes is one error line."""
+
+    def edit(rows):
+        rows[3][2], rows[9][1], rows[10][3], rows[20][0] = "", "NaN", "NA", "-"
+        for r in rows:
+            r.append("" if r is rows[5] else "1")  # an unused column with a hole
+
+    path = tmp_path / "drop.csv"
+    path.write_text(_raw_text(30, edit).replace(HEADER, HEADER + ",note", 1))
+    assert "column 'time', row 21 (line 22): '-' is not a number (a missing value; --missing skip" in _error(
+        path
+    )
+    rec = load_recording(path, missing="skip")
+    full = _raw_columns(30)
+    kept = np.setdiff1d(np.arange(30), [3, 9, 10, 20])
+    for c in full:
+        np.testing.assert_array_equal(rec.columns[c], full[c][kept])
+    (note,) = [n for n in rec.notes if "skipped" in n]
+    assert "4 of 30 rows skipped" in note and "row 4 (line 5), column 'wheel_speed'" in note
+    inf = tmp_path / "inf.csv"
+    inf.write_text(_raw_text(30, _set(9, "traction_torque", "-inf")))
+    with pytest.raises(RecordingError, match="'-inf' is not a finite number"):
+        load_recording(inf, missing="skip")
+    holes = tmp_path / "holes.csv"
+    holes.write_text(_raw_text(30, lambda rows: [r.__setitem__(1, "") for r in rows]))
+    with pytest.raises(RecordingError, match="every row has a missing value"):
+        load_recording(holes, missing="skip")
+
+
 def test_missing_file_and_directory(tmp_path):
     assert "not found" in _error(tmp_path / "nope.csv") and "nope.csv" in _error(tmp_path / "nope.csv")
     assert "directory" in _error(tmp_path)

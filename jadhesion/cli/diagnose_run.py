@@ -1,8 +1,8 @@
 """The work of ``jadhesion diagnose`` (arguments: :mod:`.diagnose`): load the recording with the
 shared recording options (:func:`.loading.load_from_args`: ``--column``, ``--axle``,
-``--start``/``--end``), select the samples of ``--phase`` (:func:`jadhesion.data.segments.select`:
-standstill, coasting, direction changes and short stretches excluded), diagnose, print or emit
-JSON, write the report.
+``--missing``, ``--start``/``--end``), select the samples of ``--phase``
+(:func:`jadhesion.data.segments.select`: standstill, coasting, direction changes and short
+stretches excluded), diagnose, print or emit JSON, write the report.
 
 One exclusion of the fitting commands is undone here: samples whose creep has the opposite sign
 of the drive ("torque and creep disagree") are kept, whatever the phase, since that disagreement
@@ -25,11 +25,20 @@ from .loading import load_from_args
 
 
 def diagnose_file(
-    path, columns=(), axle=None, phase="traction", start=None, end=None, replicas=N_REPLICAS, seed=0
+    path,
+    columns=(),
+    axle=None,
+    phase="traction",
+    start=None,
+    end=None,
+    replicas=N_REPLICAS,
+    seed=0,
+    missing="error",
 ) -> tuple:
-    """Load a recording (file + sidecar) and diagnose the samples of ``phase`` within
-    ``[start, end]``: ``(result, recording)``; the code path of the CLI, used by the benchmarks."""
-    args = Namespace(column=list(columns), axle=axle, start=start, end=end)
+    """Load a recording (file + sidecar; ``missing`` as ``--missing``) and diagnose the samples of
+    ``phase`` within ``[start, end]``: ``(result, recording)``; the code path of the CLI, used by
+    the benchmarks."""
+    args = Namespace(column=list(columns), axle=axle, start=start, end=end, missing=missing)
     recording = load_from_args(args, path)
     if not recording.has_raw_signals:
         raise UserError(
@@ -59,7 +68,15 @@ def run(args) -> int:
     require_output_dir("diagnose", "report", args.report)
     start = time.perf_counter()
     result, _ = diagnose_file(
-        args.file, args.column, args.axle, args.phase, args.start, args.end, args.replicas, args.seed
+        args.file,
+        args.column,
+        args.axle,
+        args.phase,
+        args.start,
+        args.end,
+        args.replicas,
+        args.seed,
+        args.missing,
     )
     result["seconds"] = time.perf_counter() - start
     series = result.pop("_series")

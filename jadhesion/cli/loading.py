@@ -15,9 +15,9 @@ from ..errors import VehicleError
 
 def load_from_args(args, path) -> Recording:
     """The :class:`~jadhesion.data.recording.Recording` at ``path`` with ``--column``, ``--axle``,
-    ``--start`` and ``--end`` from ``args`` applied (with a note when its ``adhesion`` column is
-    ignored, :func:`jadhesion.data.dataset.adhesion_source`)."""
-    recording = load_recording(path, columns=args.column, axle=args.axle)
+    ``--missing``, ``--start`` and ``--end`` from ``args`` applied (with a note when its
+    ``adhesion`` column is ignored, :func:`jadhesion.data.dataset.adhesion_source`)."""
+    recording = load_recording(path, columns=args.column, axle=args.axle, missing=args.missing)
     if recording.has_adhesion and adhesion_source(recording) == "observer":
         note = (
             f"{recording.path}: column 'adhesion' ignored: mu_hat is the observer's output of the raw signals"

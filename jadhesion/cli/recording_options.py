@@ -1,6 +1,6 @@
-"""Options shared by every command that reads a recording: the column map (``--column``) and
-the axle of a multi-axle file (``--axle``), the time window (``--start/--end``) and the phase of
-the samples used (``--phase``).
+"""Options shared by every command that reads a recording: the column map (``--column``), the axle
+of a multi-axle file (``--axle``), what a missing value does (``--missing``), the time window
+(``--start/--end``) and the phase of the samples used (``--phase``).
 
 Arguments only (no JAX, so ``--help`` stays instant); :mod:`.loading` applies them."""
 
@@ -8,13 +8,15 @@ from __future__ import annotations
 
 #: Phases offered (:data:`jadhesion.data.segments.PHASES`; literal so ``--help`` imports no data code).
 PHASES = ("traction", "braking", "both")
+#: Missing-value policies offered (:data:`jadhesion.data.recording.MISSING_POLICIES`; literal, as PHASES).
+MISSING = ("error", "skip")
 #: Laws of the true slip offered (:data:`jadhesion.identify.likelihood.SLIP_LAWS`; literal, as PHASES).
 SLIP_LAWS = ("normal", "population")
 
 
 def add_recording_options(parser) -> None:
-    """Add ``--column CANONICAL=SOURCE[UNIT]`` (repeatable), ``--axle``, ``--start``, ``--end``
-    and ``--phase`` to a command's parser."""
+    """Add ``--column CANONICAL=SOURCE[UNIT]`` (repeatable), ``--axle``, ``--missing``,
+    ``--start``, ``--end`` and ``--phase`` to a command's parser."""
     parser.add_argument(
         "--column",
         action="append",
@@ -32,6 +34,13 @@ def add_recording_options(parser) -> None:
         help="take wheel_speed and traction_torque of axle N from a multi-axle file "
         "(columns wheel_speed_N, wheel_speed_axleN or wheel_speedN, likewise "
         "traction_torque)",
+    )
+    parser.add_argument(
+        "--missing",
+        choices=MISSING,
+        default="error",
+        help="a row with an empty, NaN, NA, null or '-' cell in a column used: error (default: one line "
+        "naming it) or skip (the row is left out, a gap in time; a note counts them)",
     )
     parser.add_argument(
         "--start",

@@ -48,6 +48,7 @@ from .units import UNITS, ColumnSpec, parse_column_map, same_unit, split_unit, t
 from .validate import (
     KNOWN_COLUMNS,
     MAX_SPEED,
+    MISSING_CELLS,
     RAW_COLUMNS,
     _check_finite,
     _check_layout,
@@ -186,7 +187,40 @@ def _column_map(columns, sidecar: dict, sidecar_name: str, header, name: str, ax
     return specs, shown, hints
 
 
-def load_recording(path, *, columns=(), axle=None, max_speed: float = MAX_SPEED) -> Recording:
+#: How :func:`load_recording` treats a row with a missing value in a column it uses.
+MISSING_POLICIES = ("error", "skip")
+
+
+def _missing_cells(idx, cells=None, parsed=None) -> np.ndarray:
+    """(rows, len(idx)) bool: the missing values (:data:`MISSING_CELLS` in a CSV's ``cells``, NaN
+    in a binary format's ``parsed`` columns; a column that is not numeric has none: it is refused
+    later) of the columns ``idx``."""
+    if cells is not None:
+        return np.isin(np.char.lower(np.char.strip(cells[:, idx])), list(MISSING_CELLS))
+    n = len(next(a for a in parsed if a is not None))
+    return np.stack([np.zeros(n, bool) if parsed[j] is None else np.isnan(parsed[j]) for j in idx], axis=1)
+
+
+def _skip_missing(hole, shown_names, lines, name: str) -> tuple:
+    """``(rows kept, notes)`` for ``missing="skip"``: every row without a missing value
+    (:func:`_missing_cells`), and a note counting the others and naming the first."""
+    rows = np.flatnonzero(hole.any(axis=1))
+    keep = ~hole.any(axis=1)
+    if not rows.size:
+        return keep, ()
+    if not keep.any():
+        raise _fail(name, f"every row has a missing value in {', '.join(map(repr, shown_names))}")
+    first, col = int(rows[0]), int(np.flatnonzero(hole[rows[0]])[0])
+    where = f"row {first + 1}" + ("" if lines is None else f" (line {lines[first]})")
+    return keep, (
+        f"{name}: {rows.size} of {hole.shape[0]} rows skipped for a missing value (--missing skip; "
+        f"the first at {where}, column {shown_names[col]!r}): each is a gap in time",
+    )
+
+
+def load_recording(
+    path, *, columns=(), axle=None, max_speed: float = MAX_SPEED, missing: str = "error"
+) -> Recording:
     """Load and validate a recording (CSV, or by suffix Parquet ``.parquet``/``.pq`` and MATLAB
     ``.mat`` v5/v7.3, :mod:`jadhesion.data.formats`) and its optional sidecar
     ``<same stem>.json``; every format gets the same column map, units and validation.
@@ -198,6 +232,9 @@ def load_recording(path, *, columns=(), axle=None, max_speed: float = MAX_SPEED)
         axle: pick this axle's wheel speed and torque from a multi-axle file
             (:data:`AXLE_PATTERNS`, overridable by the column map).
         max_speed: largest plausible |speed| [m/s]; larger values are reported as km/h.
+        missing: a row with a missing value (:data:`MISSING_CELLS`; NaN or null in Parquet and
+            MATLAB) in a column the recording uses: ``"error"`` (the first one named) or
+            ``"skip"`` (the row left out, a gap in time, with a note counting them).
 
     Raises:
         RecordingError: one line naming the file, column and row, and what is wrong.
@@ -233,6 +270,17 @@ def load_recording(path, *, columns=(), axle=None, max_speed: float = MAX_SPEED)
         raise RecordingError("; ".join([str(exc), *hints])) from None
     notes += tuple(f"{name}: {h}" for h in hints)
     required = [c for c in renamed if c in KNOWN_COLUMNS]
+    if missing == "skip":
+        idx = [j for j, c in enumerate(renamed) if c in required]
+        names = [shown.get(renamed[j], renamed[j]) for j in idx]
+        hole = _missing_cells(idx, cells if fast is None else None, None if fast is None else parsed)
+        keep, skipped = _skip_missing(hole, names, lines, name)
+        notes += skipped
+        if skipped and fast is None:
+            cells, lines = cells[keep], [line for line, k in zip(lines, keep, strict=True) if k]
+        elif skipped:
+            parsed = [None if a is None else np.asarray(a)[keep] for a in parsed]
+            lines = None if lines is None else [line for line, k in zip(lines, keep, strict=True) if k]
     columns = {}
     ignored = []
     for j, col in enumerate(renamed):

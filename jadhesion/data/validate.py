@@ -69,6 +69,13 @@ def _check_layout(header, name):
     )
 
 
+#: What reads as a missing value in a CSV cell (case and spaces ignored; ``-`` as a row of ``-``
+#: under the header is read, :func:`.readers._parse_rows`); in Parquet and MATLAB, NaN or null.
+MISSING_CELLS = frozenset({"", "nan", "na", "n/a", "null", "-"})
+#: The end of an error about a missing value: the way to read past it.
+_SKIP_HINT = "; --missing skip leaves such rows out (gaps in time)"
+
+
 def _convert_column(cells: np.ndarray, col: str, lines, name: str, strict: bool):
     """float64 values of one column; with ``strict``, the first bad cell raises a RecordingError."""
     try:
@@ -80,8 +87,9 @@ def _convert_column(cells: np.ndarray, col: str, lines, name: str, strict: bool)
             if not _is_number(cell):
                 where = f"column {col!r}, row {i + 1} (line {lines[i]})"
                 if not cell.strip():
-                    raise _fail(name, f"{where}: empty cell (missing value)") from None
-                raise _fail(name, f"{where}: {_show(cell)} is not a number") from None
+                    raise _fail(name, f"{where}: empty cell (missing value{_SKIP_HINT})") from None
+                hint = f" (a missing value{_SKIP_HINT})" if cell.strip().lower() in MISSING_CELLS else ""
+                raise _fail(name, f"{where}: {_show(cell)} is not a number{hint}") from None
         raise  # pragma: no cover  (numpy and float() disagree)
     if strict:
         _check_finite(values, col, name, lines, cells)
@@ -153,12 +161,14 @@ def _check_finite(values, col: str, name: str, lines=None, cells=None):
         raise _fail(
             name,
             f"column {col!r}, row {i + 1}: {values[i]} is not a "
-            f"finite number (NaN, a missing value, and inf are not allowed)",
+            f"finite number (NaN, a missing value, and inf are not allowed"
+            f"{_SKIP_HINT if np.isnan(values[i]) else ''})",
         )
+    hint = _SKIP_HINT if np.isnan(values[i]) else ""
     raise _fail(
         name,
         f"column {col!r}, row {i + 1} (line {lines[i]}): {_show(cells[i].strip())}"
-        f" is not a finite number (NaN and inf are not allowed)",
+        f" is not a finite number (NaN and inf are not allowed{hint})",
     )
 
 
