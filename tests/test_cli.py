@@ -223,6 +223,21 @@ def test_posterior_auto_likelihood_is_the_gaussian_tempered_by_the_residual_colo
     assert temp["effective_samples"] == pytest.approx(temp["samples"] / temp["kappa"])
     assert set(doc["params"]) == {"kA", "kS", "mu0", "A", "B", "sigma"}
     assert doc["diagnostics"]["compile_seconds"] >= 0
+    check = doc["slip_law_check"]  # the other slip law's LM fit, beside this one law's posterior
+    assert check["law"] == "population" and check["status"] == "converged"
+    assert set(check["params"]) == {"kA", "kS", "mu0", "A", "B"} and set(check["derived"]) == {
+        "mu_max",
+        "creep_opt",
+    }
+    outside = [
+        n
+        for n, v in {**check["params"], **check["derived"]}.items()
+        if not {**doc["params"], **doc["derived"]}[n]["q05"]
+        <= v
+        <= {**doc["params"], **doc["derived"]}[n]["q95"]
+    ]
+    named = [n for w in doc["warnings"] if w["code"] == "slip_law_sensitive" for n in w["params"]]
+    assert named == outside
     args = ("--walkers", "16", "--steps", "60", "--likelihood", "observer", "--json")
     obs = json.loads(jadhesion(env, "posterior", recording, *args).stdout)
     assert obs["likelihood"] == "observer" and obs["tempering"]["weight"] == 1.0
