@@ -301,11 +301,12 @@ def test_fit_keep_going_names_the_sidecar_whose_contact_is_unusable(tmp_path, ca
 
 def test_kiencke_fit_says_it_draws_no_figure(tmp_path, capsys, recording):
     """``--plot`` with ``--model kiencke`` (fit.png draws a Polach curve): a warning, not a silently
-    missing figure."""
+    missing figure; ``--single-law`` (Kiencke has no slip law) is said to do nothing, likewise."""
     argv = ["fit", recording, "--model", "kiencke", "--method", "lm", "--plot", tmp_path / "fig", "--json"]
-    code, out, err = run_main(capsys, argv)
+    code, out, err = run_main(capsys, [*argv, "--single-law"])
     assert code == 0 and json.loads(out)["params"].keys() == {"p1", "p2", "a_s"}
     assert "--plot" in err and "kiencke" in err and not (tmp_path / "fig").exists()
+    assert "--single-law has no effect with --model kiencke" in err
 
 
 @pytest.mark.parametrize("second", ["other/ok.csv", "ok.csv"])

@@ -86,6 +86,8 @@ def _check_flags(args) -> None:
         sys.stderr.write(f"jadhesion: warning: {note}\n")
     if args.plot is not None and args.model == "kiencke":  # said, as the budget flags: never silent
         sys.stderr.write("jadhesion: warning: --plot draws Polach fits only: no figure for --model kiencke\n")
+    if args.single_law and args.model == "kiencke":
+        sys.stderr.write("jadhesion: warning: --single-law has no effect with --model kiencke\n")
     require_output_dir("fit", "plot", args.plot)
     if args.out is not None:
         require_output_file("fit", args.out)
@@ -253,7 +255,7 @@ def _params(fit) -> dict:
 def _polach_doc(args, dataset, fit, seconds, check=None) -> dict:
     """One file's document (``fit.mae``/``sse`` over its own samples; the trust block from the
     unpadded dataset); ``check``: its :func:`_slip_law_checks` entry, whose intervals the trust
-    block's join (:func:`jadhesion.identify.trust.join_slip_laws`)."""
+    block joins to its own (:func:`jadhesion.identify.trust.join_slip_laws`)."""
     status = status_of(fit.status)
     params = _params(fit)
     report = _trust(dataset, fit)
