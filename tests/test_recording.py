@@ -8,9 +8,16 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from jadhesion.cli.recording_options import MISSING
 from jadhesion.data.dataset import PolachDataset, to_dataset
 from jadhesion.data.observer import observe_adhesion
-from jadhesion.data.recording import Recording, load_recording, save_recording, vehicle_sidecar
+from jadhesion.data.recording import (
+    MISSING_POLICIES,
+    Recording,
+    load_recording,
+    save_recording,
+    vehicle_sidecar,
+)
 from jadhesion.data.validate import MAX_SPEED
 from jadhesion.data.vehicle import LOCO_22E, Vehicle
 from jadhesion.errors import InputError, RecordingError
@@ -325,6 +332,9 @@ def test_missing_values_are_skipped_as_gaps_on_request(tmp_path):
     inf.write_text(_raw_text(30, _set(9, "traction_torque", "-inf")))
     with pytest.raises(RecordingError, match="'-inf' is not a finite number"):
         load_recording(inf, missing="skip")
+    assert MISSING == MISSING_POLICIES  # the command line offers what the reader knows
+    with pytest.raises(ValueError, match="missing must be one of"):
+        load_recording(path, missing="drop")
     holes = tmp_path / "holes.csv"
     holes.write_text(_raw_text(30, lambda rows: [r.__setitem__(1, "") for r in rows]))
     with pytest.raises(RecordingError, match="every row has a missing value"):

@@ -239,6 +239,8 @@ def load_recording(
     Raises:
         RecordingError: one line naming the file, column and row, and what is wrong.
     """
+    if missing not in MISSING_POLICIES:
+        raise ValueError(f"load_recording: missing must be one of {MISSING_POLICIES}, got {missing!r}")
     path = Path(path)
     name = str(path)
     if is_binary(path):  # Parquet or .mat: numeric columns (None: not numeric), no line numbers
