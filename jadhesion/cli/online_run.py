@@ -14,6 +14,7 @@ import numpy as np
 from ..data.selected import tracking_dataset
 from ..identify.kiencke_fit import A_S_LOG10_BOUNDS, MIN_SAMPLES
 from ..identify.online import (
+    below_data_warning,
     extrapolated_warning,
     hold_warning,
     optimum_warning,
@@ -73,6 +74,7 @@ def run(args) -> int:
                 singular_warning(out),
                 hold_warning(out, time),
                 optimum_warning(out),
+                below_data_warning(out, data.adhesion),
                 extrapolated_warning(out, data.creep),
             )
             if w is not None
