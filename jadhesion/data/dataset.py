@@ -172,26 +172,24 @@ def to_dataset(
     )
 
 
+def _rows(data: PolachDataset, rows: slice) -> PolachDataset:
+    """The dataset's ``rows``, sliced on the host (no program per length); NumPy fields stay NumPy,
+    JAX ones JAX."""
+
+    def take(a):
+        return a[rows] if isinstance(a, np.ndarray) else jnp.asarray(np.asarray(a)[rows])
+
+    return data._replace(**{f: take(getattr(data, f)) for f in SAMPLE_FIELDS if getattr(data, f) is not None})
+
+
 def cut(data: PolachDataset, n: int) -> PolachDataset:
-    """The first ``n`` rows of a dataset, sliced on the host (no program per length); NumPy fields
-    stay NumPy, JAX ones JAX."""
-
-    def first(a):
-        return a[:n] if isinstance(a, np.ndarray) else jnp.asarray(np.asarray(a)[:n])
-
-    return data._replace(
-        **{f: first(getattr(data, f)) for f in SAMPLE_FIELDS if getattr(data, f) is not None}
-    )
+    """The first ``n`` rows of a dataset (:func:`_rows`)."""
+    return _rows(data, slice(n))
 
 
 def thinned(data: PolachDataset, every: int) -> PolachDataset:
-    """Every ``every``-th row of a dataset (rows 0, every, 2·every, …), sliced on the host as
-    :func:`cut`."""
-
-    def rows(a):
-        return a[::every] if isinstance(a, np.ndarray) else jnp.asarray(np.asarray(a)[::every])
-
-    return data._replace(**{f: rows(getattr(data, f)) for f in SAMPLE_FIELDS if getattr(data, f) is not None})
+    """Every ``every``-th row of a dataset (rows 0, every, 2·every, …; :func:`_rows`)."""
+    return _rows(data, slice(None, None, every))
 
 
 def adhesion_source(recording) -> str:

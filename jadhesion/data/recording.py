@@ -204,8 +204,8 @@ def _missing_cells(idx, cells=None, parsed=None) -> np.ndarray:
 def _skip_missing(hole, shown_names, lines, name: str) -> tuple:
     """``(rows kept, notes)`` for ``missing="skip"``: every row without a missing value
     (:func:`_missing_cells`), and a note counting the others and naming the first."""
-    rows = np.flatnonzero(hole.any(axis=1))
     keep = ~hole.any(axis=1)
+    rows = np.flatnonzero(~keep)
     if not rows.size:
         return keep, ()
     if not keep.any():
@@ -278,11 +278,12 @@ def load_recording(
         hole = _missing_cells(idx, cells if fast is None else None, None if fast is None else parsed)
         keep, skipped = _skip_missing(hole, names, lines, name)
         notes += skipped
-        if skipped and fast is None:
-            cells, lines = cells[keep], [line for line, k in zip(lines, keep, strict=True) if k]
-        elif skipped:
-            parsed = [None if a is None else np.asarray(a)[keep] for a in parsed]
+        if skipped:
             lines = None if lines is None else [line for line, k in zip(lines, keep, strict=True) if k]
+            if fast is None:
+                cells = cells[keep]
+            else:
+                parsed = [None if a is None else np.asarray(a)[keep] for a in parsed]
     columns = {}
     ignored = []
     for j, col in enumerate(renamed):

@@ -163,16 +163,16 @@ def _warnings(result: dict) -> list:
                 "above_critical": strong,
             }
         )
-    beyond = [c for c in result["candidates"] if not c.get("plausible", True) and select.passes(c)]
+    beyond = select.beyond_typical(result["candidates"])
     if beyond:
+        specs = [REGISTRY[c["name"]] for c in beyond]
         out.append(
             {
                 "code": "implausible_size",
                 "message": ", ".join(
-                    f"{c['name']} ({REGISTRY[c['name']].magnitude_param} "
-                    f"{c['params'][REGISTRY[c['name']].magnitude_param]:.3g}, typical up to "
-                    f"{REGISTRY[c['name']].typical[1]:g})"
-                    for c in beyond
+                    f"{c['name']} ({e.magnitude_param} {c['params'][e.magnitude_param]:.3g}, typical up "
+                    f"to {e.typical[1]:g})"
+                    for c, e in zip(beyond, specs, strict=True)
                 )
                 + f" passed every test with a fitted size beyond {IMPLAUSIBLE_BEYOND:g}× the effect's "
                 "typical range: taken for the base model's misfit (e.g. a walking-pace start's), not named",

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from ..data.vehicle import GRAVITY, Vehicle
 from ..models.effects import EFFECTS
+from .select import beyond_typical
 
 
 def effect_sentence(name: str, params: dict, vehicle: Vehicle) -> str:
@@ -40,11 +41,6 @@ def _blind_spots(sensitivity: dict) -> str:
     )
 
 
-def _implausible(result: dict) -> list:
-    """The candidates the ``implausible_size`` warning names (passed every test, sized beyond)."""
-    return [n for w in result.get("warnings", []) if w["code"] == "implausible_size" for n in w["candidates"]]
-
-
 def explain(result: dict, vehicle: Vehicle) -> str:
     """The diagnosis in words: the verdict, what it means, the fit's improvement, ambiguities and
     the effects this recording cannot see."""
@@ -62,7 +58,7 @@ def explain(result: dict, vehicle: Vehicle) -> str:
             if strong
             else "No catalogue effect is found: "
         )
-        beyond = [c for c in result["candidates"] if c["name"] in _implausible(result)]
+        beyond = beyond_typical(result["candidates"])
         if beyond:
             text = opening + (
                 " and ".join(

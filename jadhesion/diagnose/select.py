@@ -103,6 +103,12 @@ def passes(c: dict, threshold: float = GAIN_THRESHOLD) -> bool:
     return _tested(c) and c["gain"] >= threshold and c["delta_bic"] < 0.0
 
 
+def beyond_typical(candidates: list) -> list:
+    """The candidates that pass every test (:func:`passes`) at a fitted size their effect does not
+    have (``plausible`` false): never ranked, named in the ``implausible_size`` warning."""
+    return [c for c in candidates if not c.get("plausible", True) and passes(c)]
+
+
 def effects_from(candidates: list, second_round, threshold: float = GAIN_THRESHOLD) -> tuple:
     """Accepted effects (0–2, greedy) and the set indistinguishable from the first, from the
     candidate lists of a diagnosis (each entry with ``name``, ``gain``, ``delta_bic``; one with
