@@ -29,6 +29,14 @@ def seed_starts(residual, bounds, key, args=None, *, n_starts=4, pop_size=20, se
     return population[jnp.argsort(fitness)[:n_starts]], n_evals
 
 
+def with_start(starts, start):
+    """``starts`` (…, n, d) with its last row (the search's worst) replaced by ``start`` (…, d),
+    e.g. an earlier stage's optimum, so an LM run begins there; where a ``start`` row is not finite
+    the search's row stays."""
+    keep = jnp.all(jnp.isfinite(start), axis=-1, keepdims=True)
+    return starts.at[..., -1, :].set(jnp.where(keep, start, starts[..., -1, :]))
+
+
 def global_lm(
     residual,
     bounds,
@@ -44,26 +52,33 @@ def global_lm(
     options=DEFAULT_OPTIONS,
     block_rows=None,
     polish=True,
+    start=None,
 ):
     """ "Global LM": :func:`seed_starts` (a search on ``‖r‖²``) seeds ``n_starts`` :func:`box_lm`
-    runs from its best members; the lowest-SSE answer is returned.
+    runs from its best members; the lowest-SSE answer is returned (a converged one first, as
+    :func:`.lm_result.best_of`; with ``search_args``, the lowest-SSE run is polished converged or
+    not).
 
     With ``search_args`` (e.g. a subsample of the data) the search *and* the multi-start LM use
     it, and only the best of them is polished by one :func:`box_lm` on ``args`` (capped at
     ``polish_steps``, default ``max_steps``): the expensive full-data Jacobians are then paid
     once, not ``n_starts`` times; ``polish`` (a bool, may be
     traced) false skips that polish and returns the subsample's best. ``block_rows``: see
-    :func:`box_lm` (row-wise residuals only). Returns ``(LMResult,
+    :func:`box_lm` (row-wise residuals only). ``start`` (d,): run one LM from there instead of the
+    search's last start (:func:`with_start`; not finite: ignored). Returns ``(LMResult,
     population evaluations)``; ``steps`` sums every LM run's steps."""
     sub = args if search_args is None else search_args
     starts, n_evals = seed_starts(
         residual, bounds, key, sub, n_starts=n_starts, pop_size=pop_size, search_iter=search_iter
     )
+    if start is not None:
+        starts = with_start(starts, start)
 
     def solve(p, a, steps=max_steps):
         return box_lm(residual, p, a, bounds, options, max_steps=steps, block_rows=block_rows)
 
-    out = best_of(jax.vmap(solve, in_axes=(0, None))(starts, sub))
+    # runs on a subsample only seed the polish: the lowest cost wins, converged or not
+    out = best_of(jax.vmap(solve, in_axes=(0, None))(starts, sub), converged_first=search_args is None)
     if search_args is not None:
 
         def polished():

@@ -8,7 +8,7 @@
 """
 
 from .box_lm import GN_GAIN, PROBE, BoxLMOptions, box_lm
-from .global_lm import global_lm, seed_starts
+from .global_lm import global_lm, seed_starts, with_start
 from .lm_optx import from_box, lm_solve, multistart, safe_residual, to_box
 from .lm_queue import box_lm_queue
 from .lm_result import LMResult, best_of, sse_objective, status_code
@@ -30,4 +30,5 @@ __all__ = [
     "sse_objective",
     "status_code",
     "to_box",
+    "with_start",
 ]

@@ -36,11 +36,15 @@ def status_code(converged, stalled, finite):
     ).astype(jnp.int32)
 
 
-def best_of(results: LMResult) -> LMResult:
+def best_of(results: LMResult, converged_first: bool = True) -> LMResult:
     """The lowest-SSE converged member of a batch of :class:`LMResult` (leading axis), or the
-    lowest-SSE member when none converged; steps are summed."""
+    lowest-SSE member when none converged; steps are summed. ``converged_first=False``: the
+    lowest-SSE member, converged or not — for runs that only seed a further LM, where a run still
+    crawling along a flat valley at a far lower cost is the better seed."""
     sse = jnp.where(jnp.isnan(results.sse), jnp.inf, results.sse)
-    i = jnp.argmin(jnp.where(jnp.any(results.success) & ~results.success, jnp.inf, sse))
+    if converged_first:
+        sse = jnp.where(jnp.any(results.success) & ~results.success, jnp.inf, sse)
+    i = jnp.argmin(sse)
     pick = jax.tree_util.tree_map(lambda a: a[i], results)
     return pick._replace(steps=jnp.sum(results.steps))
 
