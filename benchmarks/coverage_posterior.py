@@ -11,14 +11,15 @@ written as a CSV + sidecar and run through the command line in this process
 default ``gauss:tempered,student:tempered`` runs the tempered Gaussian (what ``auto`` runs) and
 the tempered Student-t, and adds ``tail_pick`` rows: per recording the run of the one the printed
 tail check picks (Student-t where ``tempering.heavy_tails``; a candidate auto rule, measured and not
-adopted: the same chains, so no further runs). Recorded per generator
-and likelihood: the share of 90 % intervals holding the truth of kA, kS, μ0 and of the derived
-μ_max, creep_opt (at the recording's median speed, from the true parameters; a truth on a face of
-the prior box is left out of that parameter's share and counted), the median interval width, the
-median |posterior median − truth|, and per recording the truth, the interval, the median and the
-``tempering`` block (κ, tail check); per recording, the maximum-likelihood Student-t ν of the
-residuals at the truth (``tails_at_truth``; on the normal slip law). ``--slip-law`` is passed to
-every run. The JSON records the git commit, the settings and
+adopted: the same chains, so no further runs). Recorded per generator and likelihood
+(``<likelihood>/own``: the posterior's own 90 % intervals, before ``posterior`` joins them with
+LM's under the other slip law): the share of 90 % intervals holding the truth of kA, kS, μ0 and of
+the derived μ_max, creep_opt (at the recording's median speed, from the true parameters; a truth on
+a face of the prior box is left out of that parameter's share and counted), the median interval
+width, the median |posterior median − truth|, and per recording the truth, the interval, the
+median and the ``tempering`` block (κ, tail check); per recording, the maximum-likelihood
+Student-t ν of the residuals at the truth (``tails_at_truth``; on the normal slip law).
+``--slip-law`` is passed to every run. The JSON records the git commit, the settings and
 ``os.getloadavg()``.
 """
 
@@ -109,6 +110,26 @@ def _run(path: Path, entry: str, steps: int, walkers: int, slip_law: str = "norm
     return json.loads(buf.getvalue()) if code == 0 else None
 
 
+def _scored(q: dict, truth: dict, suffix: str = "") -> dict:
+    """A row scoring the 90 % intervals ``q05{suffix}``–``q95{suffix}`` of the posterior summary
+    ``q`` (``""``: the reported ones; ``"_posterior"``: the posterior's own, where ``posterior``
+    joined them with the other slip law's, else the reported) against ``truth``."""
+    ends = {
+        k: (q[k].get(f"q05{suffix}", q[k]["q05"]), q[k].get(f"q95{suffix}", q[k]["q95"])) for k in QUANTITIES
+    }
+    hit = {k: bool(lo <= truth[k] <= hi) for k, (lo, hi) in ends.items()}
+    for k in FACE_PARAMS:  # a central interval never holds a face of the prior box
+        if not FACE_TOL < truth[k] < 1 - FACE_TOL:
+            hit[k] = None
+    return {
+        "truth": truth,
+        "interval": {k: list(v) for k, v in ends.items()},
+        "hit": hit,
+        "width": {k: hi - lo for k, (lo, hi) in ends.items()},
+        "median": {k: q[k]["median"] for k in QUANTITIES},
+    }
+
+
 def _tail_pick_rows(rows: list) -> list:
     """Per recording, the tempered run of the likelihood the tail check picks (module docstring)."""
     runs = {(r["generator"], r["case"], r["likelihood"]): r for r in rows}
@@ -171,20 +192,19 @@ def main(argv=None):
             doc["tails_at_truth"].append({"generator": gen, "case": label, **tails_at_truth(path, truth)})
             for lik in args.likelihoods.split(","):
                 res = _run(path, lik, args.steps, args.walkers, args.slip_law)
-                row = {"generator": gen, "case": label, "likelihood": lik, "truth": truth, "hit": None}
-                if res is not None:
-                    row["truth"] = truth = {**truth, **_derived_truth(truth, path, res["vehicle_speed"])}
-                    q = {**res["params"], **res["derived"]}
-                    row["interval"] = {k: [q[k]["q05"], q[k]["q95"]] for k in QUANTITIES}
-                    row["hit"] = {k: bool(q[k]["q05"] <= truth[k] <= q[k]["q95"]) for k in QUANTITIES}
-                    for k in FACE_PARAMS:  # a central interval never holds a face of the prior box
-                        if not FACE_TOL < truth[k] < 1 - FACE_TOL:
-                            row["hit"][k] = None
-                    row["width"] = {k: q[k]["q95"] - q[k]["q05"] for k in QUANTITIES}
-                    row["median"] = {k: q[k]["median"] for k in QUANTITIES}
-                    row["tempering"] = res["tempering"]
-                doc["rows"].append(row)
-                print(gen, label, lik, row["hit"], flush=True)
+                if res is None:
+                    doc["rows"].append(
+                        {"generator": gen, "case": label, "likelihood": lik, "truth": truth, "hit": None}
+                    )
+                    continue
+                truth = {**truth, **_derived_truth(truth, path, res["vehicle_speed"])}
+                q = {**res["params"], **res["derived"]}
+                # the reported (both slip laws' joined) interval, and the posterior's own beside it
+                for name, suffix in ((lik, ""), (f"{lik}/own", "_posterior")):
+                    row = _scored(q, truth, suffix)
+                    row.update(generator=gen, case=label, likelihood=name, tempering=res["tempering"])
+                    doc["rows"].append(row)
+                    print(gen, label, name, row["hit"], flush=True)
             doc["summary"] = summarise(doc["rows"] + _tail_pick_rows(doc["rows"]))
             doc["wall_seconds"], doc["loadavg"] = time.perf_counter() - start, os.getloadavg()
             Path(args.save).write_text(json.dumps(doc, indent=1) + "\n")

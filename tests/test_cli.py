@@ -229,15 +229,20 @@ def test_posterior_auto_likelihood_is_the_gaussian_tempered_by_the_residual_colo
         "mu_max",
         "creep_opt",
     }
+    # the reported 90 % interval joins the posterior's own and LM's 90 % one under the other law
+    summary, other = {**doc["params"], **doc["derived"]}, {**check["params"], **check["derived"]}
     outside = [
-        n
-        for n, v in {**check["params"], **check["derived"]}.items()
-        if not {**doc["params"], **doc["derived"]}[n]["q05"]
-        <= v
-        <= {**doc["params"], **doc["derived"]}[n]["q95"]
+        n for n, v in other.items() if not summary[n]["q05_posterior"] <= v <= summary[n]["q95_posterior"]
     ]
     named = [n for w in doc["warnings"] if w["code"] == "slip_law_sensitive" for n in w["params"]]
     assert named == outside
+    for n, v in other.items():
+        q, theirs = summary[n], check["interval90"][n] or [v, v]
+        assert q["q05"] == min(q["q05_posterior"], theirs[0]) and q["q95"] == max(
+            q["q95_posterior"], theirs[1]
+        )
+        assert theirs[0] <= v <= theirs[1]
+    assert "q05_posterior" not in doc["params"]["sigma"]  # noise parameters: the posterior's own
     args = ("--walkers", "16", "--steps", "60", "--likelihood", "observer", "--json")
     obs = json.loads(jadhesion(env, "posterior", recording, *args).stdout)
     assert obs["likelihood"] == "observer" and obs["tempering"]["weight"] == 1.0

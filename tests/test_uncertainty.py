@@ -14,9 +14,16 @@ from jadhesion.data.scenarios import get_scenario
 from jadhesion.data.simulator import simulate_many
 from jadhesion.identify.batch_fit import pad_dataset
 from jadhesion.identify.likelihood import as_slip_law
-from jadhesion.identify.polach_fit import LM_RESIDUAL, fit_polach_batch, scaled
-from jadhesion.identify.trust import crowded_slips, data_warnings, fit_report, join_slip_laws
-from jadhesion.identify.uncertainty import Z95, bandwidth, colour_factor, covariance
+from jadhesion.identify.polach_fit import LM_RESIDUAL, fit_polach, fit_polach_batch, scaled
+from jadhesion.identify.trust import (
+    crowded_slips,
+    data_warnings,
+    fit_report,
+    join_posterior_intervals,
+    join_slip_laws,
+    normal_intervals,
+)
+from jadhesion.identify.uncertainty import Z90, Z95, bandwidth, colour_factor, covariance
 from jadhesion.models.polach import PARAM_NAMES, adhesion_peak
 
 
@@ -250,3 +257,35 @@ def test_joined_intervals_cover_where_one_slip_law_is_biased():
     low = stats.binom.ppf(0.005, n, 0.95)
     assert all(h >= low for h in joined.values()), (joined, own)
     assert own["mu0"] < low and own["mu_max"] < low, own  # the normal law's own fail: the join repairs it
+
+
+def test_normal_intervals_at_z95_are_the_reports_ci95_and_the_posterior_joins_at_90():
+    """:func:`normal_intervals` rebuilds a fit report's ``ci95`` from its standard errors at
+    ``Z95`` (parameters, μ_max, and creep_opt on the log scale); at ``Z90`` they are narrower, and
+    ``posterior``'s join widens each quantity's own 90 % interval exactly to hold them (noise
+    parameters untouched)."""
+    (recording,) = simulate_many("dry", [100], n_samples=1000)
+    data = to_dataset(recording)
+    fit = fit_polach(data, "lm", jax.random.key(0))
+    report = fit_report(data, fit)
+    params = dict(zip(PARAM_NAMES, np.asarray(fit.params).tolist(), strict=True))
+    at95, at90 = normal_intervals(report, params, Z95), normal_intervals(report, params, Z90)
+    given = {**report["uncertainty"], **report["derived"]}
+    assert sum(given[n]["ci95"] is not None for n in at95) >= 4
+    for name, interval in at95.items():
+        assert interval == (
+            None if given[name]["ci95"] is None else pytest.approx(given[name]["ci95"], rel=1e-12)
+        )
+        if interval is not None:
+            assert interval[0] <= at90[name][0] <= at90[name][1] <= interval[1]
+    summary = {n: {"median": v, "q05": v - 1e-4, "q95": v + 1e-4} for n, v in params.items()}
+    summary["sigma"] = {"median": 0.02, "q05": 0.019, "q95": 0.021}
+    check = {"params": params, "derived": {}, "interval90": at90}
+    joined = join_posterior_intervals(summary, check)
+    assert joined["sigma"] == summary["sigma"]
+    for name in PARAM_NAMES:
+        own, theirs = summary[name], at90[name] or [params[name]] * 2
+        assert joined[name]["q05"] == min(own["q05"], theirs[0]) and joined[name]["q95"] == max(
+            own["q95"], theirs[1]
+        )
+        assert (joined[name]["q05_posterior"], joined[name]["q95_posterior"]) == (own["q05"], own["q95"])

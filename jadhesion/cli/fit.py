@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from . import COMMANDS
 from .common import MAX_ITER
-from .recording_options import add_recording_options, add_slip_law_option
+from .recording_options import add_recording_options, add_single_law_option, add_slip_law_option
 
 #: Fit methods offered (the registry's names; kept literal so ``--help`` imports no JAX — a test
 #: keeps this equal to :data:`jadhesion.identify.methods.NAMES`).
@@ -48,12 +48,7 @@ def register(sub) -> None:
         help="creep from the Kalman/RTS-smoothed speeds (default) or their raw difference",
     )
     add_slip_law_option(p)
-    p.add_argument(
-        "--single-law",
-        action="store_true",
-        help="95 %% intervals under --slip-law alone: skip the LM fit under the other slip law whose "
-        "intervals they join by default (smoothed creep, Polach: the data cannot tell which law holds)",
-    )
+    add_single_law_option(p, "95 %% intervals")
     p.add_argument("--seed", type=int, default=0, help="optimiser seed (default 0)")
     p.add_argument(
         "--pop-size",

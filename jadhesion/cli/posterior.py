@@ -32,7 +32,11 @@ Measured coverage: ``benchmarks/results/coverage_posterior.json`` and
 signals (:mod:`jadhesion.data.creep_state`) and the likelihood integrates its uncertainty (errors in
 variables, :mod:`jadhesion.identify.likelihood`); ``--creep raw`` uses the speed difference. The
 JSON's ``creep`` says which one ran; ``--slip-law`` (``slip_law``) the law of the true slip
-given the smoothed one (:mod:`jadhesion.identify.slip_law`).
+given the smoothed one (:mod:`jadhesion.identify.slip_law`). One recording cannot tell which law
+holds, so with smoothed creep LM also fits the other law (``slip_law_check``) and each reported
+90 % interval (``q05``, ``q95``) is the join of this posterior's (``q05_posterior``,
+``q95_posterior``) and LM's 90 % interval under the other law, as ``fit`` joins its 95 % ones;
+``--single-law`` skips that fit and reports the posterior's own.
 
 This module defines the arguments only; :mod:`.posterior_run` does the work.
 """
@@ -40,7 +44,7 @@ This module defines the arguments only; :mod:`.posterior_run` does the work.
 from __future__ import annotations
 
 from . import COMMANDS
-from .recording_options import add_recording_options, add_slip_law_option
+from .recording_options import add_recording_options, add_single_law_option, add_slip_law_option
 
 #: ``--walkers``: an even ensemble of 12 to 512 (16× the default; every step evaluates the
 #: likelihood on walkers × samples values: 52 s for 200 steps of 512 walkers on a 4000-sample
@@ -92,6 +96,7 @@ def register(sub) -> None:
         "likelihood (errors in variables); raw: the difference of the speeds",
     )
     add_slip_law_option(p)
+    add_single_law_option(p, "90 %% intervals (q05, q95)")
     p.add_argument("--seed", type=int, default=0, help="0 to 2**63 - 1 (default 0)")
     p.add_argument("--json", action="store_true", help="one JSON document on stdout")
     add_recording_options(p)

@@ -26,6 +26,8 @@ from ..identify.peak import extrapolation_warning
 from ..identify.polach_fit import fit_polach, require_samples
 from ..identify.polach_residuals import eiv_scale, standardised_residual
 from ..identify.trust import data_warnings as trust_data_warnings
+from ..identify.trust import fit_report, join_posterior_intervals, normal_intervals
+from ..identify.uncertainty import Z90
 from ..models.polach import PARAM_NAMES, adhesion_peak
 from ..plots.posterior import corner_plot, predictive_plot
 from ..status import status_of
@@ -71,15 +73,16 @@ def data_warnings(recording, selection, data, result) -> list:
 
 def slip_law_check(data, law: str, seed: int, result) -> tuple:
     """``(check, warning)``: LM's fit of ``data`` under the other slip law (``law``, ``method``,
-    ``params``, ``derived`` at the posterior's reference speed, ``status``) and the warning
-    ``slip_law_sensitive`` naming the quantities it puts outside this posterior's 90 % interval
+    ``params``, ``derived`` at the posterior's reference speed, ``status``, and ``interval90``: its
+    HAC 90 % intervals, :func:`jadhesion.identify.trust.normal_intervals`) and the warning
+    ``slip_law_sensitive`` naming the quantities it puts outside this posterior's own 90 % interval
     (``None`` where there is none; LM's robust loss may differ from the likelihood too, so the
-    warning says where, not why); ``(None, None)`` without a slip sd. A posterior is one law's
-    (``fit`` joins both laws' intervals; a second sampler run would double the cost)."""
+    warning says where, not why); ``(None, None)`` without a slip sd."""
     if data.slip_sd is None:
         return None, None
     other = other_slip_law(law)
-    fit = fit_polach(as_slip_law(data, other), "lm", jax.random.key(seed))
+    other_data = as_slip_law(data, other)
+    fit = fit_polach(other_data, "lm", jax.random.key(seed))
     params = dict(zip(PARAM_NAMES, np.asarray(fit.params).tolist(), strict=True))
     peak = adhesion_peak(fit.params, data.k_eps, result.vehicle_speed)
     derived = dict(zip(("mu_max", "creep_opt"), map(float, peak), strict=True))
@@ -89,6 +92,7 @@ def slip_law_check(data, law: str, seed: int, result) -> tuple:
         "params": params,
         "derived": derived,
         "status": status_of(fit.status).label,
+        "interval90": normal_intervals(fit_report(other_data, fit), params, Z90),
     }
     ours = {**result.params, **result.derived}
     moved = [
@@ -101,9 +105,9 @@ def slip_law_check(data, law: str, seed: int, result) -> tuple:
     change = ", ".join(f"{n} {a:.4g} → {b:.4g}" for n, a, b in moved)
     message = (
         f"LM under the {other} slip law puts {change} (this posterior's median → LM's) outside this "
-        "posterior's 90 % interval; a posterior is one slip law's (whether the smoother's error is "
-        "Berkson or classical, one recording cannot tell; fit's intervals join both): compare "
-        f"--slip-law {other}"
+        "posterior's own 90 % interval: whether the smoother's error is Berkson or classical, one "
+        "recording cannot tell; q05/q95 join both laws' 90 % intervals (q05_posterior/q95_posterior: "
+        f"this posterior's own); compare --slip-law {other}"
     )
     return check, {"code": "slip_law_sensitive", "params": [n for n, _, _ in moved], "message": message}
 
@@ -268,15 +272,20 @@ def run(args) -> int:
     doc["slip_sd_scale"] = sd_scale_summary(data)
     doc["selection"] = selection.document()
     found = data_warnings(recording, selection, data, result)
-    check, sensitive = slip_law_check(data, args.slip_law, args.seed, result)
+    check, sensitive = (
+        (None, None) if args.single_law else slip_law_check(data, args.slip_law, args.seed, result)
+    )
     if check is not None:
         doc["slip_law_check"] = check
+        doc["params"], doc["derived"] = (
+            join_posterior_intervals(doc[k], check) for k in ("params", "derived")
+        )
     found += [] if sensitive is None else [sensitive]
     doc["warnings"] = ([] if sidecar is None else [sidecar]) + found  # the chain's: diagnostics
     if args.json:
         emit_json(doc)
         return 0
-    rows = [{"quantity": k, **v} for k, v in {**result.params, **result.derived}.items()]
+    rows = [{"quantity": k, **v} for k, v in {**doc["params"], **doc["derived"]}.items()]
     print(f"likelihood: {likelihood} ({note}); creep: {doc['creep']}")
     print(table(rows, ["quantity", "median", "q05", "q95"]))
     d = doc["diagnostics"]

@@ -77,3 +77,14 @@ def add_slip_law_option(parser) -> None:
         "(deconvolved) as the prior, for steady runs whose slips crowd within a few of their sds "
         "(README: 'Which slip law'); no effect with --creep raw",
     )
+
+
+def add_single_law_option(parser, intervals: str) -> None:
+    """Add ``--single-law``: the command's ``intervals`` (e.g. "95 %% intervals (ci95)") under
+    ``--slip-law`` alone, without the LM fit under the other law whose intervals they join."""
+    parser.add_argument(
+        "--single-law",
+        action="store_true",
+        help=f"{intervals} under --slip-law alone: skip the LM fit under the other slip law whose "
+        "intervals they join by default (smoothed creep, Polach: the data cannot tell which law holds)",
+    )

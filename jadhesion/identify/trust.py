@@ -39,7 +39,7 @@ Warning codes:
   extrapolation.
 * ``slip_law_sensitive`` — (:func:`join_slip_laws`) the fit under the other slip law puts a
   parameter or peak quantity outside this fit's own 95 % interval; the reported ``ci95`` join
-  both laws'.
+  both laws' (a posterior's 90 % intervals likewise: :func:`join_posterior_intervals`).
 * ``implausible_adhesion`` — μ̂ beyond any wheel–rail adhesion
   (:func:`jadhesion.data.inspection.implausible_adhesion`): the fit is of a mis-scaled recording.
 """
@@ -57,7 +57,7 @@ from ..data.inspection import implausible_adhesion
 from ..models.polach import PARAM_NAMES
 from ..status import status_of
 from .batch_fit import bucketed, valid_samples
-from .peak import DERIVED, peak_numbers, peak_report, reference_speed
+from .peak import DERIVED, MU_BOX_MAX, S_MAX, S_MIN, peak_numbers, peak_report, reference_speed
 from .polach_fit import LM_RESIDUAL, RECOMMENDED_SAMPLES, scaled
 from .uncertainty import Z95, correlation, covariance, determined, undetermined_warning
 
@@ -173,8 +173,7 @@ def crowded_slips(data):
             f"the micro-slip samples' smoothed slips spread over only {1 / ratio:.2g} of their sds "
             f"(sd/spread {ratio:.2f} > {CROWDED_SLIPS:g}): the initial slope and mu0 depend on whether "
             "the smoother's error is Berkson (--slip-law normal) or classical (--slip-law population), "
-            "which one recording cannot tell (fit's 95 % intervals join both laws'; a posterior is one "
-            "law's: compare both)"
+            "which one recording cannot tell (fit's 95 % and posterior's 90 % intervals join both laws')"
         ),
     )
 
@@ -263,6 +262,32 @@ def fit_report(data, fit, numbers=None) -> dict:
     }
 
 
+def _normal_interval(value, sd, z, lo, hi, log=False):
+    """``value ± z·sd`` clipped to ``[lo, hi]`` (``log``: on the log scale, ``sd`` the linear
+    one); ``None`` without ``sd``."""
+    if sd is None:
+        return None
+    if log:
+        half = z * sd / value
+        return [float(max(value * np.exp(-half), lo)), float(min(value * np.exp(half), hi))]
+    return [float(max(value - z * sd, lo)), float(min(value + z * sd, hi))]
+
+
+def normal_intervals(report: dict, params: dict, z: float) -> dict:
+    """``{name: [lo, hi] or None}`` for the five parameters (values ``params``) and the peak
+    quantities of a :func:`fit_report`, at the normal quantile ``z`` (e.g. :data:`.uncertainty.Z90`)
+    from its standard errors, clipped as its ``ci95`` are (parameters to [0, 1], ``mu_max`` to
+    [0, MU_BOX_MAX], ``creep_opt`` on the log scale to [S_MIN, S_MAX]); ``None`` where it has no
+    standard error."""
+    out = {
+        n: _normal_interval(params[n], report["uncertainty"][n]["stderr"], z, 0.0, 1.0) for n in PARAM_NAMES
+    }
+    mu, creep = report["derived"]["mu_max"], report["derived"]["creep_opt"]
+    out["mu_max"] = _normal_interval(mu["value"], mu["stderr"], z, 0.0, MU_BOX_MAX)
+    out["creep_opt"] = _normal_interval(creep["value"], creep["stderr"], z, S_MIN, S_MAX, log=True)
+    return out
+
+
 def joined_interval(own, other, other_value):
     """``[min, max]`` of the interval ``own`` and the other slip law's interval ``other`` (its
     estimate ``other_value`` alone where that law gives none: on a bound, or not determined);
@@ -316,4 +341,22 @@ def join_slip_laws(report: dict, params: dict, other: dict) -> dict:
                 ),
             )
         ]
+    return out
+
+
+def join_posterior_intervals(summary: dict, check: dict) -> dict:
+    """``summary`` ({name: {``median``, ``q05``, ``q95``}}, a posterior's parameters or peak
+    quantities) with each of ``check``'s quantities' ``q05``/``q95`` widened to hold the other slip
+    law's LM 90 % interval (its estimate alone where it has none; ``check``: ``jadhesion
+    posterior``'s ``slip_law_check``, with ``params``, ``derived`` and ``interval90`` from
+    :func:`normal_intervals`), the posterior's own kept as ``q05_posterior``/``q95_posterior``;
+    noise parameters unchanged. The posterior's counterpart of :func:`join_slip_laws`."""
+    out = dict(summary)
+    for name, entry in summary.items():
+        if name not in check["interval90"]:
+            continue
+        value = {**check["params"], **check["derived"]}[name]
+        own = [entry["q05"], entry["q95"]]
+        lo, hi = joined_interval(own, check["interval90"][name], value)
+        out[name] = {**entry, "q05": lo, "q95": hi, "q05_posterior": own[0], "q95_posterior": own[1]}
     return out

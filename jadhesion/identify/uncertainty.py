@@ -39,8 +39,8 @@ from .small_linalg import svd_tall
 #: Relative singular value of the equilibrated Jacobian below which a direction counts as
 #: undetermined (its variance would exceed the best-determined one's by 10¹⁸).
 RCOND = 1e-9
-#: Two-sided 95 % normal quantile.
-Z95 = 1.959963984540054
+#: Two-sided 95 % and 90 % normal quantiles.
+Z95, Z90 = 1.959963984540054, 1.6448536269514722
 
 
 def determined(sd, width=1.0) -> bool:
