@@ -24,6 +24,7 @@ import jadhesion  # noqa: E402
 from jadhesion.data.dataset import PolachDataset  # noqa: E402
 from jadhesion.identify import ITLBO, fit_polach, fit_polach_batch, lm_solve, polach_mae, run  # noqa: E402
 from jadhesion.identify.lm import box_lm, box_lm_queue  # noqa: E402
+from jadhesion.identify.polach_fit import LM_POP, LM_STARTS, SEED_SAMPLES  # noqa: E402
 from jadhesion.identify.polach_residuals import polach_residual  # noqa: E402
 from jadhesion.status import Status  # noqa: E402
 
@@ -110,7 +111,7 @@ def main():
     fit = fit_polach(ds, "lm", key)
     rows.append(
         dict(
-            name="global LM (64 random + 4 LM on 128 pts, polish)",
+            name=f"global LM ({LM_POP} random + {LM_STARTS} LM on {SEED_SAMPLES} pts, polish)",
             value=1e3 * warm,
             unit="ms",
             goal="<= 3",
