@@ -80,8 +80,8 @@ def add_slip_law_option(parser) -> None:
 
 
 def add_single_law_option(parser, intervals: str) -> None:
-    """Add ``--single-law``: the command's ``intervals`` (e.g. "95 %% intervals (ci95)") under
-    ``--slip-law`` alone, without the LM fit under the other law whose intervals they join."""
+    """Add ``--single-law``: the command's ``intervals`` (help text, ``%`` doubled for argparse)
+    under ``--slip-law`` alone, without the LM fit under the other law whose intervals they join."""
     parser.add_argument(
         "--single-law",
         action="store_true",
