@@ -28,7 +28,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..models.polach import adhesion_peak
-from .uncertainty import Z95, determined, undetermined_warning
+from .uncertainty import Z95, determined, normal_interval, undetermined_warning
 
 #: The creep range [-] searched for the peak (:func:`adhesion_peak`'s defaults).
 S_MIN, S_MAX = 1e-5, 1.0
@@ -85,18 +85,14 @@ def peak_report(peak, jacobian, cov, speed, max_creep, min_creep=0.0) -> tuple[d
     cov = np.where(np.isnan(cov), 0.0, cov)  # a fixed parameter (nan) adds nothing; inf stays inf
     sd_mu = np.sqrt(_variance(jac[0], cov))
     edge = creep_opt >= S_MAX / EDGE or creep_opt <= S_MIN * EDGE
-    ci_mu = (max(mu_max - Z95 * sd_mu, 0.0), min(mu_max + Z95 * sd_mu, MU_BOX_MAX))
+    ci_mu = normal_interval(mu_max, sd_mu, Z95, 0.0, MU_BOX_MAX)
     derived = {"mu_max": _entry(mu_max, sd_mu, ci_mu, determined(sd_mu, MU_BOX_MAX))}
     undetermined = [] if derived["mu_max"]["stderr"] is not None else ["mu_max"]
     if edge:
         derived["creep_opt"] = {"value": creep_opt, "stderr": None, "ci95": None}
     else:
         sd_log = np.sqrt(_variance(jac[1] / creep_opt, cov))
-        log_c = np.log(creep_opt)  # the interval stays in the searched range [S_MIN, S_MAX]
-        ci = (
-            np.exp(max(log_c - Z95 * sd_log, np.log(S_MIN))),
-            np.exp(min(log_c + Z95 * sd_log, np.log(S_MAX))),
-        )
+        ci = normal_interval(creep_opt, sd_log, Z95, S_MIN, S_MAX, log=True)  # in the searched range
         derived["creep_opt"] = _entry(creep_opt, creep_opt * sd_log, ci, determined(sd_log, LOG_WIDTH))
         undetermined += [] if derived["creep_opt"]["stderr"] is not None else ["creep_opt"]
     warnings = [undetermined_warning(undetermined)] if undetermined else []

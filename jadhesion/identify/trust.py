@@ -59,7 +59,7 @@ from ..status import status_of
 from .batch_fit import bucketed, valid_samples
 from .peak import DERIVED, MU_BOX_MAX, S_MAX, S_MIN, peak_numbers, peak_report, reference_speed
 from .polach_fit import LM_RESIDUAL, RECOMMENDED_SAMPLES, scaled
-from .uncertainty import Z95, correlation, covariance, determined, undetermined_warning
+from .uncertainty import Z95, correlation, covariance, determined, normal_interval, undetermined_warning
 
 #: Distance from a face of the unit box at which a parameter counts as on its bound.
 BOUND_TOL = 1e-6
@@ -195,8 +195,7 @@ def fit_report(data, fit, numbers=None) -> dict:
             uncertainty[name] = {"stderr": None, "ci95": None}
             undetermined += [] if fixed[i] else [name]
             continue
-        lo, hi = theta[i] - Z95 * sd[i], theta[i] + Z95 * sd[i]
-        uncertainty[name] = {"stderr": float(sd[i]), "ci95": [float(max(lo, 0.0)), float(min(hi, 1.0))]}
+        uncertainty[name] = {"stderr": float(sd[i]), "ci95": normal_interval(theta[i], sd[i], Z95, 0.0, 1.0)}
     on_bound = [n for n, f in zip(PARAM_NAMES, fixed, strict=True) if f]
     if on_bound:
         where = ", ".join(f"{n} = {theta[PARAM_NAMES.index(n)]:.3g}" for n in on_bound)
@@ -262,29 +261,20 @@ def fit_report(data, fit, numbers=None) -> dict:
     }
 
 
-def _normal_interval(value, sd, z, lo, hi, log=False):
-    """``value ± z·sd`` clipped to ``[lo, hi]`` (``log``: on the log scale, ``sd`` the linear
-    one); ``None`` without ``sd``."""
-    if sd is None:
-        return None
-    if log:
-        half = z * sd / value
-        return [float(max(value * np.exp(-half), lo)), float(min(value * np.exp(half), hi))]
-    return [float(max(value - z * sd, lo)), float(min(value + z * sd, hi))]
-
-
 def normal_intervals(report: dict, params: dict, z: float) -> dict:
     """``{name: [lo, hi] or None}`` for the five parameters (values ``params``) and the peak
     quantities of a :func:`fit_report`, at the normal quantile ``z`` (e.g. :data:`.uncertainty.Z90`)
     from its standard errors, clipped as its ``ci95`` are (parameters to [0, 1], ``mu_max`` to
     [0, MU_BOX_MAX], ``creep_opt`` on the log scale to [S_MIN, S_MAX]); ``None`` where it has no
     standard error."""
-    out = {
-        n: _normal_interval(params[n], report["uncertainty"][n]["stderr"], z, 0.0, 1.0) for n in PARAM_NAMES
-    }
+
+    def interval(value, sd, lo, hi, log=False):
+        return None if sd is None else normal_interval(value, sd / value if log else sd, z, lo, hi, log)
+
+    out = {n: interval(params[n], report["uncertainty"][n]["stderr"], 0.0, 1.0) for n in PARAM_NAMES}
     mu, creep = report["derived"]["mu_max"], report["derived"]["creep_opt"]
-    out["mu_max"] = _normal_interval(mu["value"], mu["stderr"], z, 0.0, MU_BOX_MAX)
-    out["creep_opt"] = _normal_interval(creep["value"], creep["stderr"], z, S_MIN, S_MAX, log=True)
+    out["mu_max"] = interval(mu["value"], mu["stderr"], 0.0, MU_BOX_MAX)
+    out["creep_opt"] = interval(creep["value"], creep["stderr"], S_MIN, S_MAX, log=True)
     return out
 
 

@@ -43,6 +43,15 @@ RCOND = 1e-9
 Z95, Z90 = 1.959963984540054, 1.6448536269514722
 
 
+def normal_interval(value, sd, z, lo, hi, log=False) -> list:
+    """``[value − z·sd, value + z·sd]`` clipped to ``[lo, hi]``; with ``log``, ``exp(log value ±
+    z·sd)`` with ``sd`` that of ``log value``, clipped likewise (floats)."""
+    if log:
+        c = np.log(value)
+        return [float(np.exp(max(c - z * sd, np.log(lo)))), float(np.exp(min(c + z * sd, np.log(hi))))]
+    return [float(max(value - z * sd, lo)), float(min(value + z * sd, hi))]
+
+
 def determined(sd, width=1.0) -> bool:
     """Whether a standard error ``sd`` means something for a quantity whose box is ``width`` wide:
     finite and at most ``width`` (module docstring)."""
