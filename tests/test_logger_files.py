@@ -15,8 +15,9 @@ import numpy as np
 import pytest
 
 from jadhesion.cli import main
+from jadhesion.cli.recording_options import REPEATED_TIME
 from jadhesion.data.dataset import to_dataset
-from jadhesion.data.recording import load_recording, save_recording
+from jadhesion.data.recording import REPEATED_TIME_POLICIES, load_recording, save_recording
 from jadhesion.data.validate import _check_values
 from jadhesion.data.vehicle import LOCO_22E
 from jadhesion.errors import RecordingError
@@ -446,3 +447,44 @@ def test_streams_are_read_and_an_endless_one_is_refused(tmp_path):
     same = load_recording(twin, columns=LOGGER_MAP)
     np.testing.assert_array_equal(rec.columns["time"], same.columns["time"])
     assert _message(Path("/dev/zero")) == "/dev/zero: binary data (NUL byte at byte 0), not a text file"
+
+
+def test_repeated_time_stamps_are_named_or_dropped_on_request(tmp_path, capsys):
+    """A logger that writes a row twice, or stamps coarser than its rate, repeats a time stamp:
+    by default one line naming the row and the option; with ``--repeated-time drop`` the first row
+    of each stamp is kept, the rest read exactly as the twin without those rows, and a note counts
+    them and how many differ from the row kept. A time that goes back stays an error either way;
+    ``inspect`` takes the option end to end."""
+    cols = _si_columns(60)
+    twin = _logger_twin(cols, tmp_path / "twin.csv").read_text().splitlines()
+    head, rows = twin[0], twin[1:]
+    coarse = rows[30].split(",")
+    coarse[1:] = rows[31].split(",")[1:]  # row 31's values under row 30's stamp: a coarse stamp
+    path = tmp_path / "repeats.csv"
+    path.write_text("\n".join([head, *rows[:10], rows[9], *rows[10:31], ",".join(coarse), *rows[32:]]) + "\n")
+    assert _message(path, LOGGER_MAP) == (
+        f"{path}: column 't_ms', row 11 (line 12): time 0.09 s is not after the previous row's 0.09 s "
+        "(time must strictly increase; --repeated-time drop keeps the first row of each repeated stamp)"
+    )
+    rec = load_recording(path, columns=LOGGER_MAP, repeated_time="drop")
+    ref = load_recording(tmp_path / "twin.csv", columns=LOGGER_MAP)
+    kept = np.setdiff1d(np.arange(60), [31])  # row 31's values sat under a repeated stamp
+    for c, v in ref.columns.items():
+        np.testing.assert_array_equal(rec.columns[c], v[kept])
+    (note,) = [n for n in rec.notes if "repeating" in n]
+    assert note == (
+        f"{path}: 2 of 61 rows dropped for repeating the previous row's time stamp in column 't_ms' "
+        "(--repeated-time drop; the first at row 11 (line 12); 1 differs from the row kept)"
+    )
+    back = tmp_path / "back.csv"
+    back.write_text("\n".join([head, *rows[:10], rows[5], *rows[10:]]) + "\n")
+    with pytest.raises(RecordingError, match=r"row 11 \(line 12\): time 0.05 s .* strictly increase\)$"):
+        load_recording(back, columns=LOGGER_MAP, repeated_time="drop")
+    with pytest.raises(ValueError, match="repeated_time must be one of"):
+        load_recording(path, repeated_time="skip")
+    assert REPEATED_TIME == REPEATED_TIME_POLICIES  # the command line offers what the reader knows
+    mapped = [a for c in LOGGER_MAP for a in ("--column", c)]
+    assert main(["inspect", str(path), *mapped, "--json"]) == 2
+    assert main(["inspect", str(path), *mapped, "--repeated-time", "drop", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["samples"] == 59 and any("2 of 61 rows dropped" in n for n in doc["notes"])

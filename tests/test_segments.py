@@ -151,7 +151,7 @@ def test_adhesion_column_is_ignored_when_raw_signals_are_present(tmp_path):
 
     cols = {k: v[100:500] for k, v in stretches_si().items()}
     bogus = save_recording({**cols, "adhesion": np.full(400, 0.9)}, LOCO_22E, tmp_path / "b.csv")
-    args = Namespace(column=[], axle=None, missing="error", start=None, end=None)
+    args = Namespace(column=[], axle=None, missing="error", repeated_time="error", start=None, end=None)
     rec = load_from_args(args, bogus)
     assert rec.notes == (
         f"{bogus}: column 'adhesion' ignored: mu_hat is the observer's output of the raw signals",

@@ -34,11 +34,15 @@ def diagnose_file(
     replicas=N_REPLICAS,
     seed=0,
     missing="error",
+    repeated_time="error",
 ) -> tuple:
-    """Load a recording (file + sidecar; ``missing`` as ``--missing``) and diagnose the samples of
+    """Load a recording (file + sidecar; ``missing`` and ``repeated_time`` as ``--missing`` and
+    ``--repeated-time``) and diagnose the samples of
     ``phase`` within ``[start, end]``: ``(result, recording)``; the code path of the CLI, used by
     the benchmarks."""
-    args = Namespace(column=list(columns), axle=axle, start=start, end=end, missing=missing)
+    args = Namespace(
+        column=list(columns), axle=axle, start=start, end=end, missing=missing, repeated_time=repeated_time
+    )
     recording = load_from_args(args, path)
     if not recording.has_raw_signals:
         raise UserError(
@@ -77,6 +81,7 @@ def run(args) -> int:
         args.replicas,
         args.seed,
         args.missing,
+        args.repeated_time,
     )
     result["seconds"] = time.perf_counter() - start
     series = result.pop("_series")

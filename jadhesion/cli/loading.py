@@ -15,9 +15,15 @@ from ..errors import VehicleError
 
 def load_from_args(args, path) -> Recording:
     """The :class:`~jadhesion.data.recording.Recording` at ``path`` with ``--column``, ``--axle``,
-    ``--missing``, ``--start`` and ``--end`` from ``args`` applied (with a note when its
+    ``--missing``, ``--repeated-time``, ``--start`` and ``--end`` from ``args`` applied (with a note when its
     ``adhesion`` column is ignored, :func:`jadhesion.data.dataset.adhesion_source`)."""
-    recording = load_recording(path, columns=args.column, axle=args.axle, missing=args.missing)
+    recording = load_recording(
+        path,
+        columns=args.column,
+        axle=args.axle,
+        missing=args.missing,
+        repeated_time=args.repeated_time,
+    )
     if recording.has_adhesion and adhesion_source(recording) == "observer":
         note = (
             f"{recording.path}: column 'adhesion' ignored: mu_hat is the observer's output of the raw signals"

@@ -1,5 +1,6 @@
 """Options shared by every command that reads a recording: the column map (``--column``), the axle
-of a multi-axle file (``--axle``), what a missing value does (``--missing``), the time window
+of a multi-axle file (``--axle``), what a missing value (``--missing``) and a repeated time stamp
+(``--repeated-time``) do, the time window
 (``--start/--end``) and the phase of the samples used (``--phase``).
 
 Arguments only (no JAX, so ``--help`` stays instant); :mod:`.loading` applies them."""
@@ -10,13 +11,15 @@ from __future__ import annotations
 PHASES = ("traction", "braking", "both")
 #: Missing-value policies offered (:data:`jadhesion.data.recording.MISSING_POLICIES`; literal, as PHASES).
 MISSING = ("error", "skip")
+#: Repeated-time policies offered (:data:`jadhesion.data.recording.REPEATED_TIME_POLICIES`; literal).
+REPEATED_TIME = ("error", "drop")
 #: Laws of the true slip offered (:data:`jadhesion.identify.likelihood.SLIP_LAWS`; literal, as PHASES).
 SLIP_LAWS = ("normal", "population")
 
 
 def add_recording_options(parser) -> None:
     """Add ``--column CANONICAL=SOURCE[UNIT]`` (repeatable), ``--axle``, ``--missing``,
-    ``--start``, ``--end`` and ``--phase`` to a command's parser."""
+    ``--repeated-time``, ``--start``, ``--end`` and ``--phase`` to a command's parser."""
     parser.add_argument(
         "--column",
         action="append",
@@ -41,6 +44,14 @@ def add_recording_options(parser) -> None:
         default="error",
         help="a row with an empty, NaN, NA, null or '-' cell in a column used: error (default: one line "
         "naming it) or skip (the row is left out, a gap in time; a note counts them)",
+    )
+    parser.add_argument(
+        "--repeated-time",
+        choices=REPEATED_TIME,
+        default="error",
+        help="a row whose time stamp equals the previous row's (a duplicated row, or stamps coarser "
+        "than the rate): error (default: one line naming it) or drop (the first row of each stamp "
+        "kept; a note counts the others and how many differ from it)",
     )
     parser.add_argument(
         "--start",

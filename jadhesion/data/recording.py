@@ -189,6 +189,8 @@ def _column_map(columns, sidecar: dict, sidecar_name: str, header, name: str, ax
 
 #: How :func:`load_recording` treats a row with a missing value in a column it uses.
 MISSING_POLICIES = ("error", "skip")
+#: How :func:`load_recording` treats a row whose time stamp repeats the previous row's.
+REPEATED_TIME_POLICIES = ("error", "drop")
 
 
 def _missing_cells(idx, cells=None, parsed=None) -> np.ndarray:
@@ -218,8 +220,41 @@ def _skip_missing(hole, shown_names, lines, name: str) -> tuple:
     )
 
 
+def _drop_repeated_time(columns: dict, required, lines, name: str, shown: dict) -> tuple:
+    """``(columns, lines, notes)`` for ``repeated_time="drop"``: the first row of every run of equal
+    time stamps kept (a logger's duplicated row, or a stamp coarser than its rate), the others
+    dropped, and a note counting them, naming the first and saying how many differ from the row
+    kept in a column used. A time that goes back stays an error (:func:`._check_values`)."""
+    t = columns["time"]
+    repeat = np.r_[False, np.diff(t) == 0]
+    if not repeat.any():
+        return columns, lines, ()
+    kept_row = np.maximum.accumulate(np.where(repeat, 0, np.arange(len(t))))  # each row's run head
+    differ = np.zeros(len(t), bool)
+    for c in required:
+        differ |= columns[c] != columns[c][kept_row]
+    rows = np.flatnonzero(repeat)
+    first = int(rows[0])
+    where = f"row {first + 1}" + ("" if lines is None else f" (line {lines[first]})")
+    n_differ = int(differ[rows].sum())
+    copies = f"{n_differ} differ{'s' * (n_differ == 1)} from the row kept" if n_differ else "all exact copies"
+    note = (
+        f"{name}: {rows.size} of {len(t)} rows dropped for repeating the previous row's time stamp in "
+        f"column {shown.get('time', 'time')!r} (--repeated-time drop; the first at {where}; {copies})"
+    )
+    keep = ~repeat
+    lines = None if lines is None else [line for line, k in zip(lines, keep, strict=True) if k]
+    return {c: v[keep] for c, v in columns.items()}, lines, (note,)
+
+
 def load_recording(
-    path, *, columns=(), axle=None, max_speed: float = MAX_SPEED, missing: str = "error"
+    path,
+    *,
+    columns=(),
+    axle=None,
+    max_speed: float = MAX_SPEED,
+    missing: str = "error",
+    repeated_time: str = "error",
 ) -> Recording:
     """Load and validate a recording (CSV, or by suffix Parquet ``.parquet``/``.pq`` and MATLAB
     ``.mat`` v5/v7.3, :mod:`jadhesion.data.formats`) and its optional sidecar
@@ -235,12 +270,19 @@ def load_recording(
         missing: a row with a missing value (:data:`MISSING_CELLS`; NaN or null in Parquet and
             MATLAB) in a column the recording uses: ``"error"`` (the first one named) or
             ``"skip"`` (the row left out, a gap in time, with a note counting them).
+        repeated_time: a row whose time stamp equals the previous row's: ``"error"`` (named) or
+            ``"drop"`` (the first row of each stamp kept, with a note counting the others and how
+            many of them differ from it).
 
     Raises:
         RecordingError: one line naming the file, column and row, and what is wrong.
     """
     if missing not in MISSING_POLICIES:
         raise ValueError(f"load_recording: missing must be one of {MISSING_POLICIES}, got {missing!r}")
+    if repeated_time not in REPEATED_TIME_POLICIES:
+        raise ValueError(
+            f"load_recording: repeated_time must be one of {REPEATED_TIME_POLICIES}, got {repeated_time!r}"
+        )
     path = Path(path)
     name = str(path)
     if is_binary(path):  # Parquet or .mat: numeric columns (None: not numeric), no line numbers
@@ -318,6 +360,9 @@ def load_recording(
             f"{name}: non-numeric column{'s' if len(ignored) > 1 else ''} "
             f"{', '.join(map(repr, ignored))} ignored",
         )
+    if repeated_time == "drop" and "time" in columns:
+        columns, lines, dropped = _drop_repeated_time(columns, required, lines, name, shown)
+        notes += dropped
     with np.errstate(all="ignore"):  # differences of huge finite values may overflow to inf
         notes += _check_values({c: columns[c] for c in required}, vehicle, lines, name, max_speed, shown)
     return Recording(

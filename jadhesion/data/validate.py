@@ -74,6 +74,7 @@ def _check_layout(header, name):
 MISSING_CELLS = frozenset({"", "nan", "na", "n/a", "null", "-"})
 #: The end of an error about a missing value: the way to read past it.
 _SKIP_HINT = "; --missing skip leaves such rows out (gaps in time)"
+_REPEAT_HINT = "; --repeated-time drop keeps the first row of each repeated stamp"
 
 
 def _convert_column(cells: np.ndarray, col: str, lines, name: str, strict: bool):
@@ -204,7 +205,8 @@ def _check_values(cols, vehicle: Vehicle, lines, name: str, max_speed: float, sh
             raise _fail(
                 name,
                 f"{_where('time', i, lines)}: time {t[i]:.10g} s is not after the "
-                f"previous row's {t[i - 1]:.10g} s (time must strictly increase)",
+                f"previous row's {t[i - 1]:.10g} s (time must strictly increase"
+                f"{_REPEAT_HINT if t[i] == t[i - 1] else ''})",
             )
         notes = _ms_note(cols["time"], name, shown.get("time", "time"))
     for col in ("vehicle_speed", "wheel_speed"):
