@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from jadhesion.cli import main
-from jadhesion.cli.online import ALGORITHM_NAMES
+from jadhesion.cli.online import ALGORITHM_NAMES, FORGETTING
 from jadhesion.data.recording import save_recording
 from jadhesion.data.simulator import simulate
 from jadhesion.experiments import online as ex
@@ -149,6 +149,54 @@ def test_running_backwards_is_tracked_as_traction(capsys, raw_recording):
 
 def test_argument_choices_match_the_algorithm_registry():
     assert ALGORITHM_NAMES == tuple(ol.ALGORITHMS)
+    assert FORGETTING == ol.FORGETTING
+
+
+def _settle_s(doc, truth, after):
+    """Seconds after ``after`` from which the tracked mu_max stays within 1 % of ``truth``."""
+    t, mu_max = np.asarray(doc["track"]["time"]), np.asarray(doc["track"]["mu_max"], float)
+    off = np.flatnonzero((t >= after) & (np.abs(mu_max / truth - 1.0) > 0.01))
+    return t[off[-1] + 1] - after
+
+
+def test_forgetting_is_counted_in_seconds_so_the_logging_rate_keeps_the_memory(capsys, tmp_path):
+    """The same run (creep sweeping both sides of the optimum every 2 s, a rail change μ_max
+    0.36 → 0.30 at 10 s, noise-free) logged at 50 and 200 Hz: forgetting per second (the default)
+    settles on the new rail after the same time at both rates (RLS, η = 0.98 at 50 Hz: within one
+    50 Hz step); the paper's per-sample η forgets 4× faster in seconds at 200 Hz. At 50 Hz both
+    are the same run."""
+    a_s, p2 = 540.0, 156.0
+    docs = {}
+    for rate in (50, 200):
+        t = np.arange(20 * rate) / rate
+        lam = 0.05 + 0.04 * np.sin(np.pi * t)
+        p1 = np.where(t < 10.0, a_s / 0.36, a_s / 0.30) - 2.0 * np.sqrt(p2)
+        mu = np.asarray(kiencke_adhesion(lam, p1, p2, a_s))
+        path = tmp_path / f"rail_{rate}.csv"
+        save_recording(
+            {"time": t, "creepage": lam, "vehicle_speed": np.full(t.size, 2.0), "adhesion": mu}, path=path
+        )
+        for forgetting in FORGETTING:
+            argv = ("online", path, "--algorithm", "rls", "--a-s", a_s, "--forgetting", forgetting)
+            code, docs[rate, forgetting], _ = _run(capsys, *argv)
+            assert code == 0 and docs[rate, forgetting]["forgetting"]["per"] == forgetting[:-1] + "s"
+    settle = {k: _settle_s(doc, 0.30, 10.0) for k, doc in docs.items()}
+    assert settle[50, "seconds"] > 0.5 and abs(settle[200, "seconds"] - settle[50, "seconds"]) <= 0.02
+    assert settle[200, "samples"] < 0.4 * settle[50, "samples"]
+    np.testing.assert_allclose(
+        docs[50, "seconds"]["track"]["p1"], docs[50, "samples"]["track"]["p1"], rtol=1e-9
+    )
+    # the applied forgetting per 200 Hz step is η^(1/4)
+    eta = np.asarray(docs[200, "seconds"]["track"]["eta"])
+    np.testing.assert_allclose(eta[100:500], 0.98**0.25, rtol=1e-12)
+
+
+def test_step_ratios_hold_across_gaps():
+    """Δt / 20 ms per row; the first row and a step across a gap take the median step."""
+    t = np.r_[np.arange(10) * 0.005, 30.0 + np.arange(5) * 0.005]
+    ratio = ol.step_ratios(t)
+    np.testing.assert_allclose(ratio, 0.25, rtol=1e-9)
+    assert ol.step_ratios(np.array([3.0])).tolist() == [1.0]
 
 
 def test_a_stuck_snr_step_is_warned_and_the_guarded_step_tracks_the_change(capsys, tmp_path):
@@ -180,8 +228,8 @@ def test_a_stuck_snr_step_is_warned_and_the_guarded_step_tracks_the_change(capsy
 
 def test_a_run_that_ends_without_an_optimum_says_so(capsys, tmp_path):
     """The independent generator's steady run (seed 1, mild sensors) ends in 30 s of low adhesion
-    (≈ 0.04) at creep ≈ 10⁻³, far below any optimum: Algorithm 1 forgets the earlier peak and
-    ends with p2 ≤ 0, a curve without a peak. The command says so (``no_optimum``, creep_opt
+    (≈ 0.04) at creep ≈ 10⁻³, far below any optimum: Algorithm 1 with the paper's per-sample
+    forgetting forgets the earlier peak and ends with p2 ≤ 0, a curve without a peak. The command says so (``no_optimum``, creep_opt
     none) exactly when the final p2 is not positive, for every identifier."""
     path = write(generate(1, effect="none", sensor="mild"), tmp_path / "steady.csv")
     for alg in ALGORITHM_NAMES:
@@ -190,8 +238,9 @@ def test_a_run_that_ends_without_an_optimum_says_so(capsys, tmp_path):
         assert code == 0 and bool(warned) == (doc["final"]["p2"] <= 0), alg
         if warned:
             assert doc["final"]["creep_opt"] is None
-    _, one, _ = _run(capsys, "online", path, "--algorithm", "1")
-    assert one["final"]["p2"] <= 0
+    _, one, _ = _run(capsys, "online", path, "--algorithm", "1", "--forgetting", "samples")
+    assert one["final"]["p2"] <= 0 and one["final"]["creep_opt"] is None
+    assert "no_optimum" in {w["code"] for w in one["warnings"]}
 
 
 def test_a_peak_below_the_data_is_named(capsys, tmp_path):

@@ -6,8 +6,10 @@ it is. The recording options (``--column``, ``--axle``, ``--start/--end``, ``--p
 other commands'; braking (``--phase braking``) and running backwards are tracked as traction.
 Kiencke's ``p1, p2`` and the optimum (``creep_opt`` = λ_m, ``mu_max`` = μ_m) are tracked sample by
 sample with the forgetting factor η (:func:`jadhesion.identify.online.track_dataset`, the code path
-of ``reproduce online``). ``a_s`` is estimated from the data (the initial slope of Kiencke's curve
-fitted offline by global LM) unless ``--a-s`` is given. Samples outside ``--phase`` (standstill,
+of ``reproduce online``), whose memory is counted in seconds by default (``--forgetting``: the
+paper's per-sample η taken at 50 Hz, :func:`jadhesion.identify.online.step_ratios`). ``a_s`` is
+estimated from the data (the initial slope of Kiencke's curve fitted offline by global LM) unless
+``--a-s`` is given. Samples outside ``--phase`` (standstill,
 coasting, direction changes…) and those the tracker finds uninformative are skipped (the estimate
 is held). ``warnings`` reports a ``no_optimum`` (the run ends with ``p2 ≤ 0``: no peak,
 :func:`jadhesion.identify.online.optimum_warning`) and an ``snr_hold``: the SNR step held η at
@@ -25,6 +27,8 @@ from .recording_options import add_recording_options
 
 #: The identifiers of :data:`jadhesion.identify.online.ALGORITHMS` (a test keeps the two equal).
 ALGORITHM_NAMES = ("1", "1-guarded", "2", "rls")
+#: :data:`jadhesion.identify.online.FORGETTING` (literal, as ALGORITHM_NAMES).
+FORGETTING = ("seconds", "samples")
 
 
 def register(sub) -> None:
@@ -44,6 +48,15 @@ def register(sub) -> None:
         default=None,
         metavar="VALUE",
         help="Kiencke's initial slope a_s [-], 1 to 10000 (default: estimated from the data)",
+    )
+    p.add_argument(
+        "--forgetting",
+        choices=FORGETTING,
+        default="seconds",
+        help="what the forgetting factor's memory is counted in: seconds (default: the paper's "
+        "per-sample factors taken at 50 Hz, so the memory in seconds is the same at any logging "
+        "rate) or samples (the paper's, whatever the rate); a file without a time column is "
+        "tracked per sample",
     )
     p.add_argument("--seed", type=int, default=0, help="seed of the a_s estimate's LM (default 0)")
     p.add_argument("--plot", metavar="DIR", default=None, help="write FILE-stem_online.png into DIR")

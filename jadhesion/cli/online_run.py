@@ -14,6 +14,7 @@ import numpy as np
 from ..data.selected import tracking_dataset
 from ..identify.kiencke_fit import A_S_LOG10_BOUNDS, MIN_SAMPLES
 from ..identify.online import (
+    REFERENCE_STEP_S,
     below_data_warning,
     extrapolated_warning,
     hold_warning,
@@ -44,7 +45,10 @@ def run(args) -> int:
     if rows < MIN_SAMPLES:  # before the observer and smoother are compiled (2-9 s)
         raise UserError(f"{args.file}: {rows} samples; online identification needs at least {MIN_SAMPLES}")
     data, selection = tracking_dataset(recording, args.phase)
-    out = track_dataset(data, args.algorithm, args.a_s, jax.random.key(args.seed))
+    cols = recording.columns
+    time = np.asarray(cols["time"]) if "time" in cols else None
+    per_second = time if args.forgetting == "seconds" else None
+    out = track_dataset(data, args.algorithm, args.a_s, jax.random.key(args.seed), per_second)
     used = np.asarray(out.used)
     status = status_of(out.status)
     if status.name == "NOT_RUN":
@@ -52,14 +56,14 @@ def run(args) -> int:
             f"{args.file}: only {int(used.sum())} informative samples of --phase {args.phase} "
             f"(|v| >= 0.1 m/s, |adhesion| >= 0.02); online identification needs at least {MIN_SAMPLES}"
         )
-    cols = recording.columns
-    time = np.asarray(cols["time"]) if "time" in cols else np.arange(used.size, dtype=float)
+    time = np.arange(used.size, dtype=float) if time is None else time
     tr = out.trace
     doc = {
         "file": str(args.file),
         "algorithm": args.algorithm,
         "a_s": float(out.a_s),
         "a_s_source": "given" if args.a_s is not None else "estimated",
+        "forgetting": {"per": out.forgetting, "reference_step_s": REFERENCE_STEP_S},
         "final": {f: _finite(getattr(tr, f)[-1]) for f in ("p1", "p2", "mu_max", "creep_opt")},
         "status": status.label,
         "converged": status.converged,
@@ -113,7 +117,8 @@ def run(args) -> int:
         ]
         print(table(rows, ["quantity", "final"]))
         print(
-            f"algorithm {args.algorithm}, a_s {doc['a_s']:.5g} ({doc['a_s_source']}), "
+            f"algorithm {args.algorithm}, forgetting per {out.forgetting[:-1]}, "
+            f"a_s {doc['a_s']:.5g} ({doc['a_s_source']}), "
             f"{doc['n_used']}/{doc['n_samples']} samples used, status {doc['status']}"
         )
         for w in doc["warnings"]:

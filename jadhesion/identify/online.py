@@ -27,6 +27,13 @@ One step ``k`` does, in this order:
 
 A sample flagged as not informative (``valid = False``: standstill, coasting, non-finite) is
 skipped: the state is carried unchanged and the trace repeats the estimate with ``η = 1``.
+
+**Forgetting per second.** The paper's η is per sample, so the estimate's memory in seconds shrinks
+with the logger's rate (a steady run of the independent generator: Algorithm 2's tracked peak 26 %
+off at 50 Hz, 66 % at 100 Hz). A step of ``Δt`` may instead forget ``η_k^(Δt/Δt_ref)``
+(:func:`step_ratios`, ``Δt_ref`` = :data:`REFERENCE_STEP_S`, the 50 Hz at which the coefficients
+were set): the same memory in seconds at any rate, the paper's at 50 Hz. η_k itself, the weight
+``w_k`` and the SNR test stay per sample.
 :func:`final_status` grades a finished run (:class:`~jadhesion.status.Status`).
 
 Every coefficient lives in :class:`OnlineParams` (arrays, so a sensitivity study vmaps over them).
@@ -43,6 +50,7 @@ from jax import lax
 
 from ..data.creep_state import difference_sd
 from ..data.dataset import PolachDataset
+from ..data.segments import GAP_FACTOR, GAP_MIN_S
 from ..models.kiencke import DEFAULT_SLOPE, kiencke_adhesion, kiencke_regressors
 from ..status import Status
 from .kiencke_fit import MIN_SAMPLES, fit_kiencke, informative
@@ -132,6 +140,28 @@ def stack_params(params) -> OnlineParams:
     return jax.tree.map(lambda *xs: jnp.stack(xs), *params)
 
 
+#: The sample step [s] at which the forgetting coefficients hold as they are (the paper's η limits
+#: and :data:`DEFAULT_KP`, set on our simulator's 50 Hz): :func:`step_ratios`.
+REFERENCE_STEP_S = 0.02
+#: What the forgetting factor's memory is counted in: ``"seconds"`` (η^(Δt/Δt_ref) per step) or
+#: ``"samples"`` (the paper's η per sample, whatever the rate).
+FORGETTING = ("seconds", "samples")
+
+
+def step_ratios(time) -> np.ndarray:
+    """(n,) exponents ``Δt/``:data:`REFERENCE_STEP_S` of each sample's forgetting, ``Δt`` [s] the
+    step from the previous row of ``time`` [s]; the first row and a step across a gap (longer than
+    the selection's gap limit, :func:`jadhesion.data.segments.find_stretches`) take the median step,
+    so the time a tracker holds across a gap, like the time of skipped samples, does not forget."""
+    t = np.asarray(time, float)
+    if t.size < 2:
+        return np.ones_like(t)
+    dt = np.diff(t)
+    median = float(np.median(dt))
+    dt = np.where(dt > max(GAP_FACTOR * median, GAP_MIN_S), median, dt)
+    return np.r_[median, dt] / REFERENCE_STEP_S
+
+
 class OnlineState(NamedTuple):
     """H(k) (2, 2), f(k) (2,), x(k) (2,), history H(k−1..k−5) (5, 2, 2), steps done k."""
 
@@ -144,7 +174,8 @@ class OnlineState(NamedTuple):
 
 class OnlineInfo(NamedTuple):
     """Per-step trace: estimates, peak adhesion ``a_s/(p1 + 2√p2)``, optimum creep ``1/√p2``,
-    η_k, SNR matrix and hit flag."""
+    the forgetting applied over the step (``η_k``, or ``η_k^(Δt/Δt_ref)`` per second), SNR matrix
+    and hit flag."""
 
     p1: jax.Array
     p2: jax.Array
@@ -190,9 +221,12 @@ def optimum_creep(x):
 
 
 def step(params: OnlineParams, state: OnlineState, obs):
-    """One identifier step on ``obs = (λ(k), μ(k))`` or ``(λ(k), μ(k), valid(k))``; returns
-    ``(state, info)`` (module docstring)."""
-    lam, mu, valid = obs if len(obs) == 3 else (*obs, True)
+    """One identifier step on ``obs = (λ(k), μ(k))``, ``(λ(k), μ(k), valid(k))`` or
+    ``(λ(k), μ(k), valid(k), ratio(k))`` (the forgetting's exponent, :func:`step_ratios`; 1: the
+    paper's per-sample η); returns ``(state, info)`` (module docstring)."""
+    lam, mu = obs[:2]
+    valid = obs[2] if len(obs) > 2 else True
+    ratio = obs[3] if len(obs) > 3 else 1.0
     lam = jnp.where(valid, lam, 0.0)
     mu = jnp.where(valid, mu, 0.0)
     z, u = kiencke_regressors(lam, mu, params.a_s)
@@ -204,6 +238,7 @@ def step(params: OnlineParams, state: OnlineState, obs):
     hit = (params.snr > 0.5) & (state.k >= 5) & inside & (jnp.abs(mu_hat - mu) <= params.hold_error)
     eta = jnp.where(hit, params.eta_max, eta)
     w = 1.0 - params.weight_slope * eta / 2.0
+    eta = eta**ratio
     h = eta * state.h + w * info
     f = eta * state.f - w * 2.0 * z * u
     x = _solve_spd2(h + params.delta * jnp.eye(2, dtype=h.dtype), params.delta * state.x - f)
@@ -217,14 +252,16 @@ def step(params: OnlineParams, state: OnlineState, obs):
 
 
 @jax.jit
-def run(params: OnlineParams, lam, mu, valid) -> tuple[OnlineState, OnlineInfo]:
-    """The identifier over ``λ (K,)``, ``μ (K,)``, ``valid (K,)`` (bool) with one ``lax.scan``;
-    returns the final state and the per-step trace (K, …)."""
+def run(params: OnlineParams, lam, mu, valid, ratio=None) -> tuple[OnlineState, OnlineInfo]:
+    """The identifier over ``λ (K,)``, ``μ (K,)``, ``valid (K,)`` (bool) and the forgetting's
+    exponents ``ratio (K,)`` (:func:`step_ratios`; ``None``: the paper's per-sample η) with one
+    ``lax.scan``; returns the final state and the per-step trace (K, …)."""
 
     def body(state, obs):
         return step(params, state, obs)
 
-    return lax.scan(body, init(params), (lam, mu, valid))
+    ratio = jnp.ones(lam.shape, lam.dtype) if ratio is None else ratio
+    return lax.scan(body, init(params), (lam, mu, valid, ratio))
 
 
 @jax.jit
@@ -360,7 +397,7 @@ def below_data_warning(tracked, adhesion) -> dict | None:
         "params": ["mu_max"],
         "message": f"the run ends with mu_max = {mu_max:.3g}, below {BELOW_DATA_SHARE:g} × the median "
         f"|mu_hat| {level:.3g} of the samples it used: the tracked curve is not this run's at the end "
-        "(too little excitation lately, or a forgetting too fast for this sampling rate); compare "
+        "(too little excitation lately, or a forgetting too fast for these data); compare "
         "--algorithm 2 or fit --model kiencke",
     }
 
@@ -412,7 +449,8 @@ NOISE_CALIBRATED = ("1-guarded",)
 class Tracked(NamedTuple):
     """Online identification of one dataset: ``a_s`` used [-], the trace (K, …), ``used`` (K,)
     informative-sample flags, the final :class:`Status` code, the offline fit that gave ``a_s``
-    (``None`` when ``a_s`` was given), and the coefficients used."""
+    (``None`` when ``a_s`` was given), the coefficients used, and what the forgetting's memory
+    was counted in (:data:`FORGETTING`)."""
 
     a_s: jax.Array
     trace: OnlineInfo
@@ -420,9 +458,10 @@ class Tracked(NamedTuple):
     status: jax.Array
     slope_fit: object
     params: OnlineParams
+    forgetting: str
 
 
-def track_dataset(data: PolachDataset, algorithm: str = "1", a_s=None, key=None) -> Tracked:
+def track_dataset(data: PolachDataset, algorithm: str = "1", a_s=None, key=None, time=None) -> Tracked:
     """Paper 000's identification on a dataset (creep λ, observed μ̂), sample by sample.
 
     ``algorithm``: a key of :data:`ALGORITHMS` (default coefficients; ``"1-guarded"``'s hold
@@ -432,6 +471,8 @@ def track_dataset(data: PolachDataset, algorithm: str = "1", a_s=None, key=None)
     estimated from the data as the initial slope of Kiencke's curve fitted offline with ``p1, p2``
     by global LM on the informative samples (:func:`.kiencke_fit.fit_kiencke`, ``key``).
     Status ``NOT_RUN`` with fewer than :data:`.kiencke_fit.MIN_SAMPLES` informative samples.
+    ``time`` [s] (n,): the samples' times, so that the forgetting's memory is counted in seconds
+    (:func:`step_ratios`); ``None``: per sample, the paper's.
     """
     if algorithm not in ALGORITHMS:
         raise ValueError(f"unknown algorithm {algorithm!r}; choose one of {', '.join(ALGORITHMS)}")
@@ -442,6 +483,8 @@ def track_dataset(data: PolachDataset, algorithm: str = "1", a_s=None, key=None)
         a_s = slope_fit.params[2]
     extra = {"noise_sd": noise_sd(data.adhesion, used)} if algorithm in NOISE_CALIBRATED else {}
     params = ALGORITHMS[algorithm](a_s=a_s, **extra)
-    state, trace = run(params, data.creep, data.adhesion, used)
+    ratio = None if time is None else jnp.asarray(step_ratios(time), data.creep.dtype)
+    state, trace = run(params, data.creep, data.adhesion, used, ratio)
     status = jnp.where(jnp.sum(used) < MIN_SAMPLES, Status.NOT_RUN, final_status(state))
-    return Tracked(params.a_s, trace, used, status.astype(jnp.int32), slope_fit, params)
+    forgetting = FORGETTING[time is None]
+    return Tracked(params.a_s, trace, used, status.astype(jnp.int32), slope_fit, params, forgetting)
