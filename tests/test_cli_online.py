@@ -229,8 +229,9 @@ def test_a_stuck_snr_step_is_warned_and_the_guarded_step_tracks_the_change(capsy
 def test_a_run_that_ends_without_an_optimum_says_so(capsys, tmp_path):
     """The independent generator's steady run (seed 1, mild sensors) ends in 30 s of low adhesion
     (≈ 0.04) at creep ≈ 10⁻³, far below any optimum: Algorithm 1 with the paper's per-sample
-    forgetting forgets the earlier peak and ends with p2 ≤ 0, a curve without a peak. The command says so (``no_optimum``, creep_opt
-    none) exactly when the final p2 is not positive, for every identifier."""
+    forgetting forgets the earlier peak and ends with p2 ≤ 0, a curve without a peak. The command
+    says so (``no_optimum``, creep_opt none) exactly when the final p2 is not positive, for every
+    identifier."""
     path = write(generate(1, effect="none", sensor="mild"), tmp_path / "steady.csv")
     for alg in ALGORITHM_NAMES:
         code, doc, _ = _run(capsys, "online", path, "--algorithm", alg)
