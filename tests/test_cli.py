@@ -155,7 +155,7 @@ def test_reproduce_online_json_keys(env):
 
 def test_reproduce_table2_json_rows_include_mcmc(env):
     proc = jadhesion(
-        env, "reproduce", "table2", "--seeds", "1", "--mcmc-steps", "300", "--sensors", "realistic", "--json"
+        env, "reproduce", "table2", "--seeds", "1", "--mcmc-steps", "120", "--sensors", "realistic", "--json"
     )
     doc = json.loads(proc.stdout)
     assert doc["sensors"] == ["clean", "realistic"]
