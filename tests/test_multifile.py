@@ -27,7 +27,7 @@ from jadhesion.identify.batch_fit import (
 from jadhesion.identify.box_lm import box_lm
 from jadhesion.identify.polach_fit import LM_RESIDUAL, SEED_SAMPLES, fit_polach, scaled, subsample
 from jadhesion.identify.polach_residuals import polach_mae
-from jadhesion.identify.trust import fit_report, trust_numbers
+from jadhesion.identify.trust import fit_report, jackknife_sd, trust_numbers
 from jadhesion.memory_maps import map_count, map_limit
 from jadhesion.models.polach import PARAM_NAMES
 
@@ -159,17 +159,19 @@ def test_trust_block_is_computed_padded_and_equals_the_unpadded_one():
     """``fit_report`` computes the covariance on the dataset padded to its bucket (one program per
     bucket): the same standard errors to round-off, the same HAC bandwidth and the same peak as on
     its own samples; padding rows count in neither the degrees of freedom, the bandwidth nor the
-    reference speed."""
+    reference speed, nor in the jackknife's blocks (its refits agree to LM's tolerance)."""
     data = _uncertain(700, 2)
     fit = fit_polach(data, "lm", jax.random.key(0))
     report = fit_report(data, fit)
     numbers = trust_numbers(fit.params, scaled(data, fit))  # unpadded, directly
-    cov = numbers.cov
+    cov, jackknife = numbers.cov, jackknife_sd(numbers.jackknife)
     assert report["hac_lags"] == int(numbers.lags)
     for i, name in enumerate(PARAM_NAMES):
-        se = report["uncertainty"][name]["stderr"]
-        if se is not None and np.isfinite(se):
-            assert se == pytest.approx(float(np.sqrt(cov[i, i])), rel=1e-9), name
+        u = report["uncertainty"][name]
+        if u["stderr"] is not None and np.isfinite(u["stderr"]):
+            assert u["stderr_hac"] == pytest.approx(float(np.sqrt(cov[i, i])), rel=1e-9), name
+            assert u["stderr_jackknife"] == pytest.approx(jackknife[i], rel=1e-5), name
+            assert u["stderr"] == max(u["stderr_hac"], u["stderr_jackknife"])
     # the peak: the median speed and largest creep of the real rows only, the same peak
     assert report["vehicle_speed"] == pytest.approx(float(numbers.speed), rel=1e-12)
     for j, name in enumerate(("mu_max", "creep_opt")):

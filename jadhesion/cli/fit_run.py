@@ -217,8 +217,9 @@ def _describe(doc) -> str:
         )
     lines.append(table(rows, ["parameter", "value", "stderr", "95% interval"]))
     lines.append(
-        f"standard errors: Newey–West (HAC, {doc['hac_lags']} lags), robust to the "
-        "observer's coloured residuals"
+        f"standard errors: the larger of Newey–West's (HAC, {doc['hac_lags']} lags: the observer's "
+        f"coloured residuals) and the jackknife's over {doc['jackknife_blocks']} blocks (errors that "
+        "come with stretches of the recording)"
     )
     if (check := doc.get("slip_law_check")) is not None:
         p = ", ".join(f"{k} {v:.4g}" for k, v in check["params"].items())

@@ -73,27 +73,34 @@ def _variance(grad, cov):
     return float(max(var, 0.0)) if np.isfinite(var) else np.inf
 
 
-def peak_report(peak, jacobian, cov, speed, max_creep, min_creep=0.0) -> tuple[dict, list]:
+def peak_report(
+    peak, jacobian, cov, speed, max_creep, min_creep=0.0, jackknife=(0.0, 0.0)
+) -> tuple[dict, list]:
     """``(derived, warnings)`` of a fit: ``derived`` {``mu_max``, ``creep_opt``: {``value``,
-    ``stderr``, ``ci95``}} from :func:`peak_numbers`' ``peak`` and ``jacobian``, the fit's ``cov``
-    (5, 5), the reference ``speed`` [m/s] and the largest and smallest ``|creep|`` of the fitted
-    samples;
+    ``stderr``, ``ci95``, ``stderr_hac``, ``stderr_jackknife``}} from :func:`peak_numbers`' ``peak``
+    and ``jacobian``, the fit's ``cov`` (5, 5), the reference ``speed`` [m/s] and the largest and
+    smallest ``|creep|`` of the fitted samples; ``stderr`` is the larger of the delta method's
+    (``stderr_hac``) and the block jackknife's ``jackknife`` (sd of ``mu_max`` and of
+    ``log creep_opt``; :func:`.trust.trust_numbers`);
     ``warnings`` as in :mod:`.trust` (module docstring), with ``undetermined`` for a quantity whose
     standard error is not determined."""
     mu_max, creep_opt = (float(x) for x in np.asarray(peak))
     jac, cov = np.asarray(jacobian, float), np.asarray(cov, float)
     cov = np.where(np.isnan(cov), 0.0, cov)  # a fixed parameter (nan) adds nothing; inf stays inf
-    sd_mu = np.sqrt(_variance(jac[0], cov))
+    hac_mu = np.sqrt(_variance(jac[0], cov))
+    sd_mu = max(hac_mu, jackknife[0])
     edge = creep_opt >= S_MAX / EDGE or creep_opt <= S_MIN * EDGE
     ci_mu = normal_interval(mu_max, sd_mu, Z95, 0.0, MU_BOX_MAX)
-    derived = {"mu_max": _entry(mu_max, sd_mu, ci_mu, determined(sd_mu, MU_BOX_MAX))}
+    derived = {"mu_max": _entry(mu_max, sd_mu, ci_mu, determined(sd_mu, MU_BOX_MAX), (hac_mu, jackknife[0]))}
     undetermined = [] if derived["mu_max"]["stderr"] is not None else ["mu_max"]
     if edge:
         derived["creep_opt"] = {"value": creep_opt, "stderr": None, "ci95": None}
     else:
-        sd_log = np.sqrt(_variance(jac[1] / creep_opt, cov))
+        hac_log = np.sqrt(_variance(jac[1] / creep_opt, cov))
+        sd_log = max(hac_log, jackknife[1])
         ci = normal_interval(creep_opt, sd_log, Z95, S_MIN, S_MAX, log=True)  # in the searched range
-        derived["creep_opt"] = _entry(creep_opt, creep_opt * sd_log, ci, determined(sd_log, LOG_WIDTH))
+        parts = (creep_opt * hac_log, creep_opt * jackknife[1])
+        derived["creep_opt"] = _entry(creep_opt, creep_opt * sd_log, ci, determined(sd_log, LOG_WIDTH), parts)
         undetermined += [] if derived["creep_opt"]["stderr"] is not None else ["creep_opt"]
     warnings = [undetermined_warning(undetermined)] if undetermined else []
     if edge:
@@ -128,7 +135,15 @@ def extrapolation_warning(creep_opt, min_creep, max_creep, where="") -> dict | N
     return {"code": "peak_extrapolated", "params": list(DERIVED), "message": message}
 
 
-def _entry(value, sd, ci, ok):
+def _entry(value, sd, ci, ok, parts):
+    """A derived quantity's entry; ``parts``: its delta-method and jackknife standard errors."""
     if not ok:  # not determined: no number that would pretend otherwise
         return {"value": value, "stderr": None, "ci95": None}
-    return {"value": value, "stderr": float(sd), "ci95": [float(ci[0]), float(ci[1])]}
+    hac, jackknife = (float(x) for x in parts)
+    return {
+        "value": value,
+        "stderr": float(sd),
+        "ci95": [float(ci[0]), float(ci[1])],
+        "stderr_hac": hac,
+        "stderr_jackknife": jackknife,
+    }

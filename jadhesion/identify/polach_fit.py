@@ -27,7 +27,7 @@ from ..errors import InputError
 from .batch_fit import bucketed
 from .driver import STALL_FTOL, run_until
 from .likelihood import with_node_slips
-from .lm import best_of, box_lm_queue, global_lm, seed_starts, with_start
+from .lm import best_of, box_lm, box_lm_queue, global_lm, seed_starts, with_start
 from .methods import NAMES as METHODS
 from .methods import POPULATION as ALGORITHMS
 from .polach_residuals import (
@@ -129,6 +129,21 @@ def _global_lm(data, key, polish=True, start=None):
         block_rows=LM_BLOCK_ROWS,
         polish=polish,
         start=start,
+    )
+
+
+def refit_lm(params, data: PolachDataset):
+    """One :func:`.lm.box_lm` run of LM's residual from ``params`` on ``data`` (its
+    ``residual_scale`` the robust stage's, :func:`scaled`) with the fit's box, step cap and row
+    blocks (the polish's): a refit of changed data near a fit's optimum, as the block jackknife of
+    :func:`.trust.trust_numbers` makes."""
+    return box_lm(
+        LM_RESIDUAL,
+        params,
+        data,
+        _box(data.adhesion.dtype),
+        max_steps=LM_POLISH_STEPS,
+        block_rows=LM_BLOCK_ROWS,
     )
 
 
