@@ -273,7 +273,7 @@ def figure(summary, path):
     titles = (
         "LM |slope error| / slope (median)",
         "LM |μ0 error| (median)",
-        "HAC 90 % interval coverage",
+        "90 % interval coverage (the fit's intervals)",
         "share of LM slopes within 25 %",
     )
     for ax, title in zip(axes, titles, strict=True):
