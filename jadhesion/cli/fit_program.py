@@ -5,10 +5,10 @@ Four programs, each exported once (``jax.export``) and kept in the program cache
 and code: ``polach_dataset`` (observer, kinematics and Kalman/RTS creep smoother of a recording's
 raw signals padded to their length bucket: :func:`to_dataset`), ``polach_slip_nodes`` (the slip
 law's nodes: :func:`slip_nodes`), ``polach_fit`` (the fit of a padded dataset: :func:`fit_polach`)
-and ``polach_trust`` (the Jacobian of LM's residual over every row, the HAC covariance and the
-curve's peak with its gradient: :func:`trust_numbers`). Each is a drop-in for its library function
-with the same results, bit for bit; a program used twice in a process (the fit under both slip
-laws) is loaded once. A process that finds them
+and ``polach_trust`` (the Jacobian of LM's residual over every row, the HAC covariance, the
+curve's peak with its gradient and the block jackknife's refits: :func:`trust_numbers`). Each is
+a drop-in for its library function with the same results, bit for bit; a program used twice in a
+process (the fit under both slip laws) is loaded once. A process that finds them
 deserialises and calls them, with the compiled executables from the persistent compilation cache:
 it traces and lowers nothing, and imports no optimistix or equinox (the fit's LM is the projected
 LM of :mod:`jadhesion.identify.box_lm`). On a miss the library function is exported, kept and
@@ -222,7 +222,7 @@ def fit_polach(dataset, method: str, key, *, pop_size: int = 50, max_iter: int =
 
 def trust_numbers(params, dataset):
     """:func:`jadhesion.identify.trust.trust_numbers` (covariance and HAC bandwidth of a fit, the
-    curve's peak and its gradient) through a kept program; a named tuple with
+    curve's peak and its gradient, the block jackknife's refits) through a kept program; a named tuple with
     :class:`~jadhesion.identify.trust.TrustNumbers`' fields (in alphabetical order), the same
     numbers bit for bit."""
     args = (jnp.asarray(params), dataset)
