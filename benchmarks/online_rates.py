@@ -20,15 +20,14 @@ import tempfile
 from pathlib import Path
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 
+from benchmarks.online_recordings import truth_peak
 from benchmarks.provenance import commit
 from jadhesion.config import enable_x64
 from jadhesion.data.recording import load_recording
 from jadhesion.data.selected import tracking_dataset
 from jadhesion.identify.online import FORGETTING, track_dataset
-from jadhesion.models.polach import adhesion_peak
 from validation.foreign_generator import generate, write
 
 RESULTS = Path(__file__).resolve().parent / "results"
@@ -38,12 +37,8 @@ ALGORITHMS = ("1", "2", "rls")
 
 
 def _row(path: Path, rate: float, profile: str, seed: int) -> dict:
-    truth = json.loads(path.with_suffix(".truth.json").read_text())
     rec = load_recording(path)
-    theta = jnp.array([truth["params"][k] for k in ("kA", "kS", "mu0", "A", "B")])
-    k_eps = truth.get("k_eps") or float(rec.vehicle.k_eps())
-    speed = float(np.median(np.abs(np.asarray(rec.columns["vehicle_speed"]))))
-    peak = float(adhesion_peak(theta, k_eps, speed)[0])
+    peak = truth_peak(path)[0]
     data, _ = tracking_dataset(rec)
     time = np.asarray(rec.columns["time"])
     late = time > 0.5 * time[-1]

@@ -56,7 +56,7 @@ def _recordings(tmp: Path):
         yield f"foreign/{profile}/{seed}", write(rec, tmp / f"foreign_{profile}_{seed}.csv")
 
 
-def _truth_peak(path: Path) -> tuple[float, float]:
+def truth_peak(path: Path) -> tuple[float, float]:
     """The recording's true Polach peak ``(mu_max, creep_opt)`` at its median ``|v|``."""
     truth = json.loads(path.with_suffix(".truth.json").read_text())
     rec = load_recording(path)
@@ -127,7 +127,7 @@ def main(argv=None) -> int:
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for name, path in _recordings(Path(tmp)):
-            peak = _truth_peak(path)
+            peak = truth_peak(path)
             for algorithm in ALGORITHM_NAMES:
                 rows.append(_row(name, algorithm, _online(path, algorithm), peak))
                 err, codes = rows[-1]["mu_max_rel_error_median"], rows[-1]["warnings"]

@@ -244,7 +244,7 @@ def test_posterior_auto_likelihood_is_the_gaussian_tempered_by_the_residual_colo
         )
         assert theirs[0] <= v <= theirs[1]
     assert "q05_posterior" not in doc["params"]["sigma"]  # noise parameters: the posterior's own
-    args = ("--walkers", "16", "--steps", "60", "--likelihood", "observer", "--json")
+    args = ("--walkers", "16", "--steps", "60", "--likelihood", "observer", "--single-law", "--json")
     obs = json.loads(jadhesion(env, "posterior", recording, *args).stdout)
     assert obs["likelihood"] == "observer" and obs["tempering"]["weight"] == 1.0
     assert set(obs["params"]) == {"kA", "kS", "mu0", "A", "B", "sigma", "rho"}
@@ -256,11 +256,12 @@ def test_posterior_of_an_oversampled_recording_samples_every_dth_sample(tmp_path
     (:func:`jadhesion.identify.laplace.thinning`), the same n/κ effective samples at 1/d of the
     cost, and gives the posterior of all samples tempered by 1/κ (``--likelihood gauss --temper``)
     within Monte Carlo noise: measured at 800 steps, medians within 0.06 of an interval's width,
-    widths 0.98–1.08 of the full ones (sampling 2.3 s against 13.3 s)."""
+    widths 0.98–1.08 of the full ones (sampling 2.3 s against 13.3 s). One slip law's chains
+    (``--single-law``): the posterior's own intervals, not joined to an LM fit's."""
     path = write(generate(0, effect="none", sensor="mild", rate_hz=200.0), tmp_path / "steady.csv")
     docs = {}
     for name, extra in (("thinned", ()), ("all", ("--likelihood", "gauss", "--temper"))):
-        assert main(["posterior", str(path), "--steps", "800", "--json", *extra]) == 0
+        assert main(["posterior", str(path), "--steps", "800", "--single-law", "--json", *extra]) == 0
         docs[name] = json.loads(capsys.readouterr().out)
     temp = docs["thinned"]["tempering"]
     every = thinning(temp["samples"], temp["kappa"])
@@ -363,7 +364,8 @@ def test_misspelled_sidecar_keys_are_said_by_fit_online_and_posterior(tmp_path, 
     JSON ``warnings``; fit echoes the vehicle numbers it used, here 22E's defaults under the
     sidecar's name. A correct sidecar: its numbers, no note."""
     path = save_recording(stretches_si(), LOCO_22E.replace(axle_load_kg=21000.0), tmp_path / "ok.csv")
-    assert main(["fit", str(path), "--method", "lm", "--json"]) == 0
+    one_law = "--single-law"  # the sidecar is the subject here, not the slip laws
+    assert main(["fit", str(path), "--method", "lm", one_law, "--json"]) == 0
     out = capsys.readouterr()
     assert "unknown key" not in out.err
     assert json.loads(out.out)["vehicle"] == {
@@ -380,9 +382,9 @@ def test_misspelled_sidecar_keys_are_said_by_fit_online_and_posterior(tmp_path, 
         "unknown key 'wheel_radius' ignored (did you mean 'wheel_radius_m'?)"
     )
     for command, *flags in (
-        ["fit", "--method", "lm"],
+        ["fit", "--method", "lm", one_law],
         ["online"],
-        ["posterior", "--walkers", "12", "--steps", "60"],
+        ["posterior", "--walkers", "12", "--steps", "60", one_law],
     ):
         assert main([command, str(path), *flags, "--json"]) == 0
         out = capsys.readouterr()
@@ -391,7 +393,7 @@ def test_misspelled_sidecar_keys_are_said_by_fit_online_and_posterior(tmp_path, 
         first = doc["warnings"][0]
         assert first["code"] == "sidecar_unknown_key" and note in first["message"], command
         assert first["params"] == ["axle_lod_kg", "wheel_radius"]
-    assert main(["fit", str(path), "--method", "lm", "--json"]) == 0
+    assert main(["fit", str(path), "--method", "lm", one_law, "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["vehicle"] == {
         "name": "typo",
         "axle_load_kg": LOCO_22E.axle_load_kg,

@@ -19,6 +19,7 @@ from jadhesion.identify.trust import (
     crowded_slips,
     data_warnings,
     fit_report,
+    jackknife_sd,
     join_posterior_intervals,
     join_slip_laws,
     normal_intervals,
@@ -292,3 +293,17 @@ def test_normal_intervals_at_z95_are_the_reports_ci95_and_the_posterior_joins_at
             own["q95"], theirs[1]
         )
         assert (joined[name]["q05_posterior"], joined[name]["q95_posterior"]) == (own["q05"], own["q95"])
+
+
+def test_jackknife_sd_is_the_textbook_block_jackknife():
+    """√((B − 1)/B Σ(x_b − x̄)²) per column, creep_opt (the last) on the log scale; a column with a
+    replicate that is not finite gives 0, so the sandwich's standard error stands alone."""
+    rng = np.random.default_rng(0)
+    reps = np.abs(rng.normal(size=(8, 7))) + 0.1
+    x = reps.copy()
+    x[:, -1] = np.log(x[:, -1])
+    want = np.sqrt(7 / 8 * ((x - x.mean(0)) ** 2).sum(0))
+    np.testing.assert_allclose(jackknife_sd(reps), want, rtol=1e-12)
+    reps[3, 2] = np.nan
+    got = jackknife_sd(reps)
+    assert got[2] == 0.0 and np.all(got[[0, 1, 3, 4, 5, 6]] > 0)

@@ -232,7 +232,7 @@ def fit_report(data, fit, numbers=None) -> dict:
     cov = np.asarray(numbers.cov)
     hac = np.sqrt(np.diag(cov))
     jackknife = jackknife_sd(numbers.jackknife)
-    sd = np.fmax(hac, jackknife[:5])  # nan (a singular direction) stays nan
+    sd = np.maximum(hac, jackknife[:5])  # nan or inf (a singular direction) stays undetermined
     uncertainty, warnings, undetermined = {}, [], []
     for i, name in enumerate(PARAM_NAMES):
         if fixed[i] or not determined(sd[i]):
