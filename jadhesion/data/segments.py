@@ -177,14 +177,20 @@ class Selection:
         }
 
 
+def gap_limit(dt) -> float:
+    """The longest time step [s] that is not a gap, of the steps ``dt`` [s] (at least one):
+    ``max(GAP_FACTOR × median step, GAP_MIN_S)``."""
+    return max(GAP_FACTOR * float(np.median(dt)), GAP_MIN_S)
+
+
 def find_stretches(time):
-    """``(stretches, gaps)``: index ranges between gaps and the gaps' ``(t0, t1)`` [s]."""
+    """``(stretches, gaps)``: index ranges between gaps (:func:`gap_limit`) and the gaps'
+    ``(t0, t1)`` [s]."""
     n = len(time)
     if n < 2:
         return ((0, n),), ()
     dt = np.diff(time)
-    limit = max(GAP_FACTOR * float(np.median(dt)), GAP_MIN_S)
-    cuts = np.flatnonzero(dt > limit) + 1
+    cuts = np.flatnonzero(dt > gap_limit(dt)) + 1
     bounds = np.r_[0, cuts, n]
     gaps = tuple((float(time[i - 1]), float(time[i])) for i in cuts)
     return tuple((int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True)), gaps

@@ -27,6 +27,7 @@ One step ``k`` does, in this order:
 
 A sample flagged as not informative (``valid = False``: standstill, coasting, non-finite) is
 skipped: the state is carried unchanged and the trace repeats the estimate with ``η = 1``.
+:func:`final_status` grades a finished run (:class:`~jadhesion.status.Status`).
 
 **Forgetting per second.** The paper's η is per sample, so the estimate's memory in seconds shrinks
 with the logger's rate (on the independent generator's runs at 500 Hz Algorithm 2's tracked peak
@@ -35,7 +36,6 @@ instead forget ``η_k^(Δt/Δt_ref)``
 (:func:`step_ratios`, ``Δt_ref`` = :data:`REFERENCE_STEP_S`, the 50 Hz at which the coefficients
 were set): the same memory in seconds at any rate, the paper's at 50 Hz. η_k itself, the weight
 ``w_k`` and the SNR test stay per sample.
-:func:`final_status` grades a finished run (:class:`~jadhesion.status.Status`).
 
 Every coefficient lives in :class:`OnlineParams` (arrays, so a sensitivity study vmaps over them).
 """
@@ -51,7 +51,7 @@ from jax import lax
 
 from ..data.creep_state import difference_sd
 from ..data.dataset import PolachDataset
-from ..data.segments import GAP_FACTOR, GAP_MIN_S
+from ..data.segments import gap_limit
 from ..models.kiencke import DEFAULT_SLOPE, kiencke_adhesion, kiencke_regressors
 from ..status import Status
 from .kiencke_fit import MIN_SAMPLES, fit_kiencke, informative
@@ -152,14 +152,14 @@ FORGETTING = ("seconds", "samples")
 def step_ratios(time) -> np.ndarray:
     """(n,) exponents ``Δt/``:data:`REFERENCE_STEP_S` of each sample's forgetting, ``Δt`` [s] the
     step from the previous row of ``time`` [s]; the first row and a step across a gap (longer than
-    the selection's gap limit, :func:`jadhesion.data.segments.find_stretches`) take the median step,
+    the selection's, :func:`jadhesion.data.segments.gap_limit`) take the median step,
     so the time a tracker holds across a gap, like the time of skipped samples, does not forget."""
     t = np.asarray(time, float)
     if t.size < 2:
         return np.ones_like(t)
     dt = np.diff(t)
     median = float(np.median(dt))
-    dt = np.where(dt > max(GAP_FACTOR * median, GAP_MIN_S), median, dt)
+    dt = np.where(dt > gap_limit(dt), median, dt)
     return np.r_[median, dt] / REFERENCE_STEP_S
 
 

@@ -4,8 +4,9 @@
 returns the JSON-ready block of ``jadhesion fit``: ``uncertainty`` {param: {``stderr``, ``ci95``,
 ``stderr_hac``, ``stderr_jackknife``}}, ``correlation`` (5 × 5, order kA, kS, mu0, A, B; the
 sandwich's), ``warnings`` [{``code``, ``params``, ``message``}], ``hac_lags``, ``jackknife_blocks``,
-and the curve's peak with its intervals, ``derived`` {``mu_max``,
-``creep_opt``: {``value``, ``stderr``, ``ci95``}} at ``vehicle_speed`` [m/s] (:mod:`.peak`).
+and the curve's peak with its intervals, ``derived`` {``mu_max``, ``creep_opt``: {``value``,
+``stderr``, ``ci95``, ``stderr_hac``, ``stderr_jackknife``}} at ``vehicle_speed`` [m/s]
+(:mod:`.peak`).
 Each standard error is the larger of two, both reported (``stderr_hac``, ``stderr_jackknife``):
 the HAC sandwich of :mod:`.uncertainty` (the observer colours the noise) of LM's residual
 :data:`.polach_fit.LM_RESIDUAL` on the dataset with the fit's noise scale
