@@ -127,7 +127,7 @@ def _cli(tmp_path, *argv):
 
 def test_fit_json_reports_the_selection_and_fits_braking_alone(tmp_path):
     path = write_logger_file(tmp_path / "log.csv")
-    proc = _cli(tmp_path, "fit", path, "--method", "lm", "--phase", "braking", "--json")
+    proc = _cli(tmp_path, "fit", path, "--method", "lm", "--phase", "braking", "--single-law", "--json")
     assert proc.returncode == 0, proc.stderr
     doc = json.loads(proc.stdout)
     sel = doc["selection"]
@@ -174,7 +174,8 @@ def test_adhesion_column_is_ignored_when_raw_signals_are_present(tmp_path):
 
 def test_posterior_runs_on_the_selected_samples_and_refuses_the_observer_likelihood(tmp_path):
     path = write_logger_file(tmp_path / "log.csv")
-    proc = _cli(tmp_path, "posterior", path, "--walkers", "12", "--steps", "60", "--creep", "raw", "--json")
+    args = ("--walkers", "12", "--steps", "60", "--creep", "raw", "--single-law", "--json")  # the selection's
+    proc = _cli(tmp_path, "posterior", path, *args)
     assert proc.returncode == 0, proc.stderr
     doc = json.loads(proc.stdout)
     assert doc["likelihood"] == "gauss" and doc["likelihood_note"].startswith("auto: Gaussian tempered")

@@ -126,9 +126,8 @@ def test_a_parameter_on_a_bound_stays_free_for_the_others():
     assert on_bound.any(), theta
     report = fit_report(data, fit)
     fitted = scaled(data, fit)  # the residual LM minimised: the fit's noise scale
-    jac = jax.jacfwd(LM_RESIDUAL)(fit.params, fitted)
-    r = LM_RESIDUAL(fit.params, fitted)
-    free = np.sqrt(np.diag(np.asarray(covariance(jac, r)[0])))
+    cov = jax.jit(lambda p, d: covariance(jax.jacfwd(LM_RESIDUAL)(p, d), LM_RESIDUAL(p, d))[0])
+    free = np.sqrt(np.diag(np.asarray(cov(fit.params, fitted))))
     for i, name in enumerate(PARAM_NAMES):
         u = report["uncertainty"][name]
         if on_bound[i]:
