@@ -121,7 +121,7 @@ def _cli(tmp_path, *argv):
         text=True,
         timeout=600,
         cwd=tmp_path,
-        env={**os.environ, "JADHESION_CACHE": str(tmp_path / "cache")},
+        env=dict(os.environ),  # the session's compilation cache (conftest.py)
     )
 
 
