@@ -1,7 +1,6 @@
 """The command line end to end: the DESIGN §3 contracts (JSON keys, exit code 2, nothing written)."""
 
 import json
-import os
 import subprocess
 import sys
 
@@ -20,18 +19,12 @@ from validation.foreign_generator import generate, write
 STATUS_LABELS = {s.label for s in Status}
 
 
-@pytest.fixture(scope="module")
-def env():
-    """The subprocesses' environment: the session's compilation cache (``conftest.py``), so a
-    command loads the programs an earlier command of any worker compiled, as a user's second run
-    does."""
-    return dict(os.environ)
-
-
-def jadhesion(env, *args, check=True):
+def jadhesion(*args, check=True):
+    """The command in a process of its own, with this session's environment: its compilation
+    cache (``conftest.py``), so a command loads the programs an earlier command of any worker
+    compiled, as a user's second run does."""
     proc = subprocess.run(
         [sys.executable, "-m", "jadhesion", *map(str, args)],
-        env=env,
         capture_output=True,
         text=True,
         timeout=600,
@@ -42,11 +35,11 @@ def jadhesion(env, *args, check=True):
 
 
 @pytest.fixture(scope="module")
-def recording(env, tmp_path_factory):
+def recording(tmp_path_factory):
     out = tmp_path_factory.mktemp("rec") / "dry.csv"
     # 0.05 × the realistic sensors ≈ the historical clean level (5e-5 m/s): the contract and
     # accuracy checks below; at realistic noise LM's mu0 is off by ~0.01-0.03 (benchmarks/methods_noise).
-    jadhesion(env, "simulate", "--scenario", "dry", "--seed", "3", "--sensor-noise", "0.05", "--out", out)
+    jadhesion("simulate", "--scenario", "dry", "--seed", "3", "--sensor-noise", "0.05", "--out", out)
     return out
 
 
@@ -57,8 +50,8 @@ def test_simulate_writes_recording_sidecar_and_truth(recording):
     assert truth["params"]["kA"] == pytest.approx(0.4288)
 
 
-def test_fit_json_contract_and_accuracy(env, recording):
-    proc = jadhesion(env, "fit", recording, "--method", "lm", "--json")
+def test_fit_json_contract_and_accuracy(recording):
+    proc = jadhesion("fit", recording, "--method", "lm", "--json")
     doc = json.loads(proc.stdout)
     assert set(doc) >= {"method", "params", "mae", "iterations", "evaluations", "seconds"}
     assert set(doc["params"]) == {"kA", "kS", "mu0", "A", "B"}
@@ -109,16 +102,14 @@ def test_fit_json_contract_and_accuracy(env, recording):
             assert u["stderr"] is None or u["stderr"] <= 1.0
 
 
-def test_fit_human_output_says_whether_it_converged(env, recording, tmp_path):
-    proc = jadhesion(
-        env, "fit", recording, "--method", "itlbo", "--max-iter", "3", "--plot", tmp_path / "plots"
-    )
+def test_fit_human_output_says_whether_it_converged(recording, tmp_path):
+    proc = jadhesion("fit", recording, "--method", "itlbo", "--max-iter", "3", "--plot", tmp_path / "plots")
     assert "NOT CONVERGED" in proc.stdout and "max_steps" in proc.stdout
     assert "warning [not_converged]" in proc.stdout
     assert (tmp_path / "plots" / "fit.png").stat().st_size > 10_000
 
 
-def test_bad_row_exits_2_with_one_line_naming_file_column_row(env, recording, tmp_path):
+def test_bad_row_exits_2_with_one_line_naming_file_column_row(recording, tmp_path):
     lines = recording.read_text().splitlines()
     header = lines[0].split(",")
     col = header.index("vehicle_speed")
@@ -128,7 +119,7 @@ def test_bad_row_exits_2_with_one_line_naming_file_column_row(env, recording, tm
     bad = tmp_path / "bad.csv"
     bad.write_text("\n".join(lines) + "\n")
     before = set(tmp_path.iterdir())
-    proc = jadhesion(env, "fit", bad, "--json", check=False)
+    proc = jadhesion("fit", bad, "--json", check=False)
     assert proc.returncode == 2
     assert proc.stdout == ""
     message = proc.stderr.strip()
@@ -137,13 +128,13 @@ def test_bad_row_exits_2_with_one_line_naming_file_column_row(env, recording, tm
     assert set(tmp_path.iterdir()) == before
 
 
-def test_missing_file_exits_2(env, tmp_path):
-    proc = jadhesion(env, "fit", tmp_path / "nope.csv", check=False)
+def test_missing_file_exits_2(tmp_path):
+    proc = jadhesion("fit", tmp_path / "nope.csv", check=False)
     assert proc.returncode == 2 and "nope.csv" in proc.stderr
 
 
-def test_reproduce_online_json_keys(env):
-    proc = jadhesion(env, "reproduce", "online", "--runs", "8", "--json")
+def test_reproduce_online_json_keys():
+    proc = jadhesion("reproduce", "online", "--runs", "8", "--json")
     doc = json.loads(proc.stdout)
     a1, a2, paper = doc["algorithms"]["1"], doc["algorithms"]["2"], doc["paper"]
     # seed 000's convergence claims for Algorithm 1 (within 20 % of the paper's step counts) ...
@@ -155,9 +146,9 @@ def test_reproduce_online_json_keys(env):
     assert a1["fluctuation"] > 0 and a2["fluctuation"] > 0
 
 
-def test_reproduce_table2_json_rows_include_mcmc(env):
+def test_reproduce_table2_json_rows_include_mcmc():
     proc = jadhesion(
-        env, "reproduce", "table2", "--seeds", "1", "--mcmc-steps", "120", "--sensors", "realistic", "--json"
+        "reproduce", "table2", "--seeds", "1", "--mcmc-steps", "120", "--sensors", "realistic", "--json"
     )
     doc = json.loads(proc.stdout)
     assert doc["sensors"] == ["clean", "realistic"]
@@ -213,10 +204,10 @@ def test_reproduce_table2_json_rows_include_mcmc(env):
             assert row["floor"] > clean_floor[row["scenario"]], row
 
 
-def test_posterior_auto_likelihood_is_the_gaussian_tempered_by_the_residual_colour(env, recording):
+def test_posterior_auto_likelihood_is_the_gaussian_tempered_by_the_residual_colour(recording):
     """The observer colours the residuals (lag-1 autocorrelation near 1 at 50 Hz): the default
     counts n/κ effective samples and says so; ``--likelihood observer`` stays on request."""
-    proc = jadhesion(env, "posterior", recording, "--walkers", "16", "--steps", "120", "--json")
+    proc = jadhesion("posterior", recording, "--walkers", "16", "--steps", "120", "--json")
     doc = json.loads(proc.stdout)
     temp = doc["tempering"]
     assert doc["likelihood"] == "gauss" and doc["likelihood_note"].startswith("auto: Gaussian tempered")
@@ -246,7 +237,7 @@ def test_posterior_auto_likelihood_is_the_gaussian_tempered_by_the_residual_colo
         assert theirs[0] <= v <= theirs[1]
     assert "q05_posterior" not in doc["params"]["sigma"]  # noise parameters: the posterior's own
     args = ("--walkers", "16", "--steps", "60", "--likelihood", "observer", "--single-law", "--json")
-    obs = json.loads(jadhesion(env, "posterior", recording, *args).stdout)
+    obs = json.loads(jadhesion("posterior", recording, *args).stdout)
     assert obs["likelihood"] == "observer" and obs["tempering"]["weight"] == 1.0
     assert set(obs["params"]) == {"kA", "kS", "mu0", "A", "B", "sigma", "rho"}
 
@@ -407,7 +398,7 @@ def test_misspelled_sidecar_keys_are_said_by_fit_online_and_posterior(tmp_path, 
     }
 
 
-def test_fit_slip_law_population_on_a_steady_start(env, tmp_path):
+def test_fit_slip_law_population_on_a_steady_start(tmp_path):
     """Our simulator's dry start at its realistic sensors: the slips crowd within ~1.7 of their sds
     and the smoother's error there is classical (its mean over one true slip ~0), so the normal
     law draws LM's μ0 up (seed 700: 0.3666 against a true 0.3555, measured; its HAC interval alone
@@ -415,10 +406,10 @@ def test_fit_slip_law_population_on_a_steady_start(env, tmp_path):
     and joins its 95 % intervals to that law's, which then hold the true μ0; ``--single-law``
     skips that. ``--creep raw`` has no slip law: said on stderr, ``slip_law`` null, no check."""
     rec = tmp_path / "dry.csv"
-    jadhesion(env, "simulate", "--scenario", "dry", "--seed", "700", "--out", rec)
+    jadhesion("simulate", "--scenario", "dry", "--seed", "700", "--out", rec)
     mu0 = json.loads(rec.with_name("dry.truth.json").read_text())["params"]["mu0"]
     docs = {
-        law: json.loads(jadhesion(env, "fit", rec, "--method", "lm", "--json", "--slip-law", law).stdout)
+        law: json.loads(jadhesion("fit", rec, "--method", "lm", "--json", "--slip-law", law).stdout)
         for law in ("normal", "population")
     }
     assert {law: d["slip_law"] for law, d in docs.items()} == {"normal": "normal", "population": "population"}
@@ -436,9 +427,9 @@ def test_fit_slip_law_population_on_a_steady_start(env, tmp_path):
         assert u["ci95"][0] <= mu0 <= u["ci95"][1], (law, u)
     own = docs["normal"]["uncertainty"]["mu0"]  # the normal law's sandwich alone misses it
     assert abs(docs["normal"]["params"]["mu0"] - mu0) > Z95 * own["stderr_hac"], own
-    single = json.loads(jadhesion(env, "fit", rec, "--method", "lm", "--json", "--single-law").stdout)
+    single = json.loads(jadhesion("fit", rec, "--method", "lm", "--json", "--single-law").stdout)
     assert "slip_law_check" not in single and single["params"] == docs["normal"]["params"]
     assert single["uncertainty"]["mu0"]["ci95"] == docs["normal"]["uncertainty"]["mu0"]["ci95_hac"]
-    raw = jadhesion(env, "fit", rec, "--method", "lm", "--json", "--creep", "raw", "--slip-law", "population")
+    raw = jadhesion("fit", rec, "--method", "lm", "--json", "--creep", "raw", "--slip-law", "population")
     assert json.loads(raw.stdout)["slip_law"] is None and "slip_law_check" not in json.loads(raw.stdout)
     assert "--slip-law population has no effect" in raw.stderr

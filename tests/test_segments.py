@@ -2,7 +2,6 @@
 direction changes; the observer runs per stretch and never bridges a gap."""
 
 import json
-import os
 import subprocess
 import sys
 
@@ -120,8 +119,7 @@ def _cli(tmp_path, *argv):
         capture_output=True,
         text=True,
         timeout=600,
-        cwd=tmp_path,
-        env=dict(os.environ),  # the session's compilation cache (conftest.py)
+        cwd=tmp_path,  # the environment, and so the session's compilation cache (conftest.py), inherited
     )
 
 
