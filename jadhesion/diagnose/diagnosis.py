@@ -200,7 +200,7 @@ def _warnings(result: dict) -> list:
         )
     truth = result["null"]["truth"]
     if truth["delta_bic"] < -select.BIC_SEPARATION:
-        past = {k: v for k in fitting.OPEN_ABOVE if (v := truth["params"].get(k, 0.0)) > 1.0}
+        past = {k: truth["params"][k] for k in fitting.OPEN_ABOVE}
         out.append(
             {
                 "code": "base_at_box_edge",

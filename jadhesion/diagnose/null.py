@@ -11,7 +11,7 @@ wheel speed. What slip error is left is weighted by Orear's effective variance
 **Re-synthesis.** A replica keeps the recording's measured speeds (so its regressors are the
 recording's) and replaces the torque by what a clean Polach wheelset would have needed along a
 "true" creep path: the base fit's adhesion (where the base fit sits at the identification box's
-upper edge in μ0, kA or kS, the fit past that edge, :func:`jadhesion.diagnose.fitting.fit_truth`: the
+upper edge in μ0, the fit past that edge, :func:`jadhesion.diagnose.fitting.fit_truth`: the
 replicas then carry the box's misfit as the recording does) along the speeds ``x̄ + γ (x̂ − x̄)``,
 where ``x̂`` are the latent speeds and ``x̄`` their centred moving average over
 ±:data:`SLOW_HALF_WIDTH_S`. The
