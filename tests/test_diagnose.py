@@ -126,6 +126,10 @@ def test_clean_is_none_and_base_fit(clean):
     assert seen["wheel_radius_error"]["visible"]
     assert seen["wheel_radius_error"]["min_detectable"] < 0.002
     assert "torque offset — a coasting run" in result["explanation"]
+    # clean speed sensors: the fast residual is the torque noise's, within its sampling error
+    power = result["null"]["noise"]["fast_power"]
+    assert 0.9 < power["recording"] / power["torque_noise"] < 1.1, power
+    assert power["recording"] < power["upper95"] < 1.1 * power["recording"], power
 
 
 def test_one_program_per_padded_length(clean):
@@ -258,6 +262,10 @@ def test_warnings_say_what_was_not_tested():
     }
     warnings = {w["code"]: w for w in diagnosis._warnings(result)}
     assert set(warnings) == {"base_not_converged", "candidates_not_tested", "null_at_widest"}
+    power = {"recording": 1.2, "upper95": 1.25, "torque_noise": 1.0, "error_path": 0.14}
+    result["null"]["noise"]["fast_power"] = power
+    said = {w["code"]: w for w in diagnosis._warnings(result)}["null_at_widest"]["message"]
+    assert "1.2× the torque noise's, at most 1.25× at 95 %; the whole error path adds 0.14×" in said
     assert warnings["candidates_not_tested"]["candidates"] == ["rail_change", "load_transfer"]
     assert warnings["candidates_not_tested"]["above_critical"] == ["rail_change"]
     result["null"] = {

@@ -213,13 +213,21 @@ def _warnings(result: dict) -> list:
         )
     noise = result["null"]["noise"]
     if noise is not None and noise["gamma"] == 0.0:
+        power = noise.get("fast_power")
+        said = (
+            f" (its fast residual power is {power['recording'] / power['torque_noise']:.3g}× the torque "
+            f"noise's, at most {power['upper95'] / power['torque_noise']:.3g}× at 95 %; the whole error "
+            f"path adds {power['error_path'] / power['torque_noise']:.3g}×)"
+            if power and power["torque_noise"] > 0
+            else ""
+        )
         out.append(
             {
                 "code": "null_at_widest",
-                "message": "this recording's fast residual is larger than clean replicas reproduce even "
-                "with all latent-speed motion faster than "
-                f"±{null.SLOW_HALF_WIDTH_S:g} s counted as sensor error (γ = 0): the null is at its "
-                f"widest (critical SSE reduction {critical:.0%}), "
+                "message": "clean replicas do not reach this recording's fast residual (its upper 95 % "
+                "bound) even with all latent-speed motion faster than "
+                f"±{null.SLOW_HALF_WIDTH_S:g} s counted as sensor error (γ = 0){said}: the null is at "
+                f"its widest (critical SSE reduction {critical:.0%}), "
                 "and the smallest detectable sizes are large accordingly",
             }
         )

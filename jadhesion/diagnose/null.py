@@ -192,13 +192,17 @@ def error_share(data_power: float, torque_power: float, power_of) -> float:
 
 
 def replicas(torque, measured, vehicle: Vehicle, p_truth, n_replicas: int, seed: int, latent) -> tuple:
-    """``(replica torques [N·m], {"torque": noise model, "gamma": γ})``: measured speeds kept (so
+    """``(replica torques [N·m], {"torque": noise model, "gamma": γ, "fast_power": {...}})``:
+    measured speeds kept (so
     the regressors, the latent speeds and slip sd ``latent = (v̂, v̂_w, sd_w)``, are the
     recording's), torque re-synthesised from the Polach curve ``p_truth`` (the base fit, or where
     that sits at the identification box's edge the fit past it:
     :func:`jadhesion.diagnose.fitting.fit_truth`) along the speeds ``x̄ + γ (x̂ − x̄)``
     with no slip error (module docstring). ``torque``: the recording's; ``measured``: its
-    :class:`Signals` on the latent speeds, whose weights select the samples γ is matched on."""
+    :class:`Signals` on the latent speeds, whose weights select the samples γ is matched on.
+    ``fast_power`` [-, adhesion²] says why γ is what it is: the recording's residual fast power
+    (``recording``) and its upper bound (``upper95``, :func:`fast_power_bound`), the torque
+    noise's (``torque_noise``) and what the whole error path adds at γ = 0 (``error_path``)."""
     torque = np.asarray(torque, float)
     keep = np.asarray(measured.weight) > 0
     t = np.asarray(measured.time)
@@ -215,15 +219,18 @@ def replicas(torque, measured, vehicle: Vehicle, p_truth, n_replicas: int, seed:
 
     mu_fit = path_mu(1.0)
     torque_power = (2.0 * model["sigma"] ** 2 + model["q"] ** 2 / 6.0) / scale**2
-    gamma = error_share(
-        fast_power_bound(np.asarray(measured.adhesion) - mu_fit, keep),
-        torque_power,
-        lambda g: fast_power(path_mu(g) - mu_fit, keep),
-    )
+    residual = np.asarray(measured.adhesion) - mu_fit
+    powers = {
+        "recording": fast_power(residual, keep),
+        "upper95": fast_power_bound(residual, keep),
+        "torque_noise": torque_power,
+        "error_path": fast_power(path_mu(0.0) - mu_fit, keep),
+    }
+    gamma = error_share(powers["upper95"], torque_power, lambda g: fast_power(path_mu(g) - mu_fit, keep))
     clean_torque = (path_mu(gamma) + np.asarray(measured.deriv_mu)) * scale
     rng = np.random.default_rng(seed)
     out = [_noisy(clean_torque, model, rng) for _ in range(n_replicas)]
-    return out, {"torque": model, "gamma": gamma}
+    return out, {"torque": model, "gamma": gamma, "fast_power": powers}
 
 
 def null_statistics(
