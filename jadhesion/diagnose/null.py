@@ -176,7 +176,7 @@ def fast_power_bound(r, keep) -> float:
     :data:`Z_UPPER` standard errors by batch means over :data:`N_BATCHES` contiguous batches
     (robust to the squares' correlation over less than a batch)."""
     x = _fast_squares(r, keep)
-    batches = np.array([b.mean() for b in np.array_split(x, min(N_BATCHES, x.size)) if b.size])
+    batches = np.array([b.mean() for b in np.array_split(x, max(1, min(N_BATCHES, x.size))) if b.size])
     se = batches.std(ddof=1) / np.sqrt(batches.size) if batches.size > 1 else 0.0
     return float(x.mean() + Z_UPPER * se)
 
@@ -193,11 +193,10 @@ def error_share(data_power: float, torque_power: float, power_of) -> float:
 
 def replicas(torque, measured, vehicle: Vehicle, p_truth, n_replicas: int, seed: int, latent) -> tuple:
     """``(replica torques [N·m], {"torque": noise model, "gamma": γ, "fast_power": {...}})``:
-    measured speeds kept (so
-    the regressors, the latent speeds and slip sd ``latent = (v̂, v̂_w, sd_w)``, are the
-    recording's), torque re-synthesised from the Polach curve ``p_truth`` (the base fit, or where
-    that sits at the identification box's edge the fit past it:
-    :func:`jadhesion.diagnose.fitting.fit_truth`) along the speeds ``x̄ + γ (x̂ − x̄)``
+    measured speeds kept (so the regressors, the latent speeds and slip sd
+    ``latent = (v̂, v̂_w, sd_w)``, are the recording's), torque re-synthesised from the Polach
+    curve ``p_truth`` (the base fit, or where that sits at the identification box's edge the fit
+    past it: :func:`jadhesion.diagnose.fitting.fit_truth`) along the speeds ``x̄ + γ (x̂ − x̄)``
     with no slip error (module docstring). ``torque``: the recording's; ``measured``: its
     :class:`Signals` on the latent speeds, whose weights select the samples γ is matched on.
     ``fast_power`` [-, adhesion²] says why γ is what it is: the recording's residual fast power
