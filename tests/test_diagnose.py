@@ -262,12 +262,12 @@ def test_warnings_say_what_was_not_tested():
     }
     warnings = {w["code"]: w for w in diagnosis._warnings(result)}
     assert set(warnings) == {"base_not_converged", "candidates_not_tested", "null_at_widest"}
+    assert warnings["candidates_not_tested"]["candidates"] == ["rail_change", "load_transfer"]
+    assert warnings["candidates_not_tested"]["above_critical"] == ["rail_change"]
     power = {"recording": 1.2, "upper95": 1.25, "torque_noise": 1.0, "error_path": 0.14}
     result["null"]["noise"]["fast_power"] = power
     said = {w["code"]: w for w in diagnosis._warnings(result)}["null_at_widest"]["message"]
     assert "1.2× the torque noise's, at most 1.25× at 95 %; the whole error path adds 0.14×" in said
-    assert warnings["candidates_not_tested"]["candidates"] == ["rail_change", "load_transfer"]
-    assert warnings["candidates_not_tested"]["above_critical"] == ["rail_change"]
     result["null"] = {
         "critical_sse_reduction": 0.95,
         "noise": {"gamma": 0.5},

@@ -65,6 +65,7 @@ import numpy as np
 
 from ..data.creep_state import difference_sd, smooth_creep
 from ..data.vehicle import GRAVITY, Vehicle
+from ..identify.uncertainty import Z90
 from ..status import Status
 from . import extensions as ext
 from . import fitting
@@ -83,8 +84,8 @@ GAMMA_GRID = 1.0 - np.array(
 #: Half-width [s] of the moving average that separates the latent speeds' slow path from their
 #: fast part (what the replicas may treat as regressor error).
 SLOW_HALF_WIDTH_S = 2.0
-#: Batches and one-sided normal quantile of :func:`fast_power_bound` (upper 95 % bound).
-N_BATCHES, Z_UPPER = 40, 1.645
+#: Contiguous batches of :func:`fast_power_bound`.
+N_BATCHES = 40
 #: Signals on a quantisation grid: at least this share of their changes within GRID_TOL of a
 #: multiple of the step.
 GRID_SHARE = 0.9
@@ -173,12 +174,13 @@ def fast_power(r, keep) -> float:
 
 def fast_power_bound(r, keep) -> float:
     """One-sided upper 95 % confidence bound of :func:`fast_power`: the mean plus
-    :data:`Z_UPPER` standard errors by batch means over :data:`N_BATCHES` contiguous batches
-    (robust to the squares' correlation over less than a batch)."""
+    :data:`~jadhesion.identify.uncertainty.Z90` (the normal's 95 % quantile) standard errors by
+    batch means over :data:`N_BATCHES` contiguous batches (robust to the squares' correlation over
+    less than a batch)."""
     x = _fast_squares(r, keep)
     batches = np.array([b.mean() for b in np.array_split(x, max(1, min(N_BATCHES, x.size))) if b.size])
     se = batches.std(ddof=1) / np.sqrt(batches.size) if batches.size > 1 else 0.0
-    return float(x.mean() + Z_UPPER * se)
+    return float(x.mean() + Z90 * se)
 
 
 def error_share(data_power: float, torque_power: float, power_of) -> float:
