@@ -53,6 +53,7 @@ def summary_of(d: dict) -> dict:
         "warnings": [w["code"] for w in d["warnings"]],
         "used": d.get("selection", {}).get("used"),
         "seconds": d["seconds"],
+        "null_error": d["null"]["noise"]["error"] if d["null"]["noise"] else None,
     }
 
 

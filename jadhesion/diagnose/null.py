@@ -63,7 +63,14 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
-from ..data.creep_state import difference_sd, smooth_creep
+from ..data.creep_state import (
+    COAST_ADHESION,
+    COAST_MIN_SAMPLES,
+    coasting_sd_scale,
+    difference_sd,
+    smooth_creep,
+)
+from ..data.segments import MIN_SPEED
 from ..data.vehicle import GRAVITY, Vehicle
 from ..identify.uncertainty import Z90
 from ..status import Status
@@ -84,6 +91,8 @@ GAMMA_GRID = 1.0 - np.array(
 #: Half-width [s] of the moving average that separates the latent speeds' slow path from their
 #: fast part (what the replicas may treat as regressor error).
 SLOW_HALF_WIDTH_S = 2.0
+#: Longest lag [s] of the coasting error's autocorrelation (:func:`error_autocorrelation`).
+ERROR_MAX_LAG_S = 4.0
 #: Contiguous batches of :func:`fast_power_bound`.
 N_BATCHES = 40
 #: Signals on a quantisation grid: at least this share of their changes within GRID_TOL of a
@@ -193,6 +202,59 @@ def error_share(data_power: float, torque_power: float, power_of) -> float:
     return 0.0
 
 
+def coasting_error(latent, adhesion) -> dict | None:
+    """The smoothed slip's error as the recording's coasting shows it, or None with fewer than
+    :data:`~jadhesion.data.creep_state.COAST_MIN_SAMPLES` coasting samples: ``{"scale", "samples", "z",
+    "runs"}``: the factor by which the smoother's slip sd understates it
+    (:func:`jadhesion.data.creep_state.coasting_sd_scale`), the coasting samples, and the
+    standardised error ``z = (ŵ − c μ̂ |v|)/sd`` (the true coasting slip ``c μ̂ |v|`` fitted and
+    removed as there).
+    ``latent = (v̂, v̂_w, sd_w)`` [m/s]; ``adhesion`` μ̂ [-]. Returns ``z`` (n,), 0 off coasting,
+    and the coasting ``runs`` [start, stop) for :func:`error_autocorrelation`."""
+    v, vw, sd = (np.asarray(x, float) for x in latent)
+    mu = np.asarray(adhesion, float)
+    w = vw - v
+    scale, count = (float(x) for x in coasting_sd_scale(w, sd, mu, v))
+    coast = (np.abs(v) >= MIN_SPEED) & (np.abs(mu) < COAST_ADHESION) & (sd > 0)
+    if coast.sum() < COAST_MIN_SAMPLES:
+        return None
+    x, y = mu[coast] * np.abs(v[coast]), w[coast]
+    c = float(np.dot(x, y) / np.dot(x, x)) if np.dot(x, x) > 0 else 0.0
+    z = np.where(coast, (w - c * mu * np.abs(v)) / np.where(coast, sd, 1.0), 0.0)
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], coast.astype(int), [0]])))
+    return {
+        "scale": scale,
+        "samples": int(count),
+        "z": z,
+        "runs": list(zip(edges[::2], edges[1::2], strict=True)),
+    }
+
+
+def error_autocorrelation(z, runs, max_lag: int) -> np.ndarray:
+    """Autocorrelation (max_lag + 1,) of ``z`` pooled over pairs within each run ``[a, b)``."""
+    num, cnt = np.zeros(max_lag + 1), np.zeros(max_lag + 1)
+    for a, b in runs:
+        seg = z[a:b]
+        for k in range(min(max_lag + 1, seg.size)):
+            num[k] += np.dot(seg[: seg.size - k], seg[k:])
+            cnt[k] += seg.size - k
+    acov = np.where(cnt > 0, num / np.maximum(cnt, 1), 0.0)
+    return acov / acov[0]
+
+
+def gaussian_paths(rho, n: int, n_paths: int, rng) -> list:
+    """Stationary Gaussian paths (n,) of unit variance with autocorrelation ``rho`` (lags 0…K,
+    Bartlett-tapered, 0 beyond) by circulant embedding (the spectrum clipped at 0)."""
+    k = rho.size - 1
+    taper = rho * (1.0 - np.arange(k + 1) / (k + 1))
+    m = 1 << int(np.ceil(np.log2(2 * (n + k))))
+    c = np.zeros(m)
+    c[: k + 1] = taper
+    c[m - k :] = taper[1:][::-1]
+    root = np.sqrt(np.maximum(np.fft.rfft(c).real, 0.0))
+    return [np.fft.irfft(root * np.fft.rfft(rng.standard_normal(m)), n=m)[:n] for _ in range(n_paths)]
+
+
 def replicas(torque, measured, vehicle: Vehicle, p_truth, n_replicas: int, seed: int, latent) -> tuple:
     """``(replica torques [N·m], {"torque": noise model, "gamma": γ, "fast_power": {...}})``:
     measured speeds kept (so the regressors, the latent speeds and slip sd
@@ -228,10 +290,26 @@ def replicas(torque, measured, vehicle: Vehicle, p_truth, n_replicas: int, seed:
         "error_path": fast_power(path_mu(0.0) - mu_fit, keep),
     }
     gamma = error_share(powers["upper95"], torque_power, lambda g: fast_power(path_mu(g) - mu_fit, keep))
-    clean_torque = (path_mu(gamma) + np.asarray(measured.deriv_mu)) * scale
     rng = np.random.default_rng(seed)
-    out = [_noisy(clean_torque, model, rng) for _ in range(n_replicas)]
-    return out, {"torque": model, "gamma": gamma, "fast_power": powers}
+    coast = coasting_error(latent, measured.adhesion)
+    if coast is not None:
+        max_lag = max(1, int(round(ERROR_MAX_LAG_S / float(np.median(np.diff(t))))))
+        rho = error_autocorrelation(coast["z"], coast["runs"], max_lag)
+        clean_torque = (path_mu(1.0) + np.asarray(measured.deriv_mu)) * scale
+        out = []
+        for z in gaussian_paths(rho, t.size, n_replicas, rng):
+            vw = latent[1] + coast["scale"] * latent[2] * z
+            out.append((_noisy(clean_torque, model, rng), (latent[0], vw, latent[2])))
+        info = {
+            "source": "coasting",
+            "samples": coast["samples"],
+            "scale": coast["scale"],
+            "rho_1s": float(rho[min(max_lag, int(round(1.0 / float(np.median(np.diff(t))))))]),
+        }
+        return out, {"torque": model, "gamma": None, "fast_power": powers, "error": info}
+    clean_torque = (path_mu(gamma) + np.asarray(measured.deriv_mu)) * scale
+    out = [(_noisy(clean_torque, model, rng), latent) for _ in range(n_replicas)]
+    return out, {"torque": model, "gamma": gamma, "fast_power": powers, "error": {"source": "fast_part"}}
 
 
 def null_statistics(
@@ -259,16 +337,18 @@ def null_statistics(
     are fitted on :func:`workers` threads (XLA runs them in parallel; the results are those of
     one after another).
     """
-    build = torque_builder(columns, vehicle, mask=mask, regressors=latent)
     torque = columns["traction_torque"]
-    torques, model = replicas(torque, build(torque), vehicle, p_truth, n_replicas, seed, latent)
+    measured = torque_builder(columns, vehicle, mask=mask, regressors=latent)(torque)
+    draws, model = replicas(torque, measured, vehicle, p_truth, n_replicas, seed, latent)
 
-    def fit(replica_torque):
-        sse, status = _fit_replica(*rows, fitting.pad_signals(build(replica_torque, tau_heat)), n_valid)
+    def fit(draw):
+        replica_torque, regressors = draw
+        sig = torque_builder(columns, vehicle, mask=mask, regressors=regressors)(replica_torque, tau_heat)
+        sse, status = _fit_replica(*rows, fitting.pad_signals(sig), n_valid)
         return statistic(merge({"sse": np.array(sse), "status": np.array(status)}), converged_only=False)
 
     with ThreadPoolExecutor(workers(n_replicas)) as pool:
-        stats = list(pool.map(fit, torques))
+        stats = list(pool.map(fit, draws))
     return np.array(stats), model
 
 
