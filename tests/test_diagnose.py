@@ -175,6 +175,33 @@ def test_threaded_null_equals_one_replica_after_another(clean, monkeypatch):
     np.testing.assert_array_equal(threaded, serial)
 
 
+def test_replicas_draw_a_fresh_error_path_where_the_recording_coasts(clean):
+    """Without coasting every replica's regressors are the latent speeds (the fixed path, γ
+    matched); with 300 coasting samples (torque off) each replica's wheel speed carries its own
+    error path of the coasting-scaled slip sd (unit variance in those units, pooled over 4 replicas
+    within 35 %), drawn afresh per replica, and γ is not used."""
+    cols = _raw(clean)
+    latent = null.latent_speeds(cols, clean.vehicle)
+    sig = from_columns(cols, clean.vehicle, regressors=latent)
+    p_base, _ = fitting.fit_base(fitting.pad_signals(sig), N)
+    build = torque_builder(cols, clean.vehicle, regressors=latent)
+    torque = np.asarray(cols["traction_torque"], float)
+    draws, info = null.replicas(torque, build(torque), clean.vehicle, p_base, 4, 0, latent)
+    assert info["error"] == {"source": "fast_part"} and info["gamma"] is not None
+    assert all(regressors is latent for _, regressors in draws)
+    coasting = torque.copy()
+    coasting[600:900] = 0.0
+    draws, info = null.replicas(coasting, build(coasting), clean.vehicle, p_base, 4, 0, latent)
+    assert info["error"]["source"] == "coasting" and info["gamma"] is None
+    assert info["error"]["coasting_samples"] >= 250, info
+    assert all(regressors[0] is latent[0] for _, regressors in draws)
+    z = np.array([(reg[1] - latent[1]) / (info["error"]["sd_scale"] * latent[2]) for _, reg in draws])
+    assert abs(np.mean(z**2) - 1.0) < 0.35, np.mean(z**2)
+    # drawn afresh: not one shared path (smooth paths over 1 500 samples have few independent
+    # stretches, so sample correlations of independent draws reach ±0.35 here)
+    assert np.max(np.abs(np.corrcoef(z)[np.triu_indices(4, 1)])) < 0.8
+
+
 def test_heat_filter_starts_at_first_sample(clean):
     """The thermal regressor uses the exact FOH low-pass from the first sample, not from rest."""
     sig = from_columns(_raw(clean), clean.vehicle)
@@ -436,6 +463,50 @@ def test_fast_power_bound_covers_the_true_power(rho):
             r[i] = rho * r[i - 1] + e[i]
         covered += null.fast_power_bound(r, keep) >= true
     assert abs(covered / 400 - 0.95) < 3 * np.sqrt(0.05 * 0.95 / 400)
+
+
+def _ar1(rng, n, rho):
+    """A unit-variance AR(1) series of n samples."""
+    x = np.empty(n)
+    x[0] = rng.standard_normal()
+    e = rng.standard_normal(n) * np.sqrt(1.0 - rho * rho)
+    for i in range(1, n):
+        x[i] = rho * x[i - 1] + e[i]
+    return x
+
+
+def test_error_autocorrelation_pools_runs_and_paths_reproduce_it():
+    """The autocorrelation pooled over pairs within runs recovers an AR(1)'s ρᵏ (30 runs of 200
+    samples: sd of a lag-k estimate ≈ √((1 + ρ²)/(1 − ρ²)/6 000) ≈ 0.04 at ρ = 0.9); paths drawn
+    with it have unit variance and the same autocorrelation (40 paths of 4 000 samples)."""
+    rng = np.random.default_rng(8)
+    rho, lags = 0.9, np.arange(9)
+    z = np.concatenate([np.concatenate([_ar1(rng, 200, rho), np.zeros(50)]) for _ in range(30)])
+    runs = [(250 * i, 250 * i + 200) for i in range(30)]
+    est = null.error_autocorrelation(z, runs, 40)
+    np.testing.assert_allclose(est[lags], rho**lags, atol=0.12)
+    paths = np.array(null.gaussian_paths(est, 4000, 40, rng))
+    assert abs(np.mean(paths**2) - 1.0) < 0.1
+    got = [np.mean(paths[:, k:] * paths[:, : paths.shape[1] - k]) for k in lags]
+    np.testing.assert_allclose(got, est[lags] * (1.0 - lags / 41.0), atol=0.06)
+
+
+def test_coasting_error_needs_coasting_and_measures_the_understatement():
+    """Without coasting samples there is no coasting error model; with a coasting stretch whose
+    smoothed slip is an AR(1) error 3× the smoother's sd, the scale is 3 (within 15 %: ~600
+    correlated samples) and z is the error over that sd."""
+    rng = np.random.default_rng(9)
+    n = 3000
+    v = np.full(n, 5.0)
+    sd = np.full(n, 1e-3)
+    mu = np.full(n, 0.2)
+    err = 3e-3 * _ar1(rng, n, 0.8)
+    assert null.coasting_error((v, v + 0.01 + err, sd), mu) is None
+    mu[1000:1600] = 0.0
+    model = null.coasting_error((v, v + err, sd), mu)
+    assert model["samples"] == 600 and model["runs"] == [(1000, 1600)]
+    assert abs(model["scale"] / 3.0 - 1.0) < 0.15, model["scale"]
+    np.testing.assert_allclose(model["z"][1000:1600], err[1000:1600] / 1e-3)
 
 
 def test_error_share_gives_the_replicas_all_error_the_data_allow():

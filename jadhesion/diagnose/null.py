@@ -8,42 +8,52 @@ white sensor noise is mostly removed from the creep before it meets Polach's ste
 wheel speed. What slip error is left is weighted by Orear's effective variance
 (:func:`jadhesion.diagnose.fitting.eiv_weights`), the same weights in recording and replicas.
 
-**Re-synthesis.** A replica keeps the recording's measured speeds (so its regressors are the
-recording's) and replaces the torque by what a clean Polach wheelset would have needed along a
-"true" creep path: the base fit's adhesion (where the base fit sits at the identification box's
-upper edge in μ0, the fit past that edge, :func:`jadhesion.diagnose.fitting.fit_truth`: the
-replicas then carry the box's misfit as the recording does) along the speeds ``x̄ + γ (x̂ − x̄)``,
-where ``x̂`` are the latent speeds and ``x̄`` their centred moving average over
-±:data:`SLOW_HALF_WIDTH_S`. The
-regressor then differs from the replica's truth by ``(1 − γ)(x̂ − x̄)``: *classical* errors in
-variables (the truth is the smoother, slower path; the regressor scatters about it), which dilute
-Polach's slope and push an intercept into the fits as the recording's own sensor errors do. (A truth
-scattered about the regressor instead — Berkson errors — leaves the slope undiluted: such replicas
-gave radius/offset statistics 20× and more below the recording's on an effect-free recording of our
-simulator at realistic sensor noise.) γ ∈ [0, 1] is the largest value on :data:`GAMMA_GRID` whose
-replica residual *fast* power about the base fit (its first difference, :func:`fast_power`) reaches
-the upper 95 % confidence bound of the recording's own (:func:`fast_power_bound`,
-:func:`error_share`): the regressors' remaining error is not observable, and γ gives the replicas
-as much as the recording's fast residual allows. (Matched on the estimate itself, γ was a coin toss
-wherever the error's whole fast power lies within the estimate's sampling error, ~3 % at 2 000
-samples: on two clean wet recordings of ours γ came out 1, replicas without errors in variables,
-and the radius error's 4–7 % SSE reduction was named against a critical value of 0.4 %.)
-(Matched on the whole residual power instead, a concealed slow effect raised γ's error to its
-maximum and the null swallowed effects of any size: a 33 % rail change got p = 1.)
-The torque follows the wheelset dynamics along
-the latent wheel speed, ``T/(m g r) = μ_base + J ω̂̇/(m g r)``, plus torque noise drawn from the
-model estimated on the recording (:func:`noise_model`: white level σ, quantisation step q); the
-target, whose ``J ω̇`` is the same latent derivative in recording and replica
+**Re-synthesis** (without coasting; with it, below). A replica keeps the recording's measured speeds
+(so its regressors are the recording's) and replaces the torque by what a clean Polach wheelset
+would have needed along a "true" creep path: the base fit's adhesion (where the base fit sits at the
+identification box's upper edge in μ0, the fit past that edge,
+:func:`jadhesion.diagnose.fitting.fit_truth`: the replicas then carry the box's misfit as the
+recording does) along the speeds ``x̄ + γ (x̂ − x̄)``, where ``x̂`` are the latent speeds and ``x̄``
+their centred moving average over ±:data:`SLOW_HALF_WIDTH_S`. The regressor then differs from the
+replica's truth by ``(1 − γ)(x̂ − x̄)``: *classical* errors in variables (the truth is the smoother,
+slower path; the regressor scatters about it), which dilute Polach's slope and push an intercept
+into the fits as the recording's own sensor errors do. (A truth scattered about the regressor
+instead — Berkson errors — leaves the slope undiluted: such replicas gave radius/offset statistics
+20× and more below the recording's on an effect-free recording of our simulator at realistic sensor
+noise.) γ ∈ [0, 1] is the largest value on :data:`GAMMA_GRID` whose replica residual *fast* power
+about the base fit (its first difference, :func:`fast_power`) reaches the upper 95 % confidence
+bound of the recording's own (:func:`fast_power_bound`, :func:`error_share`): the regressors'
+remaining error is not observable, and γ gives the replicas as much as the recording's fast residual
+allows. (Matched on the estimate itself, γ was a coin toss wherever the error's whole fast power
+lies within the estimate's sampling error, ~3 % at 2 000 samples: on two clean wet recordings of
+ours γ came out 1, replicas without errors in variables, and the radius error's 4–7 % SSE reduction
+was named against a critical value of 0.4 %.) (Matched on the whole residual power instead, a
+concealed slow effect raised γ's error to its maximum and the null swallowed effects of any size: a
+33 % rail change got p = 1.) The torque follows the wheelset dynamics along the latent wheel speed,
+``T/(m g r) = μ_base + J ω̂̇/(m g r)``, plus torque noise drawn from the model estimated on the
+recording (:func:`noise_model`: white level σ, quantisation step q); the target, whose ``J ω̇`` is
+the same latent derivative in recording and replica
 (:func:`jadhesion.diagnose.signals.from_columns`), is then ``μ_base`` + torque noise. The replicas
-share the recording's errors-in-variables weights (the ``mask`` of :func:`null_statistics`).
-Limits (measured in
-``benchmarks/results/diagnose_null_final.json`` and ``diagnose_blind_n20.json``): the regressor
-error of a replica is one fixed path, so replicas differ only by their torque noise (a narrow null);
-sensor noise correlated over longer than the window (the foreign generator's AR noise, τ 0.1–2 s) is
-only partly represented (1 false alarm in 8 clean foreign recordings); and on our simulator's
-recordings at realistic noise the data's fast residual power exceeded the replicas' even at γ = 0 on
-every one of 20 recordings, so the null was at its most conservative there: no false alarm in 8
-clean recordings, but only 1 of 16 concealed single effects named.
+share the recording's errors-in-variables weights (the ``mask`` of :func:`null_statistics`). The
+regressor error of such a replica is one fixed path, so replicas differ only by their torque noise:
+where the error path dominates the residual (the independent generator's coloured sensor noise, 3–6
+850× the torque noise's fast power), the 19 replicas give nearly one statistic, which the
+recording's own error realisation beats about as often as not.
+
+**Where the recording coasts** (:func:`coasting_error`: at least
+:data:`~jadhesion.data.creep_state.COAST_MIN_SAMPLES` samples moving with ``|μ̂|`` below
+:data:`~jadhesion.data.creep_state.COAST_ADHESION`), the true slip is a small known fraction of the
+sensors' noise, so the smoothed slip there *is* its error: its level against the smoother's sd
+(:func:`jadhesion.data.creep_state.coasting_sd_scale`, 1.0–8.3× on the independent generator) and
+its autocorrelation (:func:`error_autocorrelation`, pooled within the coasting runs, lags up to
+:data:`ERROR_MAX_LAG_S`) are measured on this recording. Each replica then takes the latent speeds
+as its truth and as its regressor wheel speed ``v̂_w + scale · sd_w · z_r``, ``z_r`` a fresh
+stationary Gaussian path with that autocorrelation (:func:`gaussian_paths`): classical errors in
+variables of the measured size and colour, drawn afresh per replica (γ is not used). Measured
+(``benchmarks/results/diagnose_null_*_coast.json``, 2026-11-28): 55 of the independent
+generator's 96 clean recordings (three seeds) coast, and its false alarms went 11 → 8 of 96; six
+of the eight left do not coast (five starts, a sweep). Our simulator's recordings never coast,
+so their null is unchanged.
 
 **Test.** The statistic of candidate c is its in-sample relative reduction of the sum of squares
 against the base fit, ``T_c = 1 − SSE_c/SSE_0`` (no cross-validation folds in the null: the
@@ -256,20 +266,25 @@ def gaussian_paths(rho, n: int, n_paths: int, rng) -> list:
 
 
 def replicas(torque, measured, vehicle: Vehicle, p_truth, n_replicas: int, seed: int, latent) -> tuple:
-    """``(replica torques [N·m], {"torque": noise model, "gamma": γ, "fast_power": {...}})``:
-    measured speeds kept (so the regressors, the latent speeds and slip sd
-    ``latent = (v̂, v̂_w, sd_w)``, are the recording's), torque re-synthesised from the Polach
-    curve ``p_truth`` (the base fit, or where that sits at the identification box's edge the fit
-    past it: :func:`jadhesion.diagnose.fitting.fit_truth`) along the speeds ``x̄ + γ (x̂ − x̄)``
-    with no slip error (module docstring). ``torque``: the recording's; ``measured``: its
-    :class:`Signals` on the latent speeds, whose weights select the samples γ is matched on.
-    ``fast_power`` [-, adhesion²] says why γ is what it is: the recording's residual fast power
+    """``([(torque [N·m], regressors (v, v_w, sd_w) [m/s])] × R, {"torque": noise model, "gamma",
+    "fast_power", "error"})``: each replica's torque, re-synthesised from the Polach curve
+    ``p_truth`` (the base fit, or where that sits at the identification box's edge the fit past
+    it: :func:`jadhesion.diagnose.fitting.fit_truth`) plus the recording's torque noise, and the
+    regressors its fits take (module docstring). Where the recording coasts
+    (:func:`coasting_error`), the truth is the latent speeds ``latent = (v̂, v̂_w, sd_w)`` and each
+    replica's regressor wheel speed carries a fresh error path with the coasting error's level and
+    autocorrelation (``gamma`` None; ``error``: ``source`` "coasting", ``coasting_samples``,
+    ``sd_scale``, ``autocorrelation_1s``); otherwise the regressors are the latent speeds and the
+    truth the speeds ``x̄ + γ (x̂ − x̄)`` (``error.source`` "fast_part"). ``torque``: the
+    recording's; ``measured``: its :class:`Signals` on the latent speeds, whose weights select the
+    samples γ is matched on. ``fast_power`` [-, adhesion²]: the recording's residual fast power
     (``recording``) and its upper bound (``upper95``, :func:`fast_power_bound`), the torque
-    noise's (``torque_noise``) and what the whole error path adds at γ = 0 (``error_path``)."""
+    noise's (``torque_noise``) and what the whole fixed error path adds at γ = 0 (``error_path``)."""
     torque = np.asarray(torque, float)
     keep = np.asarray(measured.weight) > 0
     t = np.asarray(measured.time)
-    half = max(1, int(round(SLOW_HALF_WIDTH_S / float(np.median(np.diff(t))))))
+    dt = float(np.median(np.diff(t)))
+    half = max(1, int(round(SLOW_HALF_WIDTH_S / dt)))
     slow = [local_mean(x, half) for x in latent[:2]]
     scale = vehicle.axle_load_kg * GRAVITY * vehicle.wheel_radius_m
     none = np.zeros(ext.N_EXTRA, bool)
@@ -289,27 +304,30 @@ def replicas(torque, measured, vehicle: Vehicle, p_truth, n_replicas: int, seed:
         "torque_noise": torque_power,
         "error_path": fast_power(path_mu(0.0) - mu_fit, keep),
     }
-    gamma = error_share(powers["upper95"], torque_power, lambda g: fast_power(path_mu(g) - mu_fit, keep))
     rng = np.random.default_rng(seed)
+    deriv = np.asarray(measured.deriv_mu)
     coast = coasting_error(latent, measured.adhesion)
-    if coast is not None:
-        max_lag = max(1, int(round(ERROR_MAX_LAG_S / float(np.median(np.diff(t))))))
-        rho = error_autocorrelation(coast["z"], coast["runs"], max_lag)
-        clean_torque = (path_mu(1.0) + np.asarray(measured.deriv_mu)) * scale
-        out = []
-        for z in gaussian_paths(rho, t.size, n_replicas, rng):
-            vw = latent[1] + coast["scale"] * latent[2] * z
-            out.append((_noisy(clean_torque, model, rng), (latent[0], vw, latent[2])))
-        info = {
-            "source": "coasting",
-            "samples": coast["samples"],
-            "scale": coast["scale"],
-            "rho_1s": float(rho[min(max_lag, int(round(1.0 / float(np.median(np.diff(t))))))]),
-        }
-        return out, {"torque": model, "gamma": None, "fast_power": powers, "error": info}
-    clean_torque = (path_mu(gamma) + np.asarray(measured.deriv_mu)) * scale
-    out = [(_noisy(clean_torque, model, rng), latent) for _ in range(n_replicas)]
-    return out, {"torque": model, "gamma": gamma, "fast_power": powers, "error": {"source": "fast_part"}}
+    if coast is None:
+        gamma = error_share(powers["upper95"], torque_power, lambda g: fast_power(path_mu(g) - mu_fit, keep))
+        clean_torque = (path_mu(gamma) + deriv) * scale
+        draws = [(_noisy(clean_torque, model, rng), latent) for _ in range(n_replicas)]
+        error = {"source": "fast_part"}
+        return draws, {"torque": model, "gamma": gamma, "fast_power": powers, "error": error}
+    max_lag = max(1, int(round(ERROR_MAX_LAG_S / dt)))
+    rho = error_autocorrelation(coast["z"], coast["runs"], max_lag)
+    clean_torque = (mu_fit + deriv) * scale
+    sd = coast["scale"] * np.asarray(latent[2], float)
+    draws = [
+        (_noisy(clean_torque, model, rng), (latent[0], latent[1] + sd * z, latent[2]))
+        for z in gaussian_paths(rho, t.size, n_replicas, rng)
+    ]
+    error = {
+        "source": "coasting",
+        "coasting_samples": coast["samples"],
+        "sd_scale": coast["scale"],
+        "autocorrelation_1s": float(rho[min(max_lag, int(round(1.0 / dt)))]),
+    }
+    return draws, {"torque": model, "gamma": None, "fast_power": powers, "error": error}
 
 
 def null_statistics(
@@ -332,18 +350,23 @@ def null_statistics(
     ``merge(table) -> table`` the same post-processing (best radius start); ``tau_heat`` the
     thermal lag picked on the recording; ``mask`` its fit weights (> 0 on the selected samples);
     ``latent`` its :func:`latent_speeds`; ``p_truth`` the curve the replicas are re-synthesised
-    from (:func:`replicas`). The replicas differ from the recording only in their
-    torque, so their signals share everything the speeds determine (:func:`torque_builder`); they
-    are fitted on :func:`workers` threads (XLA runs them in parallel; the results are those of
+    from (:func:`replicas`). Each replica's signals are built from its torque and regressors
+    (:func:`torque_builder`, the recording's weights ``mask``); they are fitted on
+    :func:`workers` threads (XLA runs them in parallel; the results are those of
     one after another).
     """
     torque = columns["traction_torque"]
-    measured = torque_builder(columns, vehicle, mask=mask, regressors=latent)(torque)
-    draws, model = replicas(torque, measured, vehicle, p_truth, n_replicas, seed, latent)
+    on_latent = torque_builder(columns, vehicle, mask=mask, regressors=latent)
+    draws, model = replicas(torque, on_latent(torque), vehicle, p_truth, n_replicas, seed, latent)
 
     def fit(draw):
         replica_torque, regressors = draw
-        sig = torque_builder(columns, vehicle, mask=mask, regressors=regressors)(replica_torque, tau_heat)
+        build = (
+            on_latent
+            if regressors is latent
+            else torque_builder(columns, vehicle, mask=mask, regressors=regressors)
+        )
+        sig = build(replica_torque, tau_heat)
         sse, status = _fit_replica(*rows, fitting.pad_signals(sig), n_valid)
         return statistic(merge({"sse": np.array(sse), "status": np.array(status)}), converged_only=False)
 

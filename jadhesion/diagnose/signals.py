@@ -97,14 +97,6 @@ def from_columns(
     return torque_builder(columns, vehicle, name, mask, regressors)(columns["traction_torque"])
 
 
-def inertia_mu(time, wheel_speed, vehicle: Vehicle) -> np.ndarray:
-    """``J ω̇/(m g r)`` [-] of a wheel speed [m/s] by central differences, unfiltered (the target's
-    wheel-acceleration term on latent speeds, :func:`from_columns`)."""
-    scale = vehicle.axle_load_kg * GRAVITY * vehicle.wheel_radius_m
-    omega_dot = np.gradient(np.asarray(wheel_speed, float), np.asarray(time, float)) / vehicle.wheel_radius_m
-    return vehicle.wheelset_inertia_kgm2 * omega_dot / scale
-
-
 def torque_builder(columns: dict, vehicle: Vehicle, name: str = "recording", mask=None, regressors=None):
     """``build(torque [N·m], thermal_lag=THERMAL_LAG_S) -> Signals``: :func:`from_columns` with
     everything the speeds determine (observer derivative, slip, acceleration, weights, ``k_eps``)
@@ -133,7 +125,7 @@ def torque_builder(columns: dict, vehicle: Vehicle, name: str = "recording", mas
     deriv_mu, slip_sd = observer_deriv, np.zeros(t.size)
     if regressors is not None:
         v, vw, slip_sd = (np.asarray(x, float) for x in regressors)
-        deriv_mu = inertia_mu(t, vw, vehicle)
+        deriv_mu = vehicle.wheelset_inertia_kgm2 * np.gradient(vw, t) / (vehicle.wheel_radius_m * scale)
     slip = np.abs(np.asarray(kinematics.slip_velocity(vw, v)))
     dt = float(np.median(np.diff(t)))
     f = jnp.asarray
