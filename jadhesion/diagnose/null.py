@@ -74,13 +74,12 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 
 from ..data.creep_state import (
-    COAST_ADHESION,
     COAST_MIN_SAMPLES,
+    coasting_residual,
     coasting_sd_scale,
     difference_sd,
     smooth_creep,
 )
-from ..data.segments import MIN_SPEED
 from ..data.vehicle import GRAVITY, Vehicle
 from ..identify.uncertainty import Z90
 from ..status import Status
@@ -213,31 +212,22 @@ def error_share(data_power: float, torque_power: float, power_of) -> float:
 
 
 def coasting_error(latent, adhesion) -> dict | None:
-    """The smoothed slip's error as the recording's coasting shows it, or None with fewer than
-    :data:`~jadhesion.data.creep_state.COAST_MIN_SAMPLES` coasting samples: ``{"scale", "samples", "z",
-    "runs"}``: the factor by which the smoother's slip sd understates it
-    (:func:`jadhesion.data.creep_state.coasting_sd_scale`), the coasting samples, and the
-    standardised error ``z = (ŵ − c μ̂ |v|)/sd`` (the true coasting slip ``c μ̂ |v|`` fitted and
-    removed as there).
-    ``latent = (v̂, v̂_w, sd_w)`` [m/s]; ``adhesion`` μ̂ [-]. Returns ``z`` (n,), 0 off coasting,
-    and the coasting ``runs`` [start, stop) for :func:`error_autocorrelation`."""
+    """The smoothed slip's error as the recording's coasting shows it
+    (:func:`jadhesion.data.creep_state.coasting_residual`), or None with fewer than
+    :data:`~jadhesion.data.creep_state.COAST_MIN_SAMPLES` coasting samples: ``{"scale", "samples",
+    "z", "runs"}``, the factor by which the smoother's slip sd understates it
+    (:func:`jadhesion.data.creep_state.coasting_sd_scale`), the coasting samples, the
+    standardised error ``z`` (n,) (0 off coasting) and the coasting runs ``[start, stop)`` for
+    :func:`error_autocorrelation`. ``latent = (v̂, v̂_w, sd_w)`` [m/s]; ``adhesion`` μ̂ [-]."""
     v, vw, sd = (np.asarray(x, float) for x in latent)
-    mu = np.asarray(adhesion, float)
-    w = vw - v
-    scale, count = (float(x) for x in coasting_sd_scale(w, sd, mu, v))
-    coast = (np.abs(v) >= MIN_SPEED) & (np.abs(mu) < COAST_ADHESION) & (sd > 0)
-    if coast.sum() < COAST_MIN_SAMPLES:
+    args = (vw - v, sd, np.asarray(adhesion, float), v)
+    scale, count = (float(x) for x in coasting_sd_scale(*args))
+    if count < COAST_MIN_SAMPLES:
         return None
-    x, y = mu[coast] * np.abs(v[coast]), w[coast]
-    c = float(np.dot(x, y) / np.dot(x, x)) if np.dot(x, x) > 0 else 0.0
-    z = np.where(coast, (w - c * mu * np.abs(v)) / np.where(coast, sd, 1.0), 0.0)
+    coast, z = (np.asarray(x) for x in coasting_residual(*args))
     edges = np.flatnonzero(np.diff(np.concatenate([[0], coast.astype(int), [0]])))
-    return {
-        "scale": scale,
-        "samples": int(count),
-        "z": z,
-        "runs": list(zip(edges[::2], edges[1::2], strict=True)),
-    }
+    runs = list(zip(edges[::2], edges[1::2], strict=True))
+    return {"scale": scale, "samples": int(count), "z": z, "runs": runs}
 
 
 def error_autocorrelation(z, runs, max_lag: int) -> np.ndarray:
