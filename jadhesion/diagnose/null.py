@@ -36,8 +36,8 @@ the same latent derivative in recording and replica
 (:func:`jadhesion.diagnose.signals.from_columns`), is then ``μ_base`` + torque noise. The replicas
 share the recording's errors-in-variables weights (the ``mask`` of :func:`null_statistics`). The
 regressor error of such a replica is one fixed path, so replicas differ only by their torque noise:
-where the error path dominates the residual (the independent generator's coloured sensor noise, 3–6
-850× the torque noise's fast power), the 19 replicas give nearly one statistic, which the
+where the error path dominates the residual (the independent generator's coloured sensor noise,
+3 to 6 850× the torque noise's fast power), the 19 replicas give nearly one statistic, which the
 recording's own error realisation beats about as often as not.
 
 **Where the recording coasts** (:func:`coasting_error`: at least
@@ -47,7 +47,7 @@ sensors' noise, so the smoothed slip there *is* its error: its level against the
 (:func:`jadhesion.data.creep_state.coasting_sd_scale`, 1.0–8.3× on the independent generator) and
 its autocorrelation (:func:`error_autocorrelation`, pooled within the coasting runs, lags up to
 :data:`ERROR_MAX_LAG_S`) are measured on this recording. Each replica then takes the latent speeds
-as its truth and as its regressor wheel speed ``v̂_w + scale · sd_w · z_r``, ``z_r`` a fresh
+as its truth and, as its regressor wheel speed, ``v̂_w + scale · sd_w · z_r``, ``z_r`` a fresh
 stationary Gaussian path with that autocorrelation (:func:`gaussian_paths`): classical errors in
 variables of the measured size and colour, drawn afresh per replica (γ is not used). Measured
 (``benchmarks/results/diagnose_null_*_coast.json``, 2026-11-28): 55 of the independent
