@@ -280,7 +280,12 @@ def coasting_sd_scale(slip, slip_sd, adhesion, vehicle_speed, valid=None):
     On the independent generator's recordings with coasting (16 of 20 clean, mild and realistic
     sensors, 20–200 Hz) the true understatement was 1.35–4.4× and this scale 1.17–5.4×: true over
     estimated 0.80–1.49, median 0.97."""
-    coast, z = coasting_residual(slip, slip_sd, adhesion, vehicle_speed, valid)
+    return coasting_scale(*coasting_residual(slip, slip_sd, adhesion, vehicle_speed, valid))
+
+
+def coasting_scale(coast, z):
+    """``(scale, samples)`` of :func:`coasting_sd_scale` from :func:`coasting_residual`'s coasting
+    samples and standardised errors (for a caller that needs both). Traceable."""
     count = jnp.sum(coast)
     scale = jnp.sqrt(jnp.nanmedian(jnp.where(coast, z * z, jnp.nan)) / _CHI2_1_MEDIAN)
     return jnp.where(count >= COAST_MIN_SAMPLES, jnp.maximum(scale, 1.0), 1.0), count

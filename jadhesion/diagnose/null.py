@@ -76,7 +76,7 @@ import numpy as np
 from ..data.creep_state import (
     COAST_MIN_SAMPLES,
     coasting_residual,
-    coasting_sd_scale,
+    coasting_scale,
     difference_sd,
     smooth_creep,
 )
@@ -216,15 +216,15 @@ def coasting_error(latent, adhesion) -> dict | None:
     (:func:`jadhesion.data.creep_state.coasting_residual`), or None with fewer than
     :data:`~jadhesion.data.creep_state.COAST_MIN_SAMPLES` coasting samples: ``{"scale", "samples",
     "z", "runs"}``, the factor by which the smoother's slip sd understates it
-    (:func:`jadhesion.data.creep_state.coasting_sd_scale`), the coasting samples, the
+    (:func:`jadhesion.data.creep_state.coasting_scale`), the coasting samples, the
     standardised error ``z`` (n,) (0 off coasting) and the coasting runs ``[start, stop)`` for
     :func:`error_autocorrelation`. ``latent = (v̂, v̂_w, sd_w)`` [m/s]; ``adhesion`` μ̂ [-]."""
     v, vw, sd = (np.asarray(x, float) for x in latent)
-    args = (vw - v, sd, np.asarray(adhesion, float), v)
-    scale, count = (float(x) for x in coasting_sd_scale(*args))
+    coast, z = coasting_residual(vw - v, sd, np.asarray(adhesion, float), v)
+    scale, count = (float(x) for x in coasting_scale(coast, z))
     if count < COAST_MIN_SAMPLES:
         return None
-    coast, z = (np.asarray(x) for x in coasting_residual(*args))
+    coast, z = np.asarray(coast), np.asarray(z)
     edges = np.flatnonzero(np.diff(np.concatenate([[0], coast.astype(int), [0]])))
     runs = list(zip(edges[::2], edges[1::2], strict=True))
     return {"scale": scale, "samples": int(count), "z": z, "runs": runs}
