@@ -82,6 +82,22 @@ def test_given_parameters_generate_the_data(pair):
         assert mae["given"] < 0.025 and mae["scenario"] > 1.5 * mae["given"], mae
 
 
+def test_coast_adds_a_coasting_gap(capsys, tmp_path):
+    """``--coast 2``: the summary and the truth give the gap's flat part, 2 s long, at a quarter or
+    three quarters of the run; μ̂ there is noise about 0, elsewhere the wet run's adhesion."""
+    code, summary, _ = _simulate(
+        capsys, tmp_path / "c.csv", "--scenario", "wet", "--duration", "10", "--rate", "100", "--coast", "2"
+    )
+    assert code == 0
+    gap = summary["coasting"]
+    assert gap == json.loads((tmp_path / "c.truth.json").read_text())["coasting"]
+    assert gap["end_s"] - gap["start_s"] == pytest.approx(2.0)
+    assert 0.5 * (gap["start_s"] + gap["end_s"]) in (pytest.approx(2.5), pytest.approx(7.5))
+    cols = load_recording(tmp_path / "c.csv").columns
+    inside = (cols["time"] >= gap["start_s"]) & (cols["time"] <= gap["end_s"])
+    assert abs(np.mean(cols["adhesion"][inside])) < 0.01 < 0.1 < np.mean(cols["adhesion"][~inside])
+
+
 def test_braking_mirrors_traction(pair):
     t, b = (load_recording(pair[k]).columns for k in ("traction", "braking"))
     assert np.all(t["traction_torque"] > 0) and np.all(b["traction_torque"] < 0)
@@ -108,6 +124,9 @@ def test_braking_mirrors_traction(pair):
         (["--sensor-noise", "11"], "--sensor-noise"),  # above 10× realistic: 1e9 wrote -1e6 m/s
         (["--sensor-noise", "nan"], "--sensor-noise"),
         (["--seed", "-1"], "--seed"),
+        (["--coast", "19"], "--coast"),  # 39.98 s: at most 18.99 s (half, less the edges)
+        (["--coast", "-1"], "--coast"),
+        (["--coast", "nan"], "--coast"),
     ],
 )
 def test_bad_values_exit_2_naming_the_flag(capsys, tmp_path, argv, flag):

@@ -18,7 +18,7 @@ from jadhesion.data.scenarios import SCENARIOS, envelope, get_scenario, paper_en
 from jadhesion.data.sensors import sensor_model
 from jadhesion.data.simulated_datasets import simulate_batch, simulate_dataset
 from jadhesion.data.simulator import _constants, simulate, simulate_many
-from jadhesion.data.traction_profile import random_profile
+from jadhesion.data.traction_profile import COAST_EDGE_S, random_profile
 from jadhesion.data.vehicle import GRAVITY, LOCO_22E
 from jadhesion.errors import InputError
 from jadhesion.models.effects import EFFECTS, magnitudes
@@ -104,6 +104,26 @@ def test_signal_delay_shifts_the_recorded_torque():
     np.testing.assert_allclose(
         eff.columns["traction_torque"][lag:], base.columns["traction_torque"][:-lag], rtol=1e-9
     )
+
+
+def test_a_coasting_gap_takes_the_adhesion_to_zero_and_leaves_the_run_before_it():
+    """``coast_s`` (``simulate --coast``): over the gap's flat part the true adhesion is ~0 and the
+    observed μ̂ only noise about it; before the gap's first edge the recording is the same run bit
+    for bit (the simulation is causal, the seed the same); without a gap the truth says None."""
+    base = simulate("wet", seed=5)
+    run = simulate(get_scenario("wet").replace(coast_s=3.0), seed=5)
+    assert base.truth["coasting"] is None
+    gap = run.truth["coasting"]
+    assert gap["end_s"] - gap["start_s"] == pytest.approx(3.0)
+    t = np.asarray(run.columns["time"])
+    inside = (t >= gap["start_s"]) & (t <= gap["end_s"])
+    assert inside.sum() > 100
+    assert np.max(np.abs(np.asarray(run.latent["adhesion"])[inside])) < 1e-4  # measured 1e-6
+    assert abs(np.mean(np.asarray(run.columns["adhesion"])[inside])) < 5e-3
+    before = t < gap["start_s"] - COAST_EDGE_S
+    for k in ("vehicle_speed", "wheel_speed", "traction_torque"):
+        np.testing.assert_array_equal(run.columns[k][before], base.columns[k][before])
+    assert np.mean(np.asarray(base.latent["adhesion"])[inside]) > 0.15
 
 
 def test_torque_offset_shifts_observed_adhesion():

@@ -8,7 +8,8 @@ duration, rate, test, effects, noise levels, envelope statistics).
 Researchers' options: ``--params kA=…,mu0=…`` replaces any subset of the scenario's Polach
 parameters (the rest, the creep profile and the noise stay the scenario's); ``--duration`` [s] and
 ``--rate`` [Hz] set the recording's length and sampling; ``--vehicle SIDECAR.json`` a locomotive
-(sidecar keys, missing ones 22E); ``--test braking`` negates the creep reference (negative torque).
+(sidecar keys, missing ones 22E); ``--test braking`` negates the creep reference (negative torque);
+``--coast S`` adds an S-second coasting gap (:func:`jadhesion.data.traction_profile.coast_window`).
 
 This module defines the arguments only; :mod:`.simulate_run` does the work.
 """
@@ -81,6 +82,15 @@ def register(sub) -> None:
         default=[],
         metavar="NAME[=MAGNITUDE]",
         help=f"add an effect (repeatable): {', '.join(EFFECT_NAMES)}",
+    )
+    p.add_argument(
+        "--coast",
+        type=float,
+        default=0.0,
+        metavar="S",
+        help="a coasting gap of S seconds: the creep reference taken to 0 at a quarter or three "
+        "quarters of the run, away from the main slip excursion (the run that reads a torque "
+        "offset; default 0, none)",
     )
     p.add_argument("--seed", type=int, default=0, help="PRNG seed, 0 to 2**63 - 1 (default 0)")
     p.add_argument(

@@ -13,6 +13,7 @@ from ..data.recording import save_recording
 from ..data.scenarios import get_scenario
 from ..data.sidecar import _load_sidecar
 from ..data.simulator import DEFAULT_SAMPLES, SAMPLE_PERIOD, simulate
+from ..data.traction_profile import COAST_EDGE_S
 from ..data.validate import MAX_SPEED, _check_finite, _check_values
 from ..data.vehicle import LOCO_22E
 from ..errors import RecordingError
@@ -79,6 +80,18 @@ def _samples(duration, rate) -> int:
     return n
 
 
+def _coast(seconds: float, duration: float) -> float:
+    """``--coast`` [s], checked: the gap and its edges must fit in a quarter of the run on either
+    side of its centre (:func:`jadhesion.data.traction_profile.coast_window`)."""
+    longest = max(0.0, 0.5 * duration - 2.0 * COAST_EDGE_S)
+    if not (math.isfinite(seconds) and 0.0 <= seconds <= longest):
+        raise UserError(
+            f"--coast {seconds:g}: expected 0 to {longest:g} s for a {duration:g} s run (half of it, "
+            f"less {2.0 * COAST_EDGE_S:g} s of edges)"
+        )
+    return float(seconds)
+
+
 def _vehicle(path):
     if path is None:
         return LOCO_22E
@@ -115,6 +128,7 @@ def run(args) -> int:
             params=tuple(given.get(k, v) for k, v in zip(PARAM_NAMES, scenario.params, strict=True))
         )
     n_samples = _samples(args.duration, args.rate)
+    scenario = scenario.replace(coast_s=_coast(args.coast, (n_samples - 1) / args.rate))
     vehicle = _vehicle(args.vehicle)
     magnitudes(args.effect)  # validate before any work
     require_output_file("", args.out)
@@ -148,6 +162,7 @@ def run(args) -> int:
         "duration_s": result.truth["duration_s"],
         "rate_hz": args.rate,
         "effects": result.truth["effects"],
+        "coasting": result.truth["coasting"],
         "n_samples": len(result.columns["time"]),
         "envelope": result.truth["envelope"],
     }

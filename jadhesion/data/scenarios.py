@@ -37,7 +37,10 @@ class Scenario:
     half-width ``excursion_width_s`` [s]) when the speed ramp passes ``max_slip / max_creep``, and
     ``minor_excursions`` more reach ``minor_peak`` × ``max_creep``. The load holds the speed on a
     ramp ``v_mean (1 + speed_ramp (t/T − 1/2))``. ``torque_noise`` [N·m]: the torque channel's white
-    noise (the speed channels' noise is the sensor model's, :mod:`.sensors`).
+    noise (the speed channels' noise is the sensor model's, :mod:`.sensors`). ``coast_s`` [s]: a
+    coasting gap of that length, the creep reference taken to 0 (none of the published tests has
+    one; default 0): the run that reads a torque offset and the speed sensors' own error
+    (:func:`.traction_profile.coast_window`).
     """
 
     name: str
@@ -58,6 +61,7 @@ class Scenario:
     minor_peak: float
     speed_ramp: float
     torque_noise: float
+    coast_s: float = 0.0
 
     @property
     def mean_speed(self) -> float:

@@ -206,8 +206,18 @@ def _truth(scenario, seed, mags, vehicle, duration, model, period=SAMPLE_PERIOD,
         "rate_hz": 1.0 / period,
         "duration_s": duration,
         "test": "braking" if braking else "traction",
+        "coasting": coasting_gap(scenario, duration, braking),
         "vehicle": vehicle_sidecar(vehicle),
     }
+
+
+def coasting_gap(scenario, duration: float, braking: bool = False):
+    """``{"start_s", "end_s"}`` of the coasting gap's flat part (the creep reference 0; cos² edges of
+    :data:`.traction_profile.COAST_EDGE_S` on either side), or None without one."""
+    if scenario.coast_s <= 0:
+        return None
+    c = profile_constants(scenario, duration, braking)
+    return {"start_s": c["coast_mid"] - c["coast_half"], "end_s": c["coast_mid"] + c["coast_half"]}
 
 
 def simulate_many(
