@@ -9,8 +9,8 @@ magnitudes over the effect registry's ``typical`` ranges (reaching well below th
 thresholds). The diagnoser sees only the CSV and a vehicle-only sidecar, through the CLI's
 code path. Reported: confusion matrix (true primary effect × verdict), false alarms on clean
 recordings (k/n with a 95 % Clopper–Pearson interval), per effect top-1 accuracy in magnitude bins
-and above its documented detection threshold (the registry's ``detection.top1``, measured under an
-older decision rule: :data:`jadhesion.models.effects.DETECTION_PROVENANCE`),
+and above its documented detection threshold (the registry's ``detection.top1``:
+:data:`jadhesion.models.effects.DETECTION_PROVENANCE`),
 "truth in the reported set" (verdict or its indistinguishable set), the measured 90 % threshold,
 relative error of the recovered magnitude, base-fit parameter errors, seconds per diagnosis, and
 top-1 accuracy above and below each recording's own predicted ``min_detectable`` magnitude

@@ -25,8 +25,9 @@ class Param(NamedTuple):
 class Detection(NamedTuple):
     """A documented detection threshold (|magnitude| in the simulator's units; ``None``: not reached
     in the typical range): ``top1`` — named in ≥ 90 % of blind cases above it; ``in_set`` — the
-    verdict or its indistinguishable set ≥ 90 %; ``note`` — the counts behind it. Measured under
-    an older decision rule (:data:`jadhesion.models.effects.DETECTION_PROVENANCE`)."""
+    verdict or its indistinguishable set ≥ 90 %; ``note`` — the counts behind it, and how often
+    the effect was named where its recording's own limit (``sensitivity.min_detectable``) said it
+    could be seen (:data:`jadhesion.models.effects.DETECTION_PROVENANCE`)."""
 
     top1: Optional[float]
     in_set: Optional[float]

@@ -63,7 +63,9 @@ EFFECTS = {
             sentence="the rail condition changed at t ≈ {t_change_s:.1f} s: the friction level μ0 {word} by "
             "{size:.0%} (a contaminated or cleaned section); identify the two stretches separately",
             terms=lambda v: {"word": "dropped" if v["drop"] > 0 else "rose", "size": abs(v["drop"])},
-            detection=Detection(0.023, 0.023, "24/25 named above; 25/27 over 0.022–0.48"),
+            detection=Detection(
+                0.12, 0.12, "14/14 named above, 0/9 below; 13/13 above the recording's min_detectable"
+            ),
         ),
         EffectSpec(
             name="wheel_radius_error",
@@ -97,7 +99,7 @@ EFFECTS = {
                 "radius_m": v["wheel_radius_m"] * (1 + v["delta_r"]),
             },
             detection=Detection(
-                0.0058, 0.0021, "19/21 named above (misses: torque_offset); in set 29/30 overall"
+                None, None, "not reached in 0.002–0.028: 7/14 named; 3/3 above the recording's min_detectable"
             ),
         ),
         EffectSpec(
@@ -124,7 +126,9 @@ EFFECTS = {
             sentence="the torque signal lags the speed signals by {delay_ms:.0f} ms: the observer mixes "
             "torque and wheel acceleration from different instants; align the signals before identifying",
             terms=lambda v: {"delay_ms": 1e3 * v["delay_s"]},
-            detection=Detection(None, None, "not reached in 0.01–0.3 s: 4/30 named, 23 verdict none"),
+            detection=Detection(
+                None, None, "not reached in 0.012–0.28 s: 0/13 named; 0/2 above min_detectable"
+            ),
         ),
         EffectSpec(
             name="speed_dependence",
@@ -148,7 +152,7 @@ EFFECTS = {
             },
             sentence="the friction level falls by {slope:.0%} per 100 % speed increase about the mean speed "
             "(Curtius–Kniffler-like); identify per speed band or add a speed term",
-            detection=Detection(0.13, 0.13, "7/7 named above; 2/9 below"),
+            detection=Detection(None, None, "not reached in 0.05–0.84: 5/18 named; 3/3 above min_detectable"),
         ),
         EffectSpec(
             name="torque_offset",
@@ -175,7 +179,7 @@ EFFECTS = {
                 "bias_knm": v["offset"] * v["axle_load_kg"] * v["gravity"] * v["wheel_radius_m"] / 1e3
             },
             detection=Detection(
-                None, None, "not reached in 0.002–0.05: 5/25 named (all ≥ 0.024), 7/25 in set"
+                None, None, "not reached in 0.002–0.032: 0/21 named, none above its min_detectable"
             ),
         ),
         EffectSpec(
@@ -199,7 +203,7 @@ EFFECTS = {
             sentence="friction softens with recent frictional power: μ0/(1 + {softening:.2f}·P/10 kW) with a "
             "thermal lag of about {tau_th_s:.1f} s",
             terms=lambda v: {"tau_th_s": v.get("tau_th_s", math.nan)},
-            detection=Detection(0.34, 0.34, "9/9 named above; 3/13 below"),
+            detection=Detection(None, None, "not reached in 0.05–2.6: 3/22 named; 1/3 above min_detectable"),
         ),
         EffectSpec(
             name="load_transfer",
@@ -225,21 +229,24 @@ EFFECTS = {
             "F_t/(M g) − {load_accel:.2f}·a/g) (tractive effort and acceleration); correct the axle load "
             "for load transfer",
             terms=lambda v: {"load_accel": v.get("load_accel", 0.0)},
-            detection=Detection(None, None, "not reached in 0.1–1.5: 1/20 named, 19 verdict none"),
+            detection=Detection(
+                None, None, "not reached in 0.13–1.5: 0/7 named, none above its min_detectable"
+            ),
         ),
     )
 }
 EFFECT_NAMES = tuple(EFFECTS)
 INDEX = {name: i for i, name in enumerate(EFFECT_NAMES)}
-#: How :attr:`EffectSpec.detection` was measured: ``python benchmarks/diagnose_blind.py --n 220
-#: --null 100 --seed 2026`` (``benchmarks/results/diagnose_blind.json``, committed in 8d89b5a; the file
-#: records no commit. 320 recordings, 16–30 single-effect cases per effect;
-#: the smallest |magnitude| above which ≥ 90 % of at least 5 cases were named; rounded up to two
-#: digits) with the decision of that time: one global held-out gain threshold of 1.5 %, no
-#: per-recording null, the simulator's clean sensors (speed noise 5·10⁻⁵ m/s). They do not describe
-#: the current decision (the null of :mod:`jadhesion.diagnose.null`) at realistic sensor noise, which
-#: names far fewer effects; the blind benchmark's ``top1_above_documented`` measures how they hold.
-DETECTION_PROVENANCE = "benchmarks/diagnose_blind.py --n 220 --null 100 --seed 2026, committed in 8d89b5a"
+#: How :attr:`EffectSpec.detection` was measured: ``python -m benchmarks.diagnose_blind --n 140
+#: --null 0 --seed 2027`` at d2e6902 (``benchmarks/results/diagnose_blind_thresholds.json``: 140
+#: recordings of our simulator, realistic sensors, 7–23 single-effect cases per effect, magnitudes
+#: log-uniform over the typical range; the smallest |magnitude| above which ≥ 90 % of at least 5
+#: cases were named, rounded up to two digits) with the current decision (the per-recording null of
+#: :mod:`jadhesion.diagnose.null`). Only a rail change reaches it within its typical range: at
+#: realistic speed noise the null is wide (errors in variables). Each recording's own limit
+#: (``sensitivity.min_detectable``) says more: the effects above it were named in 20 of 24 cases.
+#: (Before: 8d89b5a's thresholds, measured with one global gain threshold on clean sensors.)
+DETECTION_PROVENANCE = "benchmarks/diagnose_blind.py --n 140 --null 0 --seed 2027 at d2e6902"
 
 
 def separating_run(a: str, b: str) -> str:
