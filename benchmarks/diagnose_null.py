@@ -2,7 +2,8 @@
 per-recording null (:mod:`jadhesion.diagnose.null`).
 
 ``ours``: :func:`validation.diagnose_cases.run_case` without effects (random scenario, seed,
-vehicle, driving profile; the simulator's default ``sensors="realistic"``). ``foreign``:
+vehicle, driving profile; the simulator's default ``sensors="realistic"``; ``--coast S`` gives every
+recording an S-second coasting gap, :attr:`jadhesion.data.scenarios.Scenario.coast_s`). ``foreign``:
 :func:`validation.foreign_generator.generate` with ``effect="none"`` (its own vehicles, profiles,
 sampling rates 20–200 Hz and realistic sensor model). Every recording goes through a CSV and the
 CLI's code path. Reported per generator: false alarms k/n with a 95 % Clopper–Pearson interval,
@@ -10,7 +11,7 @@ the verdicts, the smallest p-value per recording, the generic discrepancy's held
 many passed its threshold), the warnings, seconds per diagnosis; the result file records
 the commit, the settings and the load average (2 shared cores: timings are noisy).
 
-    python -m benchmarks.diagnose_null [--n 10] [--seed 0] [--duration 30] [--out FILE]
+    python -m benchmarks.diagnose_null [--n 10] [--seed 0] [--duration 30] [--coast S] [--out FILE]
 """
 
 from __future__ import annotations
@@ -73,8 +74,8 @@ def foreign_case(seed: int, directory, duration: float) -> dict:
     }
 
 
-def ours_case(rng, directory) -> dict:
-    case = run_case([], rng, directory, p_varied_profile=0.3)
+def ours_case(rng, directory, coast_s: float = 0.0) -> dict:
+    case = run_case([], rng, directory, p_varied_profile=0.3, coast_s=coast_s)
     return {
         "scenario": case["scenario"],
         "seed": case["seed"],
@@ -96,6 +97,13 @@ def main(argv=None) -> int:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--duration", type=float, default=30.0, help="foreign recordings' length [s]")
     parser.add_argument("--generators", default="ours,foreign")
+    parser.add_argument(
+        "--coast",
+        type=float,
+        default=0.0,
+        metavar="S",
+        help="ours: a coasting gap of S seconds in every recording (default 0: none; theirs never do)",
+    )
     parser.add_argument("--out", default=str(RESULTS / "diagnose_null.json"))
     args = parser.parse_args(argv)
     enable_x64()
@@ -108,7 +116,7 @@ def main(argv=None) -> int:
         for i in range(args.n):  # interleaved, so a cut-short run has both generators
             for g in gens:
                 case = (
-                    ours_case(rng, tmp)
+                    ours_case(rng, tmp, args.coast)
                     if g == "ours"
                     else foreign_case(args.seed * 1000 + i, tmp, args.duration)
                 )

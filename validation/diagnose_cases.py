@@ -86,16 +86,24 @@ def random_effects(rng, names) -> list:
 
 
 def run_case(
-    effects, rng, directory, n_samples=None, p_varied_profile: float = 0.0, p_varied_vehicle: float = 0.5
+    effects,
+    rng,
+    directory,
+    n_samples=None,
+    p_varied_profile: float = 0.0,
+    p_varied_vehicle: float = 0.5,
+    coast_s: float = 0.0,
 ) -> dict:
-    """Simulate one recording, write CSV + sidecar into ``directory``, diagnose it through the CLI
-    code path; returns the truth and the diagnosis (without its arrays)."""
+    """Simulate one recording (with a coasting gap of ``coast_s`` [s], :attr:`Scenario.coast_s`;
+    no random draw of its own, so a seed gives the same cases either way), write CSV + sidecar into
+    ``directory``, diagnose it through the CLI code path; returns the truth and the diagnosis
+    (without its arrays)."""
     name = str(rng.choice(SCENARIOS))
     seed = int(rng.integers(0, 2**31 - 1))
     vehicle, varied = random_vehicle(rng, p_varied_vehicle)
     scenario, n_varied, profile_varied = random_profile(rng, name, p_varied_profile)
     n = n_varied if profile_varied else n_samples
-    sim = simulate(scenario, seed, effects, n, vehicle=vehicle)
+    sim = simulate(scenario.replace(coast_s=coast_s), seed, effects, n, vehicle=vehicle)
     raw = {k: sim.columns[k] for k in ("time", "vehicle_speed", "wheel_speed", "traction_torque")}
     path = save_recording(raw, sim.vehicle, Path(directory) / f"case_{seed}.csv")
     start = time.perf_counter()
