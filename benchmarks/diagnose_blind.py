@@ -16,7 +16,7 @@ relative error of the recovered magnitude, base-fit parameter errors, seconds pe
 top-1 accuracy above and below each recording's own predicted ``min_detectable`` magnitude
 (:mod:`jadhesion.diagnose.sensitivity`).
 
-    python -m benchmarks.diagnose_blind [--n 220] [--null 80] [--seed 0] [--json]
+    python -m benchmarks.diagnose_blind [--n 220] [--null 80] [--seed 0] [--coast S] [--json]
     python -m benchmarks.diagnose_blind --from-cases benchmarks/results/diagnose_blind_cases.json
 """
 
@@ -219,6 +219,13 @@ def main(argv=None) -> int:
     )
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--samples", type=int, default=None, help="samples per default recording")
+    parser.add_argument(
+        "--coast",
+        type=float,
+        default=0.0,
+        metavar="S",
+        help="a coasting gap of S seconds in every recording (default 0: none)",
+    )
     parser.add_argument("--json", action="store_true", help="one JSON document on stdout")
     parser.add_argument(
         "--out",
@@ -262,7 +269,12 @@ def main(argv=None) -> int:
         for i in range(total):  # null cases spread evenly, so a cut-short run has both kinds
             is_main = (i + 1) * args.null // total == i * args.null // total
             case = run_case(
-                draw(rng) if is_main else [], rng, tmp, args.samples, p_varied_profile=args.p_varied
+                draw(rng) if is_main else [],
+                rng,
+                tmp,
+                args.samples,
+                p_varied_profile=args.p_varied,
+                coast_s=args.coast,
             )
             case["set"] = "main" if is_main else "null"
             cases.append(case)
@@ -277,6 +289,7 @@ def main(argv=None) -> int:
         "p_varied": args.p_varied,
         "seed": args.seed,
         "samples": args.samples,
+        "coast_s": args.coast,
         "gain_threshold": GAIN_THRESHOLD,
         "replicas": 19,
         "phase": "traction",
