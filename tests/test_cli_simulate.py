@@ -96,6 +96,9 @@ def test_coast_adds_a_coasting_gap(capsys, tmp_path):
     cols = load_recording(tmp_path / "c.csv").columns
     inside = (cols["time"] >= gap["start_s"]) & (cols["time"] <= gap["end_s"])
     assert abs(np.mean(cols["adhesion"][inside])) < 0.01 < 0.1 < np.mean(cols["adhesion"][~inside])
+    argv = ["simulate", "--scenario", "wet", "--duration", "10", "--rate", "100", "--coast", "2"]
+    assert main([*argv, "--out", str(tmp_path / "d.csv")]) == 0
+    assert f"coasting gap {gap['start_s']:.2f}–{gap['end_s']:.2f} s" in capsys.readouterr().out
 
 
 def test_braking_mirrors_traction(pair):

@@ -180,4 +180,6 @@ def run(args) -> int:
             f"mu_hat [{env['mu_low']:.3f}, {env['mu_high']:.3f}] mean {env['mu_mean']:.3f}, "
             f"true-parameter MAE {env['true_param_mae']:.4f}"
         )
+        if (gap := summary["coasting"]) is not None:
+            print(f"coasting gap {gap['start_s']:.2f}–{gap['end_s']:.2f} s (creep reference 0)")
     return 0
