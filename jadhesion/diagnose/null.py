@@ -302,8 +302,18 @@ def replicas(torque, measured, vehicle: Vehicle, p_truth, n_replicas: int, seed:
     if coast is None:
         gamma = error_share(powers["upper95"], torque_power, lambda g: fast_power(path_mu(g) - mu_fit, keep))
         clean_torque = (path_mu(gamma) + deriv) * scale
-        draws = [(_noisy(clean_torque, model, rng), latent) for _ in range(n_replicas)]
-        error = {"source": "fast_part"}
+        f_slip = (latent[1] - slow[1]) - (latent[0] - slow[0])
+        level = float(1.4826 * np.median(np.abs(f_slip[keep]))) if keep.any() else 0.0
+        edges = np.flatnonzero(np.diff(np.concatenate([[0], keep.astype(int), [0]])))
+        runs = list(zip(edges[::2], edges[1::2], strict=True))
+        max_lag = max(1, int(round(ERROR_MAX_LAG_S / dt)))
+        rho = error_autocorrelation(np.where(keep, f_slip, 0.0) / max(level, 1e-300), runs, max_lag)
+        paths = gaussian_paths(rho, t.size, n_replicas, rng)
+        draws = [
+            (_noisy(clean_torque, model, rng), (latent[0], latent[1] + (1.0 - gamma) * (level * z - f_slip), latent[2]))
+            for z in paths
+        ]
+        error = {"source": "fast_part", "level": level, "autocorrelation_1s": float(rho[min(max_lag, int(round(1.0 / dt)))])}
         return draws, {"torque": model, "gamma": gamma, "fast_power": powers, "error": error}
     max_lag = max(1, int(round(ERROR_MAX_LAG_S / dt)))
     rho = error_autocorrelation(coast["z"], coast["runs"], max_lag)
