@@ -302,18 +302,21 @@ def replicas(torque, measured, vehicle: Vehicle, p_truth, n_replicas: int, seed:
     if coast is None:
         gamma = error_share(powers["upper95"], torque_power, lambda g: fast_power(path_mu(g) - mu_fit, keep))
         clean_torque = (path_mu(gamma) + deriv) * scale
-        f_slip = (latent[1] - slow[1]) - (latent[0] - slow[0])
-        level = float(1.4826 * np.median(np.abs(f_slip[keep]))) if keep.any() else 0.0
-        edges = np.flatnonzero(np.diff(np.concatenate([[0], keep.astype(int), [0]])))
-        runs = list(zip(edges[::2], edges[1::2], strict=True))
-        max_lag = max(1, int(round(ERROR_MAX_LAG_S / dt)))
-        rho = error_autocorrelation(np.where(keep, f_slip, 0.0) / max(level, 1e-300), runs, max_lag)
-        paths = gaussian_paths(rho, t.size, n_replicas, rng)
-        draws = [
-            (_noisy(clean_torque, model, rng), (latent[0], latent[1] + (1.0 - gamma) * (level * z - f_slip), latent[2]))
-            for z in paths
-        ]
-        error = {"source": "fast_part", "level": level, "autocorrelation_1s": float(rho[min(max_lag, int(round(1.0 / dt)))])}
+        path_power = fast_power(path_mu(gamma) - mu_fit, keep)
+        if path_power <= torque_power:  # replicas vary by their torque noise: one path will do
+            draws = [(_noisy(clean_torque, model, rng), latent) for _ in range(n_replicas)]
+            error = {"source": "fast_part"}
+        else:  # one path would make every replica the same: a fresh one each
+            f_slip = (latent[1] - slow[1]) - (latent[0] - slow[0])
+            level = float(1.4826 * np.median(np.abs(f_slip[keep]))) if keep.any() else 0.0
+            edges = np.flatnonzero(np.diff(np.concatenate([[0], keep.astype(int), [0]])))
+            runs = list(zip(edges[::2], edges[1::2], strict=True))
+            max_lag = max(1, int(round(ERROR_MAX_LAG_S / dt)))
+            rho = error_autocorrelation(np.where(keep, f_slip, 0.0) / max(level, 1e-300), runs, max_lag)
+            paths = gaussian_paths(rho, t.size, n_replicas, rng)
+            shift = (1.0 - gamma) * (level * np.array(paths) - f_slip)
+            draws = [(_noisy(clean_torque, model, rng), (latent[0], latent[1] + d, latent[2])) for d in shift]
+            error = {"source": "fast_part_fresh", "level": level, "path_power": path_power}
         return draws, {"torque": model, "gamma": gamma, "fast_power": powers, "error": error}
     max_lag = max(1, int(round(ERROR_MAX_LAG_S / dt)))
     rho = error_autocorrelation(coast["z"], coast["runs"], max_lag)
