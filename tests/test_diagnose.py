@@ -187,7 +187,8 @@ def test_replicas_draw_a_fresh_error_path_where_the_recording_coasts(clean):
     build = torque_builder(cols, clean.vehicle, regressors=latent)
     torque = np.asarray(cols["traction_torque"], float)
     draws, info = null.replicas(torque, build(torque), clean.vehicle, p_base, 4, 0, latent)
-    assert info["error"] == {"source": "fast_part"} and info["gamma"] is not None
+    assert info["error"]["source"] == "fast_part" and info["gamma"] is not None
+    assert not info["error"]["fresh"]  # clean speed sensors: the torque noise dominates
     assert all(regressors is latent for _, regressors in draws)
     coasting = torque.copy()
     coasting[600:900] = 0.0
@@ -199,6 +200,42 @@ def test_replicas_draw_a_fresh_error_path_where_the_recording_coasts(clean):
     assert abs(np.mean(z**2) - 1.0) < 0.35, np.mean(z**2)
     # drawn afresh: not one shared path (smooth paths over 1 500 samples have few independent
     # stretches, so sample correlations of independent draws reach ±0.35 here)
+    assert np.max(np.abs(np.corrcoef(z)[np.triu_indices(4, 1)])) < 0.8
+
+
+def test_replicas_draw_fresh_error_paths_where_one_path_would_dominate(clean):
+    """Without coasting, where the latent slip's fast part adds more fast residual power than the
+    torque noise (here AR(1) slip noise of 3 mm/s, τ 0.3 s, put into the latent wheel speed),
+    one shared error path would make the replicas nearly equal: each replica's wheel speed then
+    swaps the fast part for its own Gaussian path of the fast part's robust level (unit variance in
+    those units within 35 %, pooled over 4 replicas), not one shared path."""
+    cols = _raw(clean)
+    v, vw, sd = null.latent_speeds(cols, clean.vehicle)
+    rng = np.random.default_rng(5)
+    phi = np.exp(-np.median(np.diff(np.asarray(cols["time"]))) / 0.3)
+    e = np.zeros(N)
+    for i in range(1, N):
+        e[i] = phi * e[i - 1] + np.sqrt(1 - phi * phi) * 3e-3 * rng.standard_normal()
+    latent = (v, vw + e, sd)
+    sig = from_columns(cols, clean.vehicle, regressors=latent)
+    p_base, _ = fitting.fit_base(fitting.pad_signals(sig), N)
+    build = torque_builder(cols, clean.vehicle, regressors=latent)
+    torque = np.asarray(cols["traction_torque"], float)
+    draws, info = null.replicas(torque, build(torque), clean.vehicle, p_base, 4, 0, latent)
+    err = info["error"]
+    assert err["source"] == "fast_part" and err["fresh"], info
+    assert err["path_power"] > info["fast_power"]["torque_noise"]
+    gamma = info["gamma"]
+    assert gamma < 1.0
+    dt = float(np.median(np.diff(np.asarray(cols["time"]))))
+    half = max(1, int(round(null.SLOW_HALF_WIDTH_S / dt)))
+    fast = (latent[1] - null.local_mean(latent[1], half)) - (latent[0] - null.local_mean(latent[0], half))
+    assert err["level"] == pytest.approx(1.4826 * np.median(np.abs(fast)), rel=1e-12)
+    # the injected error's own fast part is in it (the rest: the clean slip's fast motion)
+    assert err["level"] > 0.9 * 1.4826 * np.median(np.abs(e - null.local_mean(e, half)))
+    assert all(reg[0] is latent[0] for _, reg in draws)
+    z = np.array([((reg[1] - latent[1]) / (1.0 - gamma) + fast) / err["level"] for _, reg in draws])
+    assert abs(np.mean(z**2) - 1.0) < 0.35, np.mean(z**2)
     assert np.max(np.abs(np.corrcoef(z)[np.triu_indices(4, 1)])) < 0.8
 
 

@@ -35,10 +35,15 @@ recording (:func:`noise_model`: white level σ, quantisation step q); the target
 the same latent derivative in recording and replica
 (:func:`jadhesion.diagnose.signals.from_columns`), is then ``μ_base`` + torque noise. The replicas
 share the recording's errors-in-variables weights (the ``mask`` of :func:`null_statistics`). The
-regressor error of such a replica is one fixed path, so replicas differ only by their torque noise:
-where the error path dominates the residual (the independent generator's coloured sensor noise,
-3 to 6 850× the torque noise's fast power), the 19 replicas give nearly one statistic, which the
-recording's own error realisation beats about as often as not.
+regressor error of such a replica is one fixed path, so replicas differ only by their torque noise.
+That serves where the torque noise dominates the replicas' fast residual; where the fixed path
+adds more (``path_power``, the fast power of ``μ(x̄ + γ(x̂ − x̄)) − μ(x̂)``, above the torque
+noise's: the independent generator's coloured sensor noise, 3 to 6 850× the torque noise's), the
+19 replicas gave nearly one statistic, which the recording's own error realisation beat about as
+often as not. There each replica's regressor wheel speed swaps the latent slip's fast part ``f``
+(slip less its moving average) for a fresh stationary Gaussian path ``g_r`` with ``f``'s robust
+level and autocorrelation (:func:`fast_slip_error`): ``v̂_w + (1 − γ)(g_r − f)``, so its slip
+error about the truth is ``(1 − γ) g_r``, drawn afresh per replica (``error.fresh``).
 
 **Where the recording coasts** (:func:`coasting_error`: at least
 :data:`~jadhesion.data.creep_state.COAST_MIN_SAMPLES` samples moving with ``|μ̂|`` below
@@ -257,21 +262,36 @@ def gaussian_paths(rho, n: int, n_paths: int, rng) -> list:
     return [np.fft.irfft(root * np.fft.rfft(rng.standard_normal(m)), n=m)[:n] for _ in range(n_paths)]
 
 
+def fast_slip_error(fast_slip, keep, max_lag: int) -> tuple:
+    """``(level [m/s], autocorrelation (max_lag + 1,))`` of the latent slip's fast part on the
+    selected samples ``keep``, the error a replica without coasting draws afresh: the level robust
+    (``1.4826 MAD``: real slip excursions are the fast part's tail, not its bulk), the
+    autocorrelation pooled within the selected runs (:func:`error_autocorrelation`)."""
+    fast_slip, keep = np.asarray(fast_slip, float), np.asarray(keep, bool)
+    level = float(1.4826 * np.median(np.abs(fast_slip[keep]))) if keep.any() else 0.0
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], keep.astype(int), [0]])))
+    runs = list(zip(edges[::2], edges[1::2], strict=True))
+    z = np.where(keep, fast_slip, 0.0) / (level if level > 0 else 1.0)
+    return level, error_autocorrelation(z, runs, max_lag)
+
+
 def replicas(torque, measured, vehicle: Vehicle, p_truth, n_replicas: int, seed: int, latent) -> tuple:
     """``([(torque [N·m], regressors (v, v_w, sd_w) [m/s])] × R, {"torque": noise model, "gamma",
-    "fast_power", "error"})``: each replica's torque, re-synthesised from the Polach curve
-    ``p_truth`` (the base fit, or where that sits at the identification box's edge the fit past
-    it: :func:`jadhesion.diagnose.fitting.fit_truth`) plus the recording's torque noise, and the
-    regressors its fits take (module docstring). Where the recording coasts
-    (:func:`coasting_error`), the truth is the latent speeds ``latent = (v̂, v̂_w, sd_w)`` and each
-    replica's regressor wheel speed carries a fresh error path with the coasting error's level and
-    autocorrelation (``gamma`` None; ``error``: ``source`` "coasting", ``coasting_samples``,
-    ``sd_scale``, ``autocorrelation_1s``); otherwise the regressors are the latent speeds and the
-    truth the speeds ``x̄ + γ (x̂ − x̄)`` (``error.source`` "fast_part"). ``torque``: the
-    recording's; ``measured``: its :class:`Signals` on the latent speeds, whose weights select the
-    samples γ is matched on. ``fast_power`` [-, adhesion²]: the recording's residual fast power
-    (``recording``) and its upper bound (``upper95``, :func:`fast_power_bound`), the torque
-    noise's (``torque_noise``) and what the whole fixed error path adds at γ = 0 (``error_path``)."""
+        "fast_power", "error"})``: each replica's torque, re-synthesised from the Polach curve
+        ``p_truth`` (the base fit, or where that sits at the identification box's edge the fit past
+        it: :func:`jadhesion.diagnose.fitting.fit_truth`) plus the recording's torque noise, and the
+        regressors its fits take (module docstring). Where the recording coasts
+        (:func:`coasting_error`), the truth is the latent speeds ``latent = (v̂, v̂_w, sd_w)`` and each
+        replica's regressor wheel speed carries a fresh error path with the coasting error's level and
+        autocorrelation (``gamma`` None; ``error``: ``source`` "coasting", ``coasting_samples``,
+        ``sd_scale``, ``autocorrelation_1s``); otherwise the regressors are the latent speeds and the
+        truth the speeds ``x̄ + γ (x̂ − x̄)`` (``error.source`` "fast_part", with ``path_power`` and
+    ``fresh``: where that path's fast power beats the torque noise's, each replica's slip error is a
+    fresh path of the fast part's ``level`` [m/s] and ``autocorrelation_1s``). ``torque``: the
+        recording's; ``measured``: its :class:`Signals` on the latent speeds, whose weights select the
+        samples γ is matched on. ``fast_power`` [-, adhesion²]: the recording's residual fast power
+        (``recording``) and its upper bound (``upper95``, :func:`fast_power_bound`), the torque
+        noise's (``torque_noise``) and what the whole fixed error path adds at γ = 0 (``error_path``)."""
     torque = np.asarray(torque, float)
     keep = np.asarray(measured.weight) > 0
     t = np.asarray(measured.time)
@@ -299,26 +319,23 @@ def replicas(torque, measured, vehicle: Vehicle, p_truth, n_replicas: int, seed:
     rng = np.random.default_rng(seed)
     deriv = np.asarray(measured.deriv_mu)
     coast = coasting_error(latent, measured.adhesion)
+    max_lag = max(1, int(round(ERROR_MAX_LAG_S / dt)))
+    lag_1s = min(max_lag, int(round(1.0 / dt)))
     if coast is None:
         gamma = error_share(powers["upper95"], torque_power, lambda g: fast_power(path_mu(g) - mu_fit, keep))
         clean_torque = (path_mu(gamma) + deriv) * scale
         path_power = fast_power(path_mu(gamma) - mu_fit, keep)
-        if path_power <= torque_power:  # replicas vary by their torque noise: one path will do
+        error = {"source": "fast_part", "fresh": bool(path_power > torque_power), "path_power": path_power}
+        if not error["fresh"]:  # the replicas differ by their torque noise: one error path serves
             draws = [(_noisy(clean_torque, model, rng), latent) for _ in range(n_replicas)]
-            error = {"source": "fast_part"}
-        else:  # one path would make every replica the same: a fresh one each
-            f_slip = (latent[1] - slow[1]) - (latent[0] - slow[0])
-            level = float(1.4826 * np.median(np.abs(f_slip[keep]))) if keep.any() else 0.0
-            edges = np.flatnonzero(np.diff(np.concatenate([[0], keep.astype(int), [0]])))
-            runs = list(zip(edges[::2], edges[1::2], strict=True))
-            max_lag = max(1, int(round(ERROR_MAX_LAG_S / dt)))
-            rho = error_autocorrelation(np.where(keep, f_slip, 0.0) / max(level, 1e-300), runs, max_lag)
-            paths = gaussian_paths(rho, t.size, n_replicas, rng)
-            shift = (1.0 - gamma) * (level * np.array(paths) - f_slip)
-            draws = [(_noisy(clean_torque, model, rng), (latent[0], latent[1] + d, latent[2])) for d in shift]
-            error = {"source": "fast_part_fresh", "level": level, "path_power": path_power}
+            return draws, {"torque": model, "gamma": gamma, "fast_power": powers, "error": error}
+        fast_slip = (latent[1] - slow[1]) - (latent[0] - slow[0])
+        level, rho = fast_slip_error(fast_slip, keep, max_lag)
+        paths = gaussian_paths(rho, t.size, n_replicas, rng)
+        shifts = [(1.0 - gamma) * (level * z - fast_slip) for z in paths]
+        draws = [(_noisy(clean_torque, model, rng), (latent[0], latent[1] + d, latent[2])) for d in shifts]
+        error.update(level=level, autocorrelation_1s=float(rho[lag_1s]))
         return draws, {"torque": model, "gamma": gamma, "fast_power": powers, "error": error}
-    max_lag = max(1, int(round(ERROR_MAX_LAG_S / dt)))
     rho = error_autocorrelation(coast["z"], coast["runs"], max_lag)
     clean_torque = (mu_fit + deriv) * scale
     sd = coast["scale"] * np.asarray(latent[2], float)
@@ -330,7 +347,7 @@ def replicas(torque, measured, vehicle: Vehicle, p_truth, n_replicas: int, seed:
         "source": "coasting",
         "coasting_samples": coast["samples"],
         "sd_scale": coast["scale"],
-        "autocorrelation_1s": float(rho[min(max_lag, int(round(1.0 / dt)))]),
+        "autocorrelation_1s": float(rho[lag_1s]),
     }
     return draws, {"torque": model, "gamma": None, "fast_power": powers, "error": error}
 
