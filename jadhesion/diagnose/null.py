@@ -237,9 +237,13 @@ def coasting_error(latent, adhesion) -> dict | None:
     if count < COAST_MIN_SAMPLES:
         return None
     coast, z = np.asarray(coast), np.asarray(z)
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], coast.astype(int), [0]])))
-    runs = list(zip(edges[::2], edges[1::2], strict=True))
-    return {"scale": scale, "samples": int(count), "z": z, "runs": runs}
+    return {"scale": scale, "samples": int(count), "z": z, "runs": runs_of(coast)}
+
+
+def runs_of(mask) -> list:
+    """The runs ``[start, stop)`` of consecutive true samples of a boolean mask (n,)."""
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], np.asarray(mask, bool).astype(int), [0]])))
+    return list(zip(edges[::2], edges[1::2], strict=True))
 
 
 def error_autocorrelation(z, runs, max_lag: int) -> np.ndarray:
@@ -274,10 +278,8 @@ def fast_slip_error(fast_slip, keep, max_lag: int) -> tuple:
     autocorrelation pooled within the selected runs (:func:`error_autocorrelation`)."""
     fast_slip, keep = np.asarray(fast_slip, float), np.asarray(keep, bool)
     level = float(1.4826 * np.median(np.abs(fast_slip[keep]))) if keep.any() else 0.0
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], keep.astype(int), [0]])))
-    runs = list(zip(edges[::2], edges[1::2], strict=True))
     z = np.where(keep, fast_slip, 0.0) / (level if level > 0 else 1.0)
-    return level, error_autocorrelation(z, runs, max_lag)
+    return level, error_autocorrelation(z, runs_of(keep), max_lag)
 
 
 def replicas(torque, measured, vehicle: Vehicle, p_truth, n_replicas: int, seed: int, latent) -> tuple:
