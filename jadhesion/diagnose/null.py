@@ -284,21 +284,22 @@ def fast_slip_error(fast_slip, keep, max_lag: int) -> tuple:
 
 def replicas(torque, measured, vehicle: Vehicle, p_truth, n_replicas: int, seed: int, latent) -> tuple:
     """``([(torque [N·m], regressors (v, v_w, sd_w) [m/s])] × R, {"torque": noise model, "gamma",
-        "fast_power", "error"})``: each replica's torque, re-synthesised from the Polach curve
-        ``p_truth`` (the base fit, or where that sits at the identification box's edge the fit past
-        it: :func:`jadhesion.diagnose.fitting.fit_truth`) plus the recording's torque noise, and the
-        regressors its fits take (module docstring). Where the recording coasts
-        (:func:`coasting_error`), the truth is the latent speeds ``latent = (v̂, v̂_w, sd_w)`` and each
-        replica's regressor wheel speed carries a fresh error path with the coasting error's level and
-        autocorrelation (``gamma`` None; ``error``: ``source`` "coasting", ``coasting_samples``,
-        ``sd_scale``, ``autocorrelation_1s``); otherwise the regressors are the latent speeds and the
-        truth the speeds ``x̄ + γ (x̂ − x̄)`` (``error.source`` "fast_part", with ``path_power`` and
-    ``fresh``: where that path's fast power beats the torque noise's, each replica's slip error is a
-    fresh path of the fast part's ``level`` [m/s] and ``autocorrelation_1s``). ``torque``: the
-        recording's; ``measured``: its :class:`Signals` on the latent speeds, whose weights select the
-        samples γ is matched on. ``fast_power`` [-, adhesion²]: the recording's residual fast power
-        (``recording``) and its upper bound (``upper95``, :func:`fast_power_bound`), the torque
-        noise's (``torque_noise``) and what the whole fixed error path adds at γ = 0 (``error_path``)."""
+    "fast_power", "error"})``: each replica's torque, re-synthesised from the Polach curve
+    ``p_truth`` (the base fit, or where that sits at the identification box's edge the fit past
+    it: :func:`jadhesion.diagnose.fitting.fit_truth`) plus the recording's torque noise, and the
+    regressors its fits take (module docstring). Where the recording coasts
+    (:func:`coasting_error`), the truth is the latent speeds ``latent = (v̂, v̂_w, sd_w)`` and each
+    replica's regressor wheel speed carries a fresh error path with the coasting error's level and
+    autocorrelation (``gamma`` None; ``error``: ``source`` "coasting", ``coasting_samples``,
+    ``sd_scale``, ``autocorrelation_1s``); otherwise the truth is the speeds ``x̄ + γ (x̂ − x̄)``
+    and the regressors the latent speeds (``error.source`` "fast_part", with ``path_power`` and
+    ``fresh``: where that path's fast power beats the torque noise's, each replica's regressor
+    wheel speed swaps the fast part for a fresh path of its ``level`` [m/s] and
+    ``autocorrelation_1s``). ``torque``: the
+    recording's; ``measured``: its :class:`Signals` on the latent speeds, whose weights select the
+    samples γ is matched on. ``fast_power`` [-, adhesion²]: the recording's residual fast power
+    (``recording``) and its upper bound (``upper95``, :func:`fast_power_bound`), the torque
+    noise's (``torque_noise``) and what the whole fixed error path adds at γ = 0 (``error_path``)."""
     torque = np.asarray(torque, float)
     keep = np.asarray(measured.weight) > 0
     t = np.asarray(measured.time)
