@@ -331,8 +331,9 @@ def replicas(torque, measured, vehicle: Vehicle, p_truth, n_replicas: int, seed:
     lag_1s = min(max_lag, int(round(1.0 / dt)))
     if coast is None:
         gamma = error_share(powers["upper95"], torque_power, lambda g: fast_power(path_mu(g) - mu_fit, keep))
-        clean_torque = (path_mu(gamma) + deriv) * scale
-        path_power = fast_power(path_mu(gamma) - mu_fit, keep)
+        mu_gamma = path_mu(gamma)
+        clean_torque = (mu_gamma + deriv) * scale
+        path_power = fast_power(mu_gamma - mu_fit, keep)
         error = {"source": "fast_part", "fresh": bool(path_power > torque_power), "path_power": path_power}
         if not error["fresh"]:  # the replicas differ by their torque noise: one error path serves
             draws = [(_noisy(clean_torque, model, rng), latent) for _ in range(n_replicas)]
