@@ -32,6 +32,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..identify.lm import BoxLMOptions, box_lm
+from ..identify.slip_law import GH_WEIGHTS, slip_nodes
 from ..models.kinematics import creepage
 from ..models.polach import PARAM_NAMES, polach_adhesion
 from ..status import Status
@@ -270,34 +271,49 @@ def fit_candidates(p0, idx, actives, sig: Signals, n_valid, folds: bool = True, 
 
 
 @jax.jit
-def _slip_slope(params, sig: Signals) -> jax.Array:
-    """``∂μ/∂w`` (n,) of the plain model at ``params``: the prediction's derivative in the wheel
-    speed, sample by sample (forward mode, one pass)."""
+def slip_variance(params, sig: Signals) -> jax.Array:
+    """``Var[μ(w)]`` (n,) [-²] of the plain model at ``params`` over the true slip's law ``w``
+    (:func:`jadhesion.identify.slip_law.slip_nodes`: ``N(ŵ, sd²)`` truncated to the force's side),
+    by :data:`~jadhesion.identify.slip_law.GH_NODES`-node Gauss–Hermite quadrature, the variance of
+    the fits' likelihood (:func:`jadhesion.identify.likelihood.curve_moments`). On the curve's
+    straight parts it is ``(∂μ/∂w)² sd²``; where ``sd`` spans the curve's bend, at walking pace
+    above all (creep ``w/v``), it is the spread of the curve over that span, which the slope at
+    one point misses."""
     none = jnp.zeros(ext.N_EXTRA, bool)
+    slip = sig.wheel_speed - sig.speed
+    nodes = slip[None, :] + sig.slip_sd[None, :] * slip_nodes(slip, sig.slip_sd, sig.adhesion)
+    exact = sig._replace(slip_sd=jnp.zeros_like(sig.slip_sd))
 
-    def curve(vw):
-        return ext.predict(params, none, sig._replace(wheel_speed=vw))[1]
+    def curve(w):
+        return ext.predict(params, none, exact._replace(wheel_speed=sig.speed + w))[1]
 
-    return jax.jvp(curve, (sig.wheel_speed,), (jnp.ones_like(sig.wheel_speed),))[1]
+    mu = jax.vmap(curve)(nodes)
+    weights = jnp.asarray(GH_WEIGHTS, mu.dtype)[:, None]
+    mean = jnp.sum(weights * mu, axis=0)
+    return jnp.maximum(jnp.sum(weights * (mu - mean[None, :]) ** 2, axis=0), 0.0)
 
 
 def eiv_weights(params, sig: Signals, target_sd: float) -> np.ndarray:
-    """Errors-in-variables weights (n,) of the fits' residuals: ``1/√(σ_μ² + (∂μ/∂w)² σ_w²)``
-    (Orear's effective variance, the first-order orthogonal-distance fit, as LM's second stage in
-    :func:`jadhesion.identify.polach_residuals.polach_lm_residual`), ``∂μ/∂w`` the base model's
-    slope in the slip at ``params``, ``σ_w = sig.slip_sd`` [m/s] the smoother's, ``σ_μ = target_sd``
-    [-] (at least :data:`MIN_TARGET_SD`); times ``sig.weight`` and normalised to mean 1 over the
-    selected samples. On the steep initial slope a slip error of a few mm/s moves the curve by more
-    than the target's noise, so those samples count for less. Unweighted, an attenuated slope plus
-    a torque offset or a radius error fitted clean recordings of the independent generator far
-    better than Polach alone (in-sample SSE reductions 0.68–0.94 on 6 of its first 14 clean
-    recordings, seed 11). Coloured speed noise, which the smoother tracks as motion, is not in
-    ``slip_sd``: an estimate of it from the train dynamics read 18 mm/s on our simulator (whose
-    vehicle speed does not follow that model) and weighted real effects out of the fits."""
-    slope = _slip_slope(jnp.asarray(params), sig)
-    var_w = np.asarray(sig.slip_sd) ** 2
+    """Errors-in-variables weights (n,) of the fits' residuals: ``1/√(σ_μ² + Var[μ(w)])``
+    (Orear's effective variance, with the curve's variance over the slip's law by quadrature,
+    :func:`slip_variance`, as LM's second stage in
+    :func:`jadhesion.identify.polach_residuals.polach_lm_residual`), ``sd = sig.slip_sd`` [m/s] the
+    smoother's, ``σ_μ = target_sd`` [-] (at least :data:`MIN_TARGET_SD`); times ``sig.weight`` and
+    normalised to mean 1 over the selected samples. On the steep initial slope a slip error of a
+    few mm/s moves the curve by more than the target's noise, so those samples count for less.
+    Unweighted, an attenuated slope plus a torque offset or a radius error fitted clean recordings
+    of the independent generator far better than Polach alone (in-sample SSE reductions 0.68–0.94
+    on 6 of its first 14 clean recordings, seed 11). Linearised (``(∂μ/∂w)² sd²`` at the smoothed
+    slip), the weights missed walking pace: there a slip error of ``sd`` is a creep error of
+    ``sd/v``, which spans the whole micro-slip region, while the slope at a smoothed slip in
+    saturation is ~0; such samples kept full weight, and a rail change "explained" their misfit on
+    clean starts of the independent generator (SSE reductions 0.88–0.96). Coloured speed noise,
+    which the smoother tracks as motion, is not in ``slip_sd``: an estimate of it from the train
+    dynamics read 18 mm/s on our simulator (whose vehicle speed does not follow that model) and
+    weighted real effects out of the fits."""
+    var_mu = np.asarray(slip_variance(jnp.asarray(params), sig))
     sd_mu = max(float(target_sd), MIN_TARGET_SD)
-    w = np.asarray(sig.weight) / np.sqrt(sd_mu**2 + np.asarray(slope) ** 2 * var_w)
+    w = np.asarray(sig.weight) / np.sqrt(sd_mu**2 + var_mu)
     return w / np.mean(w[np.asarray(sig.weight) > 0])
 
 
