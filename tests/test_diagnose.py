@@ -185,7 +185,7 @@ def test_replica_signals_are_the_recording_with_its_torque(clean):
     """The null builds its replicas' signals from the speeds once (torque_builder): the same,
     bit for bit, as building them from scratch with the replica's torque."""
     cols = _raw(clean)
-    latent = null.latent_speeds(cols, clean.vehicle)
+    latent, _ = null.latent_speeds(cols, clean.vehicle)
     mask = np.arange(N) % 5 != 0
     torque = np.asarray(cols["traction_torque"]) * 1.01 + 30.0
     build = torque_builder(cols, clean.vehicle, mask=mask, regressors=latent)
@@ -199,7 +199,7 @@ def test_replica_signals_are_the_recording_with_its_torque(clean):
 def test_threaded_null_equals_one_replica_after_another(clean, monkeypatch):
     """Replicas fitted on several threads give the statistics of fitting them one by one."""
     cols = _raw(clean)
-    latent = null.latent_speeds(cols, clean.vehicle)
+    latent, _ = null.latent_speeds(cols, clean.vehicle)
     sig = from_columns(cols, clean.vehicle, regressors=latent)
     p_base, _ = fitting.fit_base(fitting.pad_signals(sig), N)
     sets = [()] + [(n,) for n in ext.NAMES]
@@ -219,7 +219,7 @@ def test_replicas_draw_a_fresh_error_path_where_the_recording_coasts(clean):
     error path of the coasting-scaled slip sd (unit variance in those units, pooled over 4 replicas
     within 35 %), drawn afresh per replica, and γ is not used."""
     cols = _raw(clean)
-    latent = null.latent_speeds(cols, clean.vehicle)
+    latent, _ = null.latent_speeds(cols, clean.vehicle)
     sig = from_columns(cols, clean.vehicle, regressors=latent)
     p_base, _ = fitting.fit_base(fitting.pad_signals(sig), N)
     build = torque_builder(cols, clean.vehicle, regressors=latent)
@@ -248,7 +248,7 @@ def test_replicas_draw_fresh_error_paths_where_one_path_would_dominate(clean):
     swaps the fast part for its own Gaussian path of the fast part's robust level (unit variance in
     those units within 35 %, pooled over 4 replicas), not one shared path."""
     cols = _raw(clean)
-    v, vw, sd = null.latent_speeds(cols, clean.vehicle)
+    (v, vw, sd), _ = null.latent_speeds(cols, clean.vehicle)
     rng = np.random.default_rng(5)
     phi = np.exp(-np.median(np.diff(np.asarray(cols["time"]))) / 0.3)
     e = np.zeros(N)

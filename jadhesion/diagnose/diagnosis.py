@@ -280,7 +280,7 @@ def diagnose(
     if keep.sum() < 50:
         raise InputError(f"{name}: diagnosis needs at least 50 selected samples, got {int(keep.sum())}")
     from_columns(columns, vehicle, name)  # checks the columns before the smoother reads them
-    latent = null.latent_speeds(columns, vehicle)
+    latent, sd_scale = null.latent_speeds(columns, vehicle)
     sig = from_columns(columns, vehicle, name, keep, latent)
     n_valid = int(sig.time.shape[0])
     # errors in variables: a first base fit gives the curve's slope, whose weights every fit uses
@@ -427,9 +427,12 @@ def diagnose(
             "max-T p-values of the in-sample SSE reduction",
         },
         "errors_in_variables": {
-            "method": "effective-variance weights 1/sqrt(target_sd^2 + slope^2 slip_sd^2)",
+            "method": "effective-variance weights 1/sqrt(target_sd^2 + Var[mu(w)]), the curve's "
+            "variance over the slip's sign-truncated law (Gauss-Hermite); slip_sd the smoother's times "
+            "slip_sd_scale, the understatement its coasting shows",
             "target_sd": target_sd,
             "slip_sd_median_m_s": float(np.median(latent[2][keep])),
+            "slip_sd_scale": sd_scale,
         },
     }
     result["warnings"] = _warnings(result)

@@ -89,6 +89,7 @@ from ..data.creep_state import (
     COAST_MIN_SAMPLES,
     coasting_residual,
     coasting_scale,
+    coasting_sd_scale,
     difference_sd,
     smooth_creep,
 )
@@ -170,17 +171,24 @@ def grid_step(x) -> float:
 
 
 def latent_speeds(columns: dict, vehicle: Vehicle) -> tuple:
-    """``(v̂, v̂_w, sd_w)`` [m/s]: the Kalman/RTS smoother's latent vehicle and wheel speeds and the
-    slip's standard deviation (:func:`jadhesion.data.creep_state.smooth_creep`), the regressors
-    of every diagnosis fit."""
+    """``((v̂, v̂_w, sd_w), scale)``: the Kalman/RTS smoother's latent vehicle and wheel speeds
+    [m/s] and the slip's standard deviation [m/s] (:func:`jadhesion.data.creep_state.smooth_creep`),
+    the regressors of every diagnosis fit; ``sd_w`` is the smoother's times ``scale``, the factor
+    by which the recording's coasting shows it understated
+    (:func:`jadhesion.data.creep_state.coasting_sd_scale`; 1 without coasting), as ``fit``'s
+    dataset does (:func:`jadhesion.data.dataset.to_dataset`). Unscaled, the independent
+    generator's coloured speed sensors left slip errors of 5–10 mm/s against an sd of 1 mm/s on
+    its starts: the sign-truncated law then put walking-pace samples at zero slip with full
+    weight, and a rail change took up their misfit."""
     est = smooth_creep(
         *(np.asarray(columns[k], float) for k in ("time", "wheel_speed", "vehicle_speed", "traction_torque")),
         vehicle.wheelset_inertia_kgm2,
         vehicle.wheel_radius_m,
         vehicle.axle_load_kg,
     )
+    scale, _ = coasting_sd_scale(est.slip, est.slip_sd, est.adhesion, est.vehicle_speed)
     v = np.asarray(est.vehicle_speed)
-    return v, v + np.asarray(est.slip), np.asarray(est.slip_sd)
+    return (v, v + np.asarray(est.slip), float(scale) * np.asarray(est.slip_sd)), float(scale)
 
 
 def local_mean(x, half: int) -> np.ndarray:
