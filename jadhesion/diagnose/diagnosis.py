@@ -283,7 +283,8 @@ def diagnose(
     latent, sd_scale = null.latent_speeds(columns, vehicle)
     sig = from_columns(columns, vehicle, name, keep, latent)
     n_valid = int(sig.time.shape[0])
-    # errors in variables: a first base fit gives the curve's slope, whose weights every fit uses
+    # errors in variables: a first base fit gives the curve whose variance over the slip's law sets
+    # the weights every fit uses
     p_first, _ = fitting.fit_base(fitting.pad_signals(sig), n_valid)
     target_sd = float(difference_sd(np.asarray(sig.adhesion)))
     sig = sig._replace(weight=fitting.eiv_weights(p_first, sig, target_sd))

@@ -32,7 +32,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..identify.lm import BoxLMOptions, box_lm
-from ..identify.slip_law import GH_WEIGHTS, slip_nodes
+from ..identify.slip_law import node_moments, node_slips
 from ..models.kinematics import creepage
 from ..models.polach import PARAM_NAMES, polach_adhesion
 from ..status import Status
@@ -273,24 +273,20 @@ def fit_candidates(p0, idx, actives, sig: Signals, n_valid, folds: bool = True, 
 @jax.jit
 def slip_variance(params, sig: Signals) -> jax.Array:
     """``Var[μ(w)]`` (n,) [-²] of the plain model at ``params`` over the true slip's law ``w``
-    (:func:`jadhesion.identify.slip_law.slip_nodes`: ``N(ŵ, sd²)`` truncated to the force's side),
+    (:func:`jadhesion.identify.slip_law.node_slips`: ``N(ŵ, sd²)`` truncated to the force's side),
     by :data:`~jadhesion.identify.slip_law.GH_NODES`-node Gauss–Hermite quadrature, the variance of
     the fits' likelihood (:func:`jadhesion.identify.likelihood.curve_moments`). On the curve's
     straight parts it is ``(∂μ/∂w)² sd²``; where ``sd`` spans the curve's bend, at walking pace
     above all (creep ``w/v``), it is the spread of the curve over that span, which the slope at
     one point misses."""
     none = jnp.zeros(ext.N_EXTRA, bool)
-    slip = sig.wheel_speed - sig.speed
-    nodes = slip[None, :] + sig.slip_sd[None, :] * slip_nodes(slip, sig.slip_sd, sig.adhesion)
+    nodes = node_slips(sig.wheel_speed - sig.speed, sig.slip_sd, sig.adhesion)
     exact = sig._replace(slip_sd=jnp.zeros_like(sig.slip_sd))
 
     def curve(w):
         return ext.predict(params, none, exact._replace(wheel_speed=sig.speed + w))[1]
 
-    mu = jax.vmap(curve)(nodes)
-    weights = jnp.asarray(GH_WEIGHTS, mu.dtype)[:, None]
-    mean = jnp.sum(weights * mu, axis=0)
-    return jnp.maximum(jnp.sum(weights * (mu - mean[None, :]) ** 2, axis=0), 0.0)
+    return node_moments(jax.vmap(curve)(nodes))[1]
 
 
 def eiv_weights(params, sig: Signals, target_sd: float) -> np.ndarray:

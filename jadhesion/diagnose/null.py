@@ -53,8 +53,11 @@ effects: there the fast part is mostly real slip motion, and as error it widened
 **Where the recording coasts** (:func:`coasting_error`: at least
 :data:`~jadhesion.data.creep_state.COAST_MIN_SAMPLES` samples moving with ``|μ̂|`` below
 :data:`~jadhesion.data.creep_state.COAST_ADHESION`), the true slip is a small known fraction of the
-sensors' noise, so the smoothed slip there *is* its error: its level against the smoother's sd
-(:func:`jadhesion.data.creep_state.coasting_sd_scale`, 1.0–8.3× on the independent generator) and
+sensors' noise, so the smoothed slip there *is* its error: its level against the regressors'
+sd (:func:`jadhesion.data.creep_state.coasting_sd_scale`; the smoother's sd falls 1.0–8.3× short
+on the independent generator, and :func:`latent_speeds` has already scaled it by that, so this
+``scale`` is what remains: 1.00–1.01 on 22 such recordings, the two μ̂ that pick the coasting
+samples differing slightly) and
 its autocorrelation (:func:`error_autocorrelation`, pooled within the coasting runs, lags up to
 :data:`ERROR_MAX_LAG_S`) are measured on this recording. Each replica then takes the latent speeds
 as its truth and, as its regressor wheel speed, ``v̂_w + scale · sd_w · z_r``, ``z_r`` a fresh

@@ -85,7 +85,7 @@ from ..models.kinematics import SPEED_FLOOR
 from ..models.polach import polach_adhesion
 from .batch_fit import bucketed
 from .observer_view import ObserverTerms, lowpass
-from .slip_law import GH_WEIGHTS, posterior_nodes, slip_nodes
+from .slip_law import node_moments, node_slips, posterior_nodes
 
 LIKELIHOODS = ("gauss", "laplace", "ar1", "observer", "student")
 #: Likelihoods with an AR(1) noise coefficient ``rho`` (the last sampled coordinate).
@@ -129,8 +129,7 @@ def with_node_slips(data: PolachDataset, law: str = "normal") -> PolachDataset:
         return jax.vmap(partial(with_node_slips, law=law))(data)
     if law == "population":
         return data._replace(node_slips=posterior_nodes(data.slip, data.slip_sd, data.adhesion, data.weight))
-    nodes = data.slip[None, :] + data.slip_sd[None, :] * slip_nodes(data.slip, data.slip_sd, data.adhesion)
-    return data._replace(node_slips=nodes.T)
+    return data._replace(node_slips=node_slips(data.slip, data.slip_sd, data.adhesion).T)
 
 
 _stored_nodes = jax.jit(with_node_slips, static_argnames="law")
@@ -169,10 +168,7 @@ def curve_moments(theta, data: PolachDataset):
         return polach_adhesion(theta, data.creep, data.slip, data.k_eps), jnp.zeros_like(data.slip)
     speed = jnp.maximum(jnp.abs(data.vehicle_speed), SPEED_FLOOR)
     w = with_node_slips(data).node_slips.T
-    mu = polach_adhesion(theta, w / speed[None, :], w, data.k_eps)
-    weights = jnp.asarray(GH_WEIGHTS, mu.dtype)[:, None]
-    mean = jnp.sum(weights * mu, axis=0)
-    return mean, jnp.maximum(jnp.sum(weights * (mu - mean[None, :]) ** 2, axis=0), 0.0)
+    return node_moments(polach_adhesion(theta, w / speed[None, :], w, data.k_eps))
 
 
 def _predict(theta, data, likelihood, obs):

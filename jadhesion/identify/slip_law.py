@@ -99,6 +99,20 @@ def slip_nodes(slip, slip_sd, adhesion):
     return jnp.where(sign[None, :] == 0, z, sign[None, :] * u)
 
 
+def node_slips(slip, slip_sd, adhesion):
+    """The true slips [m/s] (GH_NODES, n) at the sign-truncated normal's nodes,
+    ``slip + slip_sd · e_j`` (:func:`slip_nodes`; inputs as there)."""
+    return slip[None, :] + slip_sd[None, :] * slip_nodes(slip, slip_sd, adhesion)
+
+
+def node_moments(values):
+    """Mean and variance (n,) of ``values`` (GH_NODES, n), a function at each node, under the
+    quadrature weights :data:`GH_WEIGHTS` (the variance floored at 0 against rounding)."""
+    weights = jnp.asarray(GH_WEIGHTS, values.dtype)[:, None]
+    mean = jnp.sum(weights * values, axis=0)
+    return mean, jnp.maximum(jnp.sum(weights * (values - mean[None, :]) ** 2, axis=0), 0.0)
+
+
 def truncated_mean(slip, slip_sd, adhesion):
     """Mean [m/s] (n,) of the true slip's law: ``slip + σ slip_sd φ(a)/Φ(−a)`` (module docstring;
     ``slip`` where untruncated or ``slip_sd`` is 0; beyond ``a`` = :data:`TAIL` the Mills ratio's
@@ -162,7 +176,7 @@ def posterior_nodes(slip, slip_sd, adhesion, weight=None):
     grid, log_density = population_law(slip, slip_sd, adhesion, weight)
     t = jnp.linspace(-LOCAL_WIDTH, LOCAL_WIDTH, LOCAL_POINTS, dtype=slip.dtype)
     p = jnp.asarray(ndtr(_GH_Z), slip.dtype)
-    normal = (slip[None, :] + slip_sd[None, :] * slip_nodes(slip, slip_sd, adhesion)).T
+    normal = node_slips(slip, slip_sd, adhesion).T
 
     def one(row):
         w, sd, mu, fallback = row
