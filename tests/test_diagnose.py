@@ -203,8 +203,13 @@ def test_threaded_null_equals_one_replica_after_another(clean, monkeypatch):
     sig = from_columns(cols, clean.vehicle, regressors=latent)
     p_base, _ = fitting.fit_base(fitting.pad_signals(sig), N)
     sets = [()] + [(n,) for n in ext.NAMES]
-    args = (cols, np.ones(N), latent, clean.vehicle, p_base, 2.0)
-    rest = (diagnosis._round_rows(p_base, sets), diagnosis._merger(sets), N, 3)
+    args = (cols, np.ones(N), latent, clean.vehicle, p_base, p_base)
+    rest = (
+        lambda d, u: diagnosis._round_rows(diagnosis._with_starts(p_base, d, u), sets),
+        diagnosis._merger(sets),
+        N,
+        3,
+    )
     monkeypatch.setattr(null, "workers", lambda n: 3)  # three threads whatever the machine's cores
     threaded, _ = null.null_statistics(*args, *rest)
     monkeypatch.setattr(null, "workers", lambda n: 1)

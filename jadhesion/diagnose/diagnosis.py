@@ -72,6 +72,14 @@ def _extra_rows(sets) -> list:
     return out
 
 
+def _with_starts(p_base, drop: float, u_change: float) -> np.ndarray:
+    """``p_base`` (P,) with the rail change's data-driven starts (:func:`features.starting_values`)."""
+    p0 = np.array(p_base, float)
+    p0[5 + ext.EXTRA_NAMES.index("drop")] = drop
+    p0[5 + ext.EXTRA_NAMES.index("u_change")] = u_change
+    return p0
+
+
 def _round_rows(p0, sets) -> tuple:
     """Rows ``(starts, idx, actives)`` of one round: the effect sets (the first is the reference)
     from ``p0``, plus their extra starts (:func:`_extra_rows`); padded to :data:`N_CANDIDATES` rows
@@ -294,13 +302,10 @@ def diagnose(
     r_base = target - pred
     lib = features.library(sig, pred)
     sigs = features.signatures(r_base[keep], {k: v[keep] for k, v in lib.items()})
-    drop, u_change, tau_th = features.starting_values(sig, r_base * keep, pred * keep)
+    drop, u_change, tau_th = features.starting_values_at(sig, p_base)
     sig = sig._replace(heat=lowpass_foh(sig.time, sig.power, tau_th))
     padded = fitting.pad_signals(sig)
-    p0 = p_base.copy()
-    start = {"drop": drop, "u_change": u_change}
-    for k, v in start.items():
-        p0[5 + ext.EXTRA_NAMES.index(k)] = v
+    p0 = _with_starts(p_base, drop, u_change)
 
     sets1 = [()] + [(n,) for n in ext.NAMES]
     t1, act1 = _fit_round(padded, n_valid, p0, sets1)
@@ -319,8 +324,8 @@ def diagnose(
             latent,
             vehicle,
             p_truth,
-            tau_th,
-            _round_rows(p0, sets1),
+            p_base,
+            lambda d, u: _round_rows(_with_starts(p_base, d, u), sets1),
             _merger(sets1),
             n_valid,
             n_replicas,

@@ -8,7 +8,7 @@ import numpy as np
 
 from ..data.observer import lowpass_foh
 from ..models.effects import EFFECTS
-from .extensions import POWER_REF, STEP_WIDTH
+from .extensions import N_EXTRA, POWER_REF, STEP_WIDTH, predict
 from .signals import Signals
 
 #: The signal each effect's residual signature follows (from the effect registry).
@@ -85,6 +85,16 @@ def starting_values(sig: Signals, residual, mu_pred) -> tuple:
     ]
     tau_th = THERMAL_LAGS[int(np.argmax(gains))]
     return float(np.clip(drop, -1.0, 0.9)), float(u_change), float(tau_th)
+
+
+def starting_values_at(sig: Signals, params) -> tuple:
+    """:func:`starting_values` on the residual of the plain model at ``params`` (P,) over the
+    selected samples (``sig.weight > 0``): the data-driven starts of a recording, and of each of
+    its null's replicas, which must pick theirs the same way (:func:`jadhesion.diagnose.null.
+    null_statistics`)."""
+    target, pred = (np.asarray(x) for x in predict(params, np.zeros(N_EXTRA, bool), sig))
+    keep = np.asarray(sig.weight) > 0
+    return starting_values(sig, (target - pred) * keep, pred * keep)
 
 
 def stlsq(

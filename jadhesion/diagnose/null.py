@@ -96,11 +96,13 @@ from ..data.creep_state import (
     difference_sd,
     smooth_creep,
 )
+from ..data.observer import lowpass_foh
 from ..data.vehicle import GRAVITY, Vehicle
 from ..identify.uncertainty import Z90
 from ..status import Status
 from . import extensions as ext
 from . import fitting
+from .features import starting_values_at
 from .signals import torque_builder
 
 #: Replicas of the null (the smallest R for which p ≤ 0.05 is attainable is 19) and the level.
@@ -378,8 +380,8 @@ def null_statistics(
     latent,
     vehicle,
     p_truth,
-    tau_heat,
-    rows,
+    p_base,
+    round_rows,
     merge,
     n_valid: int,
     n_replicas=N_REPLICAS,
@@ -388,14 +390,19 @@ def null_statistics(
     """``(statistics (R, C − 1), noise model)``: every replica's :func:`statistic` of the
     round-1 candidates.
 
-    ``rows = (starts, idx, actives)`` are the observed recording's round-1 rows (base first) and
-    ``merge(table) -> table`` the same post-processing (best radius start); ``tau_heat`` the
-    thermal lag picked on the recording; ``mask`` its fit weights (> 0 on the selected samples);
-    ``latent`` its :func:`latent_speeds`; ``p_truth`` the curve the replicas are re-synthesised
-    from (:func:`replicas`). Each replica's signals are built from its torque and regressors
-    (:func:`torque_builder`, the recording's weights ``mask``); they are fitted on
-    :func:`workers` threads (XLA runs them in parallel; the results are those of
-    one after another).
+    ``round_rows(drop, u_change) -> (starts, idx, actives)`` gives the round-1 rows (base first)
+    from the rail change's starts, and ``merge(table) -> table`` the recording's post-processing
+    (best start of an effect with extra starts); ``mask`` its fit weights (> 0 on the selected
+    samples); ``latent`` its :func:`latent_speeds`; ``p_truth`` the curve the replicas are
+    re-synthesised from (:func:`replicas`), ``p_base`` the recording's base fit. Each replica's
+    signals are built from its torque and regressors (:func:`torque_builder`, the recording's
+    weights ``mask``), and each picks its data-driven starts — the rail change's time and size,
+    the thermal lag — from its own residual at ``p_base``
+    (:func:`jadhesion.diagnose.features.starting_values_at`), as the recording picked its own:
+    with the recording's starts, a replica's rail change started at a time chosen for another
+    series' noise and its LM ended in a lesser local optimum, so the null of that candidate was
+    too narrow. They are fitted on :func:`workers` threads (XLA runs them in parallel; the
+    results are those of one after another).
     """
     torque = columns["traction_torque"]
     on_latent = torque_builder(columns, vehicle, mask=mask, regressors=latent)
@@ -408,8 +415,10 @@ def null_statistics(
             if regressors is latent
             else torque_builder(columns, vehicle, mask=mask, regressors=regressors)
         )
-        sig = build(replica_torque, tau_heat)
-        sse, status = _fit_replica(*rows, fitting.pad_signals(sig), n_valid)
+        sig = build(replica_torque)
+        drop, u_change, tau_heat = starting_values_at(sig, p_base)
+        sig = sig._replace(heat=lowpass_foh(sig.time, sig.power, tau_heat))
+        sse, status = _fit_replica(*round_rows(drop, u_change), fitting.pad_signals(sig), n_valid)
         return statistic(merge({"sse": np.array(sse), "status": np.array(status)}), converged_only=False)
 
     with ThreadPoolExecutor(workers(n_replicas)) as pool:
