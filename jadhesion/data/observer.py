@@ -46,6 +46,7 @@ def foh_coefficients(dt, t0):
     return 1.0 - one_minus_alpha, one_minus_alpha, beta
 
 
+@jax.jit
 def lowpass_foh(time, signal, t0):
     """First-order low-pass ``1/(1 + s T0)`` of a piecewise-linear signal, exact at the samples.
 
@@ -56,6 +57,8 @@ def lowpass_foh(time, signal, t0):
 
     Returns:
         The filter state at each sample, shape (n,), starting at rest (``x_0 = signal[0]``).
+        Jitted: called on its own (the diagnosis's heat, per replica) op-by-op dispatch cost
+        ~70 ms at 3 000 samples against 0.1 ms compiled.
     """
     alpha, one_minus_alpha, beta = foh_coefficients(jnp.diff(time), t0)
 
