@@ -352,6 +352,9 @@ def test_a_size_the_effect_does_not_have_is_not_named():
     text = explain(result, LOCO_22E)
     assert text.startswith("No catalogue effect is found: rail change (+2.5%, p = 0.05) passed every test")
     assert "beyond the effect's typical range" in text and "no other candidate" in text
+    # without a null (``--replicas 0``) there is no p-value to quote: said without one, no TypeError
+    no_null = explain({**result, "candidates": [{**rail, "p_value": None}]}, LOCO_22E)
+    assert no_null.startswith("No catalogue effect is found: rail change (+2.5%) passed every test")
 
 
 def test_warnings_say_what_was_not_tested():

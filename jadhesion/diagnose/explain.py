@@ -62,7 +62,9 @@ def explain(result: dict, vehicle: Vehicle) -> str:
         if beyond:
             text = opening + (
                 " and ".join(
-                    f"{c['name'].replace('_', ' ')} ({c['gain']:+.1%}, p = {c['p_value']:.2f})"
+                    f"{c['name'].replace('_', ' ')} ({c['gain']:+.1%}"
+                    + ("" if c["p_value"] is None else f", p = {c['p_value']:.2f}")
+                    + ")"
                     for c in beyond
                 )
                 + " passed every test only at a size beyond the effect's typical range: the base model's "
