@@ -218,32 +218,43 @@ def test_threaded_null_equals_one_replica_after_another(clean, monkeypatch):
     np.testing.assert_array_equal(threaded, serial)
 
 
-def test_replicas_draw_a_fresh_error_path_where_the_recording_coasts(clean):
+def SPEEDS(cols):
+    """The raw (vehicle, wheel) speed columns, as :func:`null.replicas` takes them."""
+    return np.asarray(cols["vehicle_speed"], float), np.asarray(cols["wheel_speed"], float)
+
+
+def test_replicas_are_re_smoothed_where_the_recording_coasts(clean):
     """Without coasting every replica's regressors are the latent speeds (the fixed path, γ
-    matched); with 300 coasting samples (torque off) each replica's wheel speed carries its own
-    error path of the coasting-scaled slip sd (unit variance in those units, pooled over 4 replicas
-    within 35 %), drawn afresh per replica, and γ is not used."""
+    matched). With 300 coasting samples (torque off) each replica's regressors are the smoother's
+    answer to fresh raw speeds: the latent ones plus white noise at the recording's measured levels
+    and quantisation, and on the wheel an AR(1) colour of the coasting error's level and
+    correlation time; so each replica's slip error is its own, of the size the coasting shows
+    (rms between 0.7× the colour level and 1.5× the colour and white noise together; 1.00–1.04×
+    measured), and γ is not used."""
     cols = _raw(clean)
     latent, _ = null.latent_speeds(cols, clean.vehicle)
     sig = from_columns(cols, clean.vehicle, regressors=latent)
     p_base, _ = fitting.fit_base(fitting.pad_signals(sig), N)
     build = torque_builder(cols, clean.vehicle, regressors=latent)
     torque = np.asarray(cols["traction_torque"], float)
-    draws, info = null.replicas(torque, build(torque), clean.vehicle, p_base, 4, 0, latent)
+    draws, info = null.replicas(torque, build(torque), clean.vehicle, p_base, 4, 0, latent, SPEEDS(cols))
     assert info["error"]["source"] == "fast_part" and info["gamma"] is not None
     assert not info["error"]["fresh"]  # clean speed sensors: the torque noise dominates
     assert all(regressors is latent for _, regressors in draws)
     coasting = torque.copy()
     coasting[600:900] = 0.0
-    draws, info = null.replicas(coasting, build(coasting), clean.vehicle, p_base, 4, 0, latent)
-    assert info["error"]["source"] == "coasting" and info["gamma"] is None
-    assert info["error"]["coasting_samples"] >= 250, info
-    assert all(regressors[0] is latent[0] for _, regressors in draws)
-    z = np.array([(reg[1] - latent[1]) / (info["error"]["sd_scale"] * latent[2]) for _, reg in draws])
-    assert abs(np.mean(z**2) - 1.0) < 0.35, np.mean(z**2)
-    # drawn afresh: not one shared path (smooth paths over 1 500 samples have few independent
-    # stretches, so sample correlations of independent draws reach ±0.35 here)
-    assert np.max(np.abs(np.corrcoef(z)[np.triu_indices(4, 1)])) < 0.8
+    draws, info = null.replicas(coasting, build(coasting), clean.vehicle, p_base, 4, 0, latent, SPEEDS(cols))
+    error = info["error"]
+    assert error["source"] == "coasting" and info["gamma"] is None
+    assert error["coasting_samples"] >= 250, info
+    assert error["colour_tau_s"] > 0 and error["colour_level"] > 0
+    white = np.hypot(error["sensors"]["wheel_speed"]["sigma"], error["sensors"]["vehicle_speed"]["sigma"])
+    expected = np.hypot(error["colour_level"], white)
+    slip_error = np.array([(reg[1] - reg[0]) - (latent[1] - latent[0]) for _, reg in draws])
+    rms = np.sqrt(np.mean(slip_error**2, axis=1))
+    assert np.all((0.7 * error["colour_level"] < rms) & (rms < 1.5 * expected)), (rms, error)
+    # drawn afresh: not one shared path
+    assert np.max(np.abs(np.corrcoef(slip_error)[np.triu_indices(4, 1)])) < 0.8
 
 
 def test_replicas_draw_fresh_error_paths_where_one_path_would_dominate(clean):
@@ -264,7 +275,7 @@ def test_replicas_draw_fresh_error_paths_where_one_path_would_dominate(clean):
     p_base, _ = fitting.fit_base(fitting.pad_signals(sig), N)
     build = torque_builder(cols, clean.vehicle, regressors=latent)
     torque = np.asarray(cols["traction_torque"], float)
-    draws, info = null.replicas(torque, build(torque), clean.vehicle, p_base, 4, 0, latent)
+    draws, info = null.replicas(torque, build(torque), clean.vehicle, p_base, 4, 0, latent, SPEEDS(cols))
     err = info["error"]
     assert err["source"] == "fast_part" and err["fresh"], info
     assert err["path_power"] > info["fast_power"]["torque_noise"]

@@ -58,17 +58,20 @@ sd (:func:`jadhesion.data.creep_state.coasting_sd_scale`; the smoother's sd fall
 on the independent generator, and :func:`latent_speeds` has already scaled it by that, so this
 ``scale`` is what remains: 1.00–1.01 on 22 such recordings, the two μ̂ that pick the coasting
 samples differing slightly) and
-its autocorrelation (:func:`error_autocorrelation`, pooled within the coasting runs, lags up to
-:data:`ERROR_MAX_LAG_S`) are measured on this recording. Each replica then takes the latent speeds
-as its truth and, as its regressor wheel speed, ``v̂_w + scale · sd_w · z_r``, ``z_r`` a fresh
-stationary Gaussian path with that autocorrelation (:func:`gaussian_paths`): classical errors in
-variables of the measured size and colour, drawn afresh per replica (γ is not used). Measured
-(``benchmarks/results/diagnose_null_*_coast.json``, 2026-11-28): 55 of the independent
-generator's 96 clean recordings (three seeds) coast, and its false alarms went 11 → 8 of 96; six
-of the eight left do not coast (five starts, a sweep). Our simulator's recordings coast only when
-asked (``simulate --coast``): with 3 s gaps, 59 of 60 clean ones took this path, measured the
-smoother's sd short by 1.0–1.79× (about what their truth says) and gave 1 false alarm in 60 (2
-without the gaps).
+its autocorrelation (:func:`error_autocorrelation`, pooled within the coasting runs) are
+measured on this recording. The truth is then the latent speeds, and each replica's regressors are
+the smoother re-run (:func:`jadhesion.data.creep_state.smooth_creep`) on fresh raw signals: the
+latent speeds plus white noise at each speed channel's measured level and quantisation step
+(:func:`noise_model`, the smoother's own third-difference estimate), the wheel channel plus an
+AR(1) colour (:func:`ar1_paths`) of the coasting error's level and the correlation time its
+autocorrelation has at :data:`COLOUR_LAG_S`, and the replica's torque. The errors in variables are
+then the smoother's answer to coloured sensor noise, as in the recording. Adding a stationary path
+of the measured level and autocorrelation to the latent wheel speed instead (before 2026-11-29)
+left the null too narrow: on the independent generator's clean recordings taking this path, 23 of
+83 had a min p ≤ 0.05; against 19 of the generator's own replicas (same world, fresh sensor noise)
+its critical values were 0.572, 0.456, 0.038, 0.104 on four of them where the generator's 90 %
+points are 0.506, 0.676, 0.265, 0.308; re-smoothed, 0.639, 0.599, 0.259, 0.116 (recordings 47016,
+47020, 47017, 47002). Our simulator's recordings coast only when asked (``simulate --coast``).
 
 **Test.** The statistic of candidate c is its in-sample relative reduction of the sum of squares
 against the base fit, ``T_c = 1 − SSE_c/SSE_0`` (no cross-validation folds in the null: the
@@ -86,6 +89,8 @@ from __future__ import annotations
 import os
 from concurrent.futures import ThreadPoolExecutor
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 
 from ..data.creep_state import (
@@ -120,6 +125,9 @@ GAMMA_GRID = 1.0 - np.array(
 SLOW_HALF_WIDTH_S = 2.0
 #: Longest lag [s] of the coasting error's autocorrelation (:func:`error_autocorrelation`).
 ERROR_MAX_LAG_S = 4.0
+#: Lag [s] at which the coasting error's autocorrelation sets the colour's correlation time in the
+#: re-smoothed replicas (short: the coasting runs measure it well; 0.1–4 s runs).
+COLOUR_LAG_S = 0.25
 #: Contiguous batches of :func:`fast_power_bound`.
 N_BATCHES = 40
 #: Signals on a quantisation grid: at least this share of their changes within GRID_TOL of a
@@ -284,6 +292,19 @@ def gaussian_paths(rho, n: int, n_paths: int, rng) -> list:
     return [np.fft.irfft(root * np.fft.rfft(rng.standard_normal(m)), n=m)[:n] for _ in range(n_paths)]
 
 
+@jax.jit
+def ar1_paths(z, phi) -> jax.Array:
+    """Stationary AR(1) paths of unit variance, ``x_k = φ x_{k−1} + √(1 − φ²) z_k`` (``x_0 = z_0``),
+    from standard normal draws ``z`` (R, n); one scan over the samples for all R paths."""
+
+    def step(x, zk):
+        x = phi * x + jnp.sqrt(1.0 - phi * phi) * zk
+        return x, x
+
+    _, rest = jax.lax.scan(step, z[:, 0], z[:, 1:].T)
+    return jnp.concatenate([z[:, :1], rest.T], axis=1)
+
+
 def fast_slip_error(fast_slip, keep, max_lag: int) -> tuple:
     """``(level [m/s], autocorrelation (max_lag + 1,))`` of the latent slip's fast part on the
     selected samples ``keep``, the error a replica without coasting draws afresh: the level robust
@@ -295,16 +316,20 @@ def fast_slip_error(fast_slip, keep, max_lag: int) -> tuple:
     return level, error_autocorrelation(z, runs_of(keep), max_lag)
 
 
-def replicas(torque, measured, vehicle: Vehicle, p_truth, n_replicas: int, seed: int, latent) -> tuple:
+def replicas(
+    torque, measured, vehicle: Vehicle, p_truth, n_replicas: int, seed: int, latent, speeds
+) -> tuple:
     """``([(torque [N·m], regressors (v, v_w, sd_w) [m/s])] × R, {"torque": noise model, "gamma",
     "fast_power", "error"})``: each replica's torque, re-synthesised from the Polach curve
     ``p_truth`` (the base fit, or where that sits at the identification box's edge the fit past
     it: :func:`jadhesion.diagnose.fitting.fit_truth`) plus the recording's torque noise, and the
     regressors its fits take (module docstring). Where the recording coasts
     (:func:`coasting_error`), the truth is the latent speeds ``latent = (v̂, v̂_w, sd_w)`` and each
-    replica's regressor wheel speed carries a fresh error path with the coasting error's level and
-    autocorrelation (``gamma`` None; ``error``: ``source`` "coasting", ``coasting_samples``,
-    ``sd_scale``, ``autocorrelation_1s``); otherwise the truth is the speeds ``x̄ + γ (x̂ − x̄)``
+    replica's regressors are the smoother re-run on fresh raw speeds, white and quantised as the
+    recording's raw ``speeds = (v, v_w)`` [m/s], the wheel's coloured as its coasting error
+    (``gamma`` None; ``error``: ``source`` "coasting", ``coasting_samples``, ``sd_scale``,
+    ``autocorrelation_1s``, ``colour_level`` [m/s], ``colour_tau_s`` [s], ``sensors``); otherwise
+    the truth is the speeds ``x̄ + γ (x̂ − x̄)``
     and the regressors the latent speeds (``error.source`` "fast_part", with ``path_power`` and
     ``fresh``: where that path's fast power beats the torque noise's, each replica's regressor
     wheel speed swaps the fast part for a fresh path of its ``level`` [m/s] and
@@ -360,16 +385,33 @@ def replicas(torque, measured, vehicle: Vehicle, p_truth, n_replicas: int, seed:
         return draws, {"torque": model, "gamma": gamma, "fast_power": powers, "error": error}
     rho = error_autocorrelation(coast["z"], coast["runs"], max_lag)
     clean_torque = (mu_fit + deriv) * scale
-    sd = coast["scale"] * np.asarray(latent[2], float)
-    draws = [
-        (_noisy(clean_torque, model, rng), (latent[0], latent[1] + sd * z, latent[2]))
-        for z in gaussian_paths(rho, t.size, n_replicas, rng)
-    ]
+    lag = min(max_lag, max(1, int(round(COLOUR_LAG_S / dt))))
+    level = coast["scale"] * float(np.median(np.asarray(latent[2], float)))
+    tau = -lag * dt / float(np.log(np.clip(rho[lag], 0.01, 0.99)))
+    sensors = [noise_model(x) for x in speeds]
+    colour = np.asarray(ar1_paths(jnp.asarray(rng.standard_normal((n_replicas, t.size))), np.exp(-dt / tau)))
+    draws = []
+    for c in colour:
+        replica_torque = _noisy(clean_torque, model, rng)
+        est = smooth_creep(
+            t,
+            _noisy(latent[1] + level * c, sensors[1], rng),
+            _noisy(latent[0], sensors[0], rng),
+            replica_torque,
+            vehicle.wheelset_inertia_kgm2,
+            vehicle.wheel_radius_m,
+            vehicle.axle_load_kg,
+        )
+        v = np.asarray(est.vehicle_speed)
+        draws.append((replica_torque, (v, v + np.asarray(est.slip), latent[2])))
     error = {
         "source": "coasting",
         "coasting_samples": coast["samples"],
         "sd_scale": coast["scale"],
         "autocorrelation_1s": float(rho[lag_1s]),
+        "colour_level": level,
+        "colour_tau_s": tau,
+        "sensors": {"vehicle_speed": sensors[0], "wheel_speed": sensors[1]},
     }
     return draws, {"torque": model, "gamma": None, "fast_power": powers, "error": error}
 
@@ -406,7 +448,8 @@ def null_statistics(
     """
     torque = columns["traction_torque"]
     on_latent = torque_builder(columns, vehicle, mask=mask, regressors=latent)
-    draws, model = replicas(torque, on_latent(torque), vehicle, p_truth, n_replicas, seed, latent)
+    speeds = (columns["vehicle_speed"], columns["wheel_speed"])
+    draws, model = replicas(torque, on_latent(torque), vehicle, p_truth, n_replicas, seed, latent, speeds)
 
     def fit(draw):
         replica_torque, regressors = draw
