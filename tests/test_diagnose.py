@@ -218,7 +218,7 @@ def test_threaded_null_equals_one_replica_after_another(clean, monkeypatch):
     np.testing.assert_array_equal(threaded, serial)
 
 
-def SPEEDS(cols):
+def raw_speeds(cols):
     """The raw (vehicle, wheel) speed columns, as :func:`null.replicas` takes them."""
     return np.asarray(cols["vehicle_speed"], float), np.asarray(cols["wheel_speed"], float)
 
@@ -237,13 +237,15 @@ def test_replicas_are_re_smoothed_where_the_recording_coasts(clean):
     p_base, _ = fitting.fit_base(fitting.pad_signals(sig), N)
     build = torque_builder(cols, clean.vehicle, regressors=latent)
     torque = np.asarray(cols["traction_torque"], float)
-    draws, info = null.replicas(torque, build(torque), clean.vehicle, p_base, 4, 0, latent, SPEEDS(cols))
+    draws, info = null.replicas(torque, build(torque), clean.vehicle, p_base, 4, 0, latent, raw_speeds(cols))
     assert info["error"]["source"] == "fast_part" and info["gamma"] is not None
     assert not info["error"]["fresh"]  # clean speed sensors: the torque noise dominates
     assert all(regressors is latent for _, regressors in draws)
     coasting = torque.copy()
     coasting[600:900] = 0.0
-    draws, info = null.replicas(coasting, build(coasting), clean.vehicle, p_base, 4, 0, latent, SPEEDS(cols))
+    draws, info = null.replicas(
+        coasting, build(coasting), clean.vehicle, p_base, 4, 0, latent, raw_speeds(cols)
+    )
     error = info["error"]
     assert error["source"] == "coasting" and info["gamma"] is None
     assert error["coasting_samples"] >= 250, info
@@ -275,7 +277,7 @@ def test_replicas_draw_fresh_error_paths_where_one_path_would_dominate(clean):
     p_base, _ = fitting.fit_base(fitting.pad_signals(sig), N)
     build = torque_builder(cols, clean.vehicle, regressors=latent)
     torque = np.asarray(cols["traction_torque"], float)
-    draws, info = null.replicas(torque, build(torque), clean.vehicle, p_base, 4, 0, latent, SPEEDS(cols))
+    draws, info = null.replicas(torque, build(torque), clean.vehicle, p_base, 4, 0, latent, raw_speeds(cols))
     err = info["error"]
     assert err["source"] == "fast_part" and err["fresh"], info
     assert err["path_power"] > info["fast_power"]["torque_noise"]

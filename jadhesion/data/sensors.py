@@ -90,9 +90,14 @@ def quantise(x, quantum):
 
 def ar1_noise(key, n: int, sd, time_s, dt):
     """Stationary AR(1) noise (n,) of standard deviation ``sd`` and correlation time ``time_s`` [s]
-    at sample period ``dt`` [s] (``lax.scan``)."""
-    rho = jnp.exp(-dt / time_s)
-    e = jax.random.normal(key, (n,))
+    at sample period ``dt`` [s]."""
+    return ar1_path(jax.random.normal(key, (n,)), jnp.exp(-dt / time_s), sd)
+
+
+def ar1_path(e, rho, sd):
+    """Stationary AR(1) path (n,) of standard deviation ``sd`` and lag-one correlation ``rho`` from
+    standard normal draws ``e`` (n,): ``c_0 = sd e_0``, ``c_k = rho c_{k−1} + sd √(1 − rho²) e_k``
+    (``lax.scan``)."""
     innov = sd * jnp.sqrt(1.0 - rho * rho) * e[1:]
 
     def step(c, eps):

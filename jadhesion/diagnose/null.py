@@ -102,6 +102,7 @@ from ..data.creep_state import (
     smooth_creep,
 )
 from ..data.observer import lowpass_foh
+from ..data.sensors import ar1_path
 from ..data.vehicle import GRAVITY, Vehicle
 from ..identify.uncertainty import Z90
 from ..status import Status
@@ -292,17 +293,8 @@ def gaussian_paths(rho, n: int, n_paths: int, rng) -> list:
     return [np.fft.irfft(root * np.fft.rfft(rng.standard_normal(m)), n=m)[:n] for _ in range(n_paths)]
 
 
-@jax.jit
-def ar1_paths(z, phi) -> jax.Array:
-    """Stationary AR(1) paths of unit variance, ``x_k = φ x_{k−1} + √(1 − φ²) z_k`` (``x_0 = z_0``),
-    from standard normal draws ``z`` (R, n); one scan over the samples for all R paths."""
-
-    def step(x, zk):
-        x = phi * x + jnp.sqrt(1.0 - phi * phi) * zk
-        return x, x
-
-    _, rest = jax.lax.scan(step, z[:, 0], z[:, 1:].T)
-    return jnp.concatenate([z[:, :1], rest.T], axis=1)
+#: :func:`jadhesion.data.sensors.ar1_path` of unit sd for each row of standard normal draws (R, n).
+ar1_paths = jax.jit(jax.vmap(ar1_path, in_axes=(0, None, None)))
 
 
 def fast_slip_error(fast_slip, keep, max_lag: int) -> tuple:
@@ -389,7 +381,9 @@ def replicas(
     level = coast["scale"] * float(np.median(np.asarray(latent[2], float)))
     tau = -lag * dt / float(np.log(np.clip(rho[lag], 0.01, 0.99)))
     sensors = [noise_model(x) for x in speeds]
-    colour = np.asarray(ar1_paths(jnp.asarray(rng.standard_normal((n_replicas, t.size))), np.exp(-dt / tau)))
+    colour = np.asarray(
+        ar1_paths(jnp.asarray(rng.standard_normal((n_replicas, t.size))), np.exp(-dt / tau), 1.0)
+    )
     draws = []
     for c in colour:
         replica_torque = _noisy(clean_torque, model, rng)
