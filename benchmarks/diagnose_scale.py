@@ -1,15 +1,16 @@
-"""Seconds and peak memory of ``jadhesion diagnose`` against recording length.  For each length a
-recording is written to CSV — our simulator's (dry, seed 0, ``sensors="realistic"``; its recordings
-do not coast) or, with ``--generator foreign``, the independent generator's
-(:mod:`validation.foreign_generator`: seed 3, ``sensor="realistic"``, 50 Hz, its own profile with
-coasting gaps, so the null takes its coasting path and re-smooths every replica's raw speeds) — and
-a fresh process then runs the CLI's code path on it (load, selection, diagnosis with the null's
-replicas) and reports its wall time and peak resident memory (``ru_maxrss``, the whole process:
-Python, JAX, the compiled programs and the data), and its CPU seconds (all threads; less sensitive
-than wall time to the other jobs on the 2 shared cores). Each length runs twice on a fresh
-compilation cache: ``cold`` (compiles and fills the cache, as a user's first run) and ``warm``
-(reads it, as every later run), reported apart (``--starts cold`` runs the first only). The result
-file records the commit, the settings and the load average.
+"""Seconds and peak memory of ``jadhesion diagnose`` against recording length.
+
+For each length a recording is written to CSV — our simulator's (dry, seed 0,
+``sensors="realistic"``; its recordings do not coast) or, with ``--generator foreign``, the
+independent generator's (:mod:`validation.foreign_generator`: seed 3, ``sensor="realistic"``, 50 Hz,
+its own profile with coasting gaps, so the null takes its coasting path and re-smooths every
+replica's raw speeds) — and a fresh process then runs the CLI's code path on it (load, selection,
+diagnosis with the null's replicas) and reports its wall time and peak resident memory
+(``ru_maxrss``, the whole process: Python, JAX, the compiled programs and the data), and its CPU
+seconds (all threads; less sensitive than wall time to the other jobs on the 2 shared cores). Each
+length runs twice on a fresh compilation cache: ``cold`` (compiles and fills the cache, as a user's
+first run) and ``warm`` (reads it, as every later run), reported apart (``--starts cold`` runs the
+first only). The result file records the commit, the settings and the load average.
 
     python -m benchmarks.diagnose_scale [--lengths 5000,20000,60000,180000] [--replicas 19]
         [--generator ours|foreign] [--starts cold,warm]
