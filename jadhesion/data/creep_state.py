@@ -267,6 +267,7 @@ def smooth_creep(time, wheel_speed, vehicle_speed, torque, inertia, wheel_radius
     )
 
 
+@jax.jit
 def coasting_sd_scale(slip, slip_sd, adhesion, vehicle_speed, valid=None):
     """``(scale, samples)``: the factor [-] by which the smoother's ``slip_sd`` understates the
     smoothed slip's error, measured on the recording's coasting samples (``|adhesion| <``

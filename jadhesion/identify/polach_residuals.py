@@ -9,6 +9,7 @@ in every one of them.
 
 from __future__ import annotations
 
+import jax
 import jax.numpy as jnp
 
 from ..data.dataset import PolachDataset
@@ -70,6 +71,7 @@ def polach_lm_residual(theta, data: PolachDataset):
     return _masked(pseudo_huber(standardised_residual(theta, data)), data)
 
 
+@jax.jit
 def standardised_residual(theta, data: PolachDataset):
     """``(E[mu_adh] − mu_hat) / √(σ² + Var[mu_adh])`` per sample (n,), unmasked, with the noise scale
     ``σ = data.residual_scale``: the errors-in-variables residual in units of its effective sd."""
@@ -86,6 +88,7 @@ def residual_scale(r, data: PolachDataset):
     return jnp.maximum(1.4826 * mad, MIN_SCALE)
 
 
+@jax.jit
 def eiv_scale(theta, data: PolachDataset):
     """:func:`residual_scale` of the errors-in-variables residual at ``theta``
     (:func:`polach_eiv_residual`): the noise scale of LM's second stage and of the posterior's

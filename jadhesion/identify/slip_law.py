@@ -99,9 +99,11 @@ def slip_nodes(slip, slip_sd, adhesion):
     return jnp.where(sign[None, :] == 0, z, sign[None, :] * u)
 
 
+@jax.jit
 def node_slips(slip, slip_sd, adhesion):
     """The true slips [m/s] (GH_NODES, n) at the sign-truncated normal's nodes,
-    ``slip + slip_sd · e_j`` (:func:`slip_nodes`; inputs as there)."""
+    ``slip + slip_sd · e_j`` (:func:`slip_nodes`; inputs as there). Jitted: op by op (an eager
+    caller's dataset) the inverse normal CDFs took ~0.6 s a call."""
     return slip[None, :] + slip_sd[None, :] * slip_nodes(slip, slip_sd, adhesion)
 
 

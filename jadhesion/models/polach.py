@@ -25,6 +25,8 @@ form to 1e-15.
 
 from __future__ import annotations
 
+from functools import partial
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -125,6 +127,7 @@ def initial_slope(theta, k_eps):
     return (2.0 / jnp.pi) * (theta[..., 0] + theta[..., 1]) * k_eps
 
 
+@partial(jax.jit, static_argnames=("n_grid",))
 def adhesion_peak(theta, k_eps, vehicle_speed, n_grid=400, s_min=1e-5, s_max=1.0):
     """Peak adhesion ``mu_max`` [-] and the creepage where it occurs [-] at a vehicle speed [m/s].
 
