@@ -116,7 +116,7 @@ def test_fit_intervals_cover_the_truth_on_simulated_recordings(sensors):
 def test_a_parameter_on_a_bound_stays_free_for_the_others():
     """The trust block reports no interval for a parameter on a bound but keeps it free in the
     covariance: the others' stderrs are the unconditional ones, not those conditional on it."""
-    data = to_dataset(simulate_many("sand", [7], n_samples=400)[0])  # sand: true kA = 1, A = 0
+    data = to_dataset(simulate_many("sand", [7], n_samples=1000)[0])  # sand: true kA = 1, A = 0
     fit = fit_polach_batch(
         jax.tree.map(lambda a: a[None], data), "lm", jax.random.split(jax.random.key(0), 1)
     )
@@ -141,7 +141,7 @@ def test_a_mis_scaled_recording_is_said_to_be_one():
     """μ̂ three times too large (a sidecar axle load a third of the true one) converges to a
     saturated curve; the trust block says the recording is mis-scaled, not only that the
     parameters sit on their bounds."""
-    data = to_dataset(simulate_many("dry", [3], n_samples=400)[0])
+    data = to_dataset(simulate_many("dry", [3], n_samples=1000)[0])
     data = data._replace(adhesion=3.0 * data.adhesion)
     fit = jax.tree.map(
         lambda a: a[0],
