@@ -104,10 +104,8 @@ def friction(theta, slip):
     return mu0 * ((1.0 - a) * jnp.exp(-b * jnp.abs(slip)) + a)
 
 
-@jax.jit
 def polach_adhesion(theta, creep, slip, k_eps):
-    """Adhesion coefficient ``mu_adh`` [-] (paper eq 8). Jitted (an eager call ran its dozen
-    operations one by one: ~35 ms).
+    """Adhesion coefficient ``mu_adh`` [-] (paper eq 8).
 
     Args:
         theta: ``[kA, kS, mu0, A, B]``, shape (5,) (broadcasts against ``creep``).
