@@ -104,6 +104,8 @@ BASE_STARTS = halton(N_SCREEN)
 class FitTable(NamedTuple):
     """Fits of C candidates: ``params`` (C, P) on all data, ``mae``/``sse`` (C,) in-sample,
     ``heldout_mae`` (C,) blocked-CV, ``residual`` (C, n) of the full-data fit (zero on padding),
+    both means of ``weight · |target − prediction|`` over the selected samples (the weights have mean
+    1 there: :func:`eiv_weights`),
     ``status`` (C,) int32 :class:`~jadhesion.status.Status` of the full-data fit, ``fold_status``
     (C,) the worst status among its cross-validation fits, ``steps`` (C,) LM steps of the full fit."""
 
@@ -251,7 +253,7 @@ def fit_candidates(p0, idx, actives, sig: Signals, n_valid, folds: bool = True, 
             one_side = jnp.all(~train | (sig.time < t_change)) | jnp.all(~train | (sig.time > t_change))
             i_k = jnp.where(one_side & jnp.asarray(_PLACED)[i], PAD, i_fold)  # nor sized from one side
             pk, sk, _ = _solve(full, i_k, a, w, sig, MAX_STEPS_FOLD, upper)
-            return jnp.sum(jnp.abs(resid(pk, a)) * (weights[0] - w)), sk
+            return jnp.sum(jnp.where(w > 0, 0.0, jnp.abs(resid(pk, a)))), sk  # block k, weighted once
 
         held, fold_status = jax.lax.map(fold, weights[1:])
         return full, status, steps, r_full, jnp.sum(held) / used, jnp.max(fold_status)
