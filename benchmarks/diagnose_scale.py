@@ -71,10 +71,10 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parent.parent)}
     rows, head = [], commit()
+    write = WRITE if args.generator == "ours" else WRITE_FOREIGN
     with tempfile.TemporaryDirectory() as tmp:
         for n in (int(x) for x in args.lengths.split(",")):
             path = str(Path(tmp) / f"rec_{n}.csv")
-            write = WRITE if args.generator == "ours" else WRITE_FOREIGN
             subprocess.run([sys.executable, "-c", write, path, str(n)], check=True, env=env)
             cache = {**env, "JADHESION_CACHE": str(Path(tmp) / f"cache_{n}")}
             for start in args.starts.split(","):

@@ -103,11 +103,11 @@ BASE_STARTS = halton(N_SCREEN)
 
 class FitTable(NamedTuple):
     """Fits of C candidates: ``params`` (C, P) on all data, ``mae``/``sse`` (C,) in-sample,
-    ``heldout_mae`` (C,) blocked-CV, ``residual`` (C, n) of the full-data fit (zero on padding),
-    both means of ``weight · |target − prediction|`` over the selected samples (the weights have mean
-    1 there: :func:`eiv_weights`),
-    ``status`` (C,) int32 :class:`~jadhesion.status.Status` of the full-data fit, ``fold_status``
-    (C,) the worst status among its cross-validation fits, ``steps`` (C,) LM steps of the full fit."""
+    ``heldout_mae`` (C,) blocked-CV (``mae`` and ``heldout_mae`` both means of ``weight · |target −
+    prediction|`` over the selected samples; the weights have mean 1 there, :func:`eiv_weights`),
+    ``residual`` (C, n) of the full-data fit (zero on padding), ``status`` (C,) int32
+    :class:`~jadhesion.status.Status` of the full-data fit, ``fold_status`` (C,) the worst status
+    among its cross-validation fits, ``steps`` (C,) LM steps of the full fit."""
 
     params: jax.Array
     mae: jax.Array
