@@ -359,6 +359,12 @@ def test_a_size_the_effect_does_not_have_is_not_named():
     (warning,) = diagnosis._warnings(result)
     assert warning["code"] == "implausible_size" and warning["candidates"] == ["rail_change"]
     assert "drop -1.09, typical up to 0.5" in warning["message"]
+    # a term beyond its physical limit counts too: the independent generator's clean hour was named
+    # load transfer with its acceleration term on the box's edge (load_accel −3) and μ0 +42 %
+    hour = {"name": "load_transfer", "params": {"load_m": 0.2, "load_accel": -3.0}}
+    assert not diagnosis._plausible("load_transfer", hour["params"])
+    assert diagnosis._plausible("load_transfer", {"load_m": 0.2, "load_accel": -1.0})
+    assert diagnosis._beyond(hour) == "load_transfer (load_accel -3, at most 2.5)"
     result.update(
         effects=[], warnings=[warning], generic={"used": False}, sensitivity={}, extended={"params": {}}
     )

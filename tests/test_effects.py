@@ -113,6 +113,17 @@ def test_registry_record_is_complete(name, clean):
     assert not spec.plausible(1.01 * IMPLAUSIBLE_BEYOND * hi) and not spec.plausible(
         -2 * IMPLAUSIBLE_BEYOND * hi
     )
+    # the same limits read by the diagnosis, over every parameter: the neutral fit is plausible, a
+    # magnitude past the margin is named, and a parameter with a physical limit is implausible at
+    # its box's edge (where a fit bending the curve with it ends)
+    neutral = {p.name: p.neutral for p in spec.extension}
+    assert spec.implausible(neutral) == {}
+    assert list(spec.implausible({**neutral, mag.name: 1.01 * IMPLAUSIBLE_BEYOND * hi})) == [mag.name]
+    for p in spec.extension[1:]:
+        if p.plausible_abs is not None:
+            assert 0.0 < p.plausible_abs < max(abs(p.lower), abs(p.upper))
+            edge = p.lower if abs(p.lower) > p.plausible_abs else p.upper
+            assert list(spec.implausible({**neutral, p.name: edge})) == [p.name]
 
 
 @pytest.mark.parametrize("name", EFFECT_NAMES)

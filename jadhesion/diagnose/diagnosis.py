@@ -54,9 +54,19 @@ def _row(params, active, sig, tau_th: float) -> dict:
 
 
 def _plausible(name: str, params: dict) -> bool:
-    """Whether the fitted size of effect ``name`` is one it has (:meth:`.EffectSpec.plausible`)."""
-    spec = REGISTRY[name]
-    return spec.plausible(params[spec.magnitude_param])
+    """Whether effect ``name``'s fitted parameters are ones it has (:meth:`.EffectSpec.implausible`)."""
+    return not REGISTRY[name].implausible(params)
+
+
+def _beyond(candidate: dict) -> str:
+    """``"name (param value, typical up to …; param value, at most …)"``: what makes a candidate's
+    fit implausible (:meth:`.EffectSpec.implausible`)."""
+    spec = REGISTRY[candidate["name"]]
+    parts = []
+    for k, limit in spec.implausible(candidate["params"]).items():
+        bound = f"typical up to {spec.typical[1]:g}" if k == spec.magnitude_param else f"at most {limit:g}"
+        parts.append(f"{k} {candidate['params'][k]:.3g}, {bound}")
+    return f"{candidate['name']} ({'; '.join(parts)})"
 
 
 def _extra_rows(sets) -> list:
@@ -173,17 +183,13 @@ def _warnings(result: dict) -> list:
         )
     beyond = select.beyond_typical(result["candidates"])
     if beyond:
-        specs = [REGISTRY[c["name"]] for c in beyond]
         out.append(
             {
                 "code": "implausible_size",
-                "message": ", ".join(
-                    f"{c['name']} ({e.magnitude_param} {c['params'][e.magnitude_param]:.3g}, typical up "
-                    f"to {e.typical[1]:g})"
-                    for c, e in zip(beyond, specs, strict=True)
-                )
+                "message": ", ".join(_beyond(c) for c in beyond)
                 + f" passed every test with a fitted size beyond {IMPLAUSIBLE_BEYOND:g}× the effect's "
-                "typical range: taken for the base model's misfit (e.g. a walking-pace start's), not named",
+                "typical range or a term beyond what the physics allows: taken for the base model's "
+                "misfit (e.g. a walking-pace start's), not named",
                 "candidates": [c["name"] for c in beyond],
             }
         )

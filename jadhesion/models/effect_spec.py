@@ -12,7 +12,10 @@ class Param(NamedTuple):
     fit's box ``[lower, upper]``, the ``neutral`` value at which the extension is the base model
     exactly, and its ``unit``; ``fold_fixed``: it places the effect in time, so a cross-validation
     fold whose held-out block contains that place cannot determine it (a flat direction: the fold's
-    LM stalls or runs to its cap) — the folds keep it at the full-data fit's value."""
+    LM stalls or runs to its cap) — the folds keep it at the full-data fit's value;
+    ``plausible_abs``: for a parameter other than the magnitude, the largest ``|value|`` the effect
+    has (a fit beyond it is the base model's misfit, :meth:`EffectSpec.implausible`); ``None``: any
+    value in the box."""
 
     name: str
     lower: float
@@ -20,6 +23,7 @@ class Param(NamedTuple):
     neutral: float
     unit: str
     fold_fixed: bool = False
+    plausible_abs: Optional[float] = None
 
 
 class Detection(NamedTuple):
@@ -101,6 +105,14 @@ class EffectSpec(NamedTuple):
         """Whether a fitted ``magnitude`` (of :attr:`magnitude_param`) is one the effect has: within
         :data:`IMPLAUSIBLE_BEYOND` × the top of its typical range."""
         return bool(abs(magnitude) <= IMPLAUSIBLE_BEYOND * self.typical[1])
+
+    def implausible(self, values: Mapping) -> dict:
+        """``{parameter: limit}`` of the fitted extension parameters in ``values`` beyond what the
+        effect has: the magnitude beyond :meth:`plausible`'s limit, another parameter beyond its
+        :attr:`Param.plausible_abs`. Empty for a fit the effect can make."""
+        limits = {self.magnitude_param: IMPLAUSIBLE_BEYOND * self.typical[1]}
+        limits.update({p.name: p.plausible_abs for p in self.extension[1:] if p.plausible_abs is not None})
+        return {k: lim for k, lim in limits.items() if k in values and not abs(values[k]) <= lim}
 
     @property
     def extra_start_param(self) -> str:
