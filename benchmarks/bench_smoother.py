@@ -10,6 +10,14 @@ LM fit of the same recording's 2 000-sample dataset (:func:`jadhesion.identify.f
 program and their mean process CPU time (the machine is shared), with ``os.getloadavg()`` beside
 each. Linear in length: seconds per row at each size.
 
+**What a user pays: the fit command.** On the smallest recording, ``jadhesion fit FILE --json``
+run in this process (:func:`jadhesion.cli.main`, warm: programs compiled or loaded, two calls
+first), best wall time of ``--repeats`` calls, with the default smoothed creep (the fit, its trust
+block, and the LM fit and trust block under the other slip law whose intervals it joins), with
+``--single-law`` (no second law), and with ``--creep raw`` (the speeds' difference, no smoother);
+and the smoother's compiled run time as a share of each. Timed after everything else: the command
+turns on the persistent compilation cache, which the compile times above must not see.
+
 **Agreement.** Reference and this tree on recordings the speed-up must not change: the simulator's
 realistic sensors (dry, wet, sand) and clean ones, the foreign generator
 (:mod:`validation.foreign_generator`: clean, mild and realistic sensors, jittered and quantised time
@@ -25,7 +33,9 @@ the load averages.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib.util
+import io
 import json
 import os
 import platform
@@ -39,6 +49,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jadhesion.cli import main as jadhesion_main
 from jadhesion.config import enable_x64
 
 enable_x64()
@@ -112,6 +123,35 @@ def _time_lm(recording, repeats: int) -> dict:
     first_s = time.perf_counter() - t0
     out = {"samples": int(data.adhesion.shape[0]), "first_call_s": first_s, "status": int(fit.status)}
     return {**out, **_best(lambda: fit_polach(data, "lm", key), repeats)}
+
+
+#: The fit command's variants timed by :func:`fit_command`: name → extra arguments.
+FIT_VARIANTS = {
+    "smoothed": [],
+    "smoothed_single_law": ["--single-law"],
+    "raw": ["--creep", "raw"],
+}
+
+
+def fit_command(path: Path, smoother_wall_s: float, repeats: int) -> dict:
+    """Best wall seconds of ``jadhesion fit path --json`` per :data:`FIT_VARIANTS` entry, in this
+    process after two warm-up calls (stdout discarded), and the smoother's share of each."""
+    out = {}
+    for name, extra in FIT_VARIANTS.items():
+        argv = ["fit", str(path), "--json", *extra]
+
+        def call(argv=argv):
+            with contextlib.redirect_stdout(io.StringIO()):
+                code = jadhesion_main(argv)
+            if code != 0:
+                raise RuntimeError(f"jadhesion {' '.join(argv)} exited {code}")
+
+        for _ in range(2):
+            call()
+        timing = _best(call, repeats)
+        out[name] = {**timing, "smoother_share": smoother_wall_s / timing["wall_s"]}
+        print("fit", name, out[name], flush=True)
+    return out
 
 
 def cost(rows_list, work: Path, ref, repeats: int) -> dict:
@@ -215,6 +255,11 @@ def main(argv=None) -> int:
         },
         "cost": cost(args.rows, args.work, ref, args.repeats),
     }
+    # last: the command turns on the persistent compilation cache, which compile times must not see
+    small = min(args.rows)
+    doc["fit_command"] = fit_command(
+        args.work / f"hour{small}.csv", doc["cost"][str(small)]["this"]["wall_s"], args.repeats
+    )
     if not args.skip_agreement:
         doc["agreement"] = agreement(ref, args.work, max(args.rows))
     doc["settings"]["load_average_at_end"] = list(os.getloadavg())
