@@ -243,9 +243,9 @@ def _peak_text(derived) -> str:
     return ", ".join(parts)
 
 
-def _trust(dataset, fit) -> dict:
+def trust_report(dataset, fit) -> dict:
     """:func:`fit_report` of a fit, its covariance from the dataset padded to its length bucket,
-    as the fit (one trust program per bucket)."""
+    as the fit (one kept trust program per bucket: :func:`.fit_program.trust_numbers`)."""
     return fit_report(dataset, fit, numbers=trust_numbers(fit.params, scaled(bucketed(dataset), fit)))
 
 
@@ -259,7 +259,7 @@ def _polach_doc(args, dataset, fit, seconds, check=None) -> dict:
     block joins to its own (:func:`jadhesion.identify.trust.join_slip_laws`)."""
     status = status_of(fit.status)
     params = _params(fit)
-    report = _trust(dataset, fit)
+    report = trust_report(dataset, fit)
     if check is not None:
         report = join_slip_laws(report, params, check)
     return {
@@ -293,7 +293,7 @@ def _slip_law_checks(args, datasets) -> list:
     fitted = fit_datasets(others, "lm", seed_key(args.seed), fit=fit_polach)
     for i, data, f in zip(todo, others, fitted, strict=True):
         status = status_of(f.fit.status)
-        report = _trust(data, f.fit)
+        report = trust_report(data, f.fit)
         checks[i] = {
             "law": law,
             "method": "lm",
