@@ -91,8 +91,8 @@ def explain(result: dict, vehicle: Vehicle) -> str:
         text[0].upper()
         + text[1:]
         + (
-            f". Modelling it lowers the held-out adhesion error from {base['heldout_mae']:.4f} to "
-            f"{extended['heldout_mae']:.4f}."
+            f". Modelling it lowers the cross-validated error (weighted mean |residual| of μ on "
+            f"held-out stretches) from {base['heldout_mae']:.4f} to {extended['heldout_mae']:.4f}."
         )
     )
     if result["indistinguishable"]:
