@@ -35,6 +35,7 @@ from ..status import status_of
 from .common import Progress, UserError, emit_json, require_output_dir, require_seed, table
 from .fit_program import fit_polach as kept_fit_polach
 from .fit_program import seed_key, slip_nodes
+from .fit_program import to_dataset as kept_dataset
 from .fit_run import trust_report
 from .loading import load_dataset, load_from_args, say_sidecar_warning, slip_law_used
 from .posterior import MAX_CHAIN_BYTES, MAX_WALKERS, MIN_WALKERS
@@ -215,7 +216,7 @@ def run(args) -> int:
     _check_flags(args)
     recording = load_from_args(args, args.file)
     sidecar = say_sidecar_warning(recording)
-    recording, data, selection = load_dataset(args, args.file, recording=recording)
+    recording, data, selection = load_dataset(args, args.file, kept_dataset, recording=recording)
     data = with_slip_law(data, args.slip_law)  # --slip-law population: that law's nodes
     require_samples(data, args.file)
     if args.likelihood == "observer" and not selection.complete:
