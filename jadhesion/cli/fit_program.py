@@ -1,12 +1,13 @@
-"""``jadhesion fit``'s fast start: the command's JAX work as kept exported programs.
+"""``jadhesion fit``'s (and ``posterior``'s) fast start: the commands' JAX work as kept exported programs.
 
-Four programs, each exported once (``jax.export``) and kept in the program cache
+Five programs, each exported once (``jax.export``) and kept in the program cache
 (:func:`jadhesion.config.program_cache_dir`, :mod:`jadhesion.programs`) under its shapes, options
 and code: ``polach_dataset`` (observer, kinematics and Kalman/RTS creep smoother of a recording's
 raw signals padded to their length bucket: :func:`to_dataset`), ``polach_slip_nodes`` (the slip
-law's nodes: :func:`slip_nodes`), ``polach_fit`` (the fit of a padded dataset: :func:`fit_polach`)
-and ``polach_trust`` (the Jacobian of LM's residual over every row, the HAC covariance, the
-curve's peak with its gradient and the block jackknife's refits: :func:`trust_numbers`). Each is
+law's nodes: :func:`slip_nodes`), ``polach_fit`` (the fit of a padded dataset: :func:`fit_polach`),
+``polach_trust`` (the Jacobian of LM's residual over every row, the HAC covariance, the
+curve's peak with its gradient and the block jackknife's refits: :func:`trust_numbers`) and, for
+``jadhesion posterior``, ``polach_lm_optimum`` (its least-squares start: :func:`lm_optimum`). Each is
 a drop-in for its library function with the same results, bit for bit; a program used twice in a
 process (the fit under both slip laws) is loaded once. A process that finds them
 deserialises and calls them, with the compiled executables from the persistent compilation cache:
@@ -185,6 +186,27 @@ def slip_nodes(dataset, law: str):
         make = functools.partial(_nodes_program, law)
         nodes = _kept("polach_slip_nodes", make, (padded,), {"law": law})
     return dataset._replace(node_slips=jnp.asarray(np.asarray(nodes)[:n]))
+
+
+def _optimum_program(observer: bool):
+    """The function kept as program ``polach_lm_optimum``: ``(dataset[, observer terms]) ->
+    params``, the posterior's least-squares start."""
+    from ..identify.laplace import lm_optimum as library_optimum  # on a miss only, as the fit's
+
+    if observer:
+        return lambda data, obs: library_optimum(data, obs=obs)
+    return lambda data: library_optimum(data)
+
+
+def lm_optimum(dataset, obs=None):
+    """:func:`jadhesion.identify.laplace.lm_optimum` (the box LM from every start, the best
+    converged one's parameters; with ``obs``, of the observer's view) through a kept program, keyed
+    on the dataset's shapes."""
+    args = (dataset,) if obs is None else (dataset, obs)
+    make = functools.partial(_optimum_program, obs is not None)
+    if not _enabled():
+        return make()(*args)
+    return _kept("polach_lm_optimum", make, args, {"observer": obs is not None})
 
 
 def seed_key(seed: int):

@@ -19,7 +19,7 @@ from ..data.dataset import sd_scale_summary, thinned, valid_mask
 from ..data.selected import creep_sign_warning
 from ..identify.batch_fit import fit_datasets
 from ..identify.ensemble import ChainTooShortWarning
-from ..identify.laplace import colour_check, initial_spread, lm_optimum, thinning
+from ..identify.laplace import colour_check, initial_spread, thinning
 from ..identify.likelihood import noise_names, other_slip_law, with_slip_law
 from ..identify.mcmc import sample_posterior
 from ..identify.observer_view import recording_observer_terms
@@ -34,7 +34,7 @@ from ..plots.posterior import corner_plot, predictive_plot
 from ..status import status_of
 from .common import Progress, UserError, emit_json, require_output_dir, require_seed, table
 from .fit_program import fit_polach as kept_fit_polach
-from .fit_program import seed_key, slip_nodes
+from .fit_program import lm_optimum, seed_key, slip_nodes
 from .fit_program import to_dataset as kept_dataset
 from .fit_run import trust_report
 from .loading import load_dataset, load_from_args, say_sidecar_warning, slip_law_used
