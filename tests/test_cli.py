@@ -4,6 +4,7 @@ import json
 import os
 import subprocess
 import sys
+import types
 
 import numpy as np
 import pytest
@@ -11,6 +12,7 @@ from logger_data import stretches_si, swapped_stretches
 
 from jadhesion import LOCO_22E, adhesion_peak, polach_adhesion
 from jadhesion.cli import main
+from jadhesion.cli.posterior_run import start_warning
 from jadhesion.data.recording import save_recording
 from jadhesion.identify.laplace import thinning
 from jadhesion.identify.uncertainty import Z95
@@ -217,6 +219,11 @@ def test_posterior_auto_likelihood_is_the_gaussian_tempered_by_the_residual_colo
     assert temp["effective_samples"] == pytest.approx(temp["samples"] / temp["kappa"])
     assert set(doc["params"]) == {"kA", "kS", "mu0", "A", "B", "sigma"}
     assert doc["diagnostics"]["compile_seconds"] >= 0
+    # the least-squares start carries its solver's status; only one that did not converge is warned of
+    assert doc["lm_start_status"] == "converged"
+    assert "lm_start_not_converged" not in [w["code"] for w in doc["warnings"]]
+    stopped = start_warning(types.SimpleNamespace(status=int(Status.MAX_STEPS)))
+    assert [w["code"] for w in stopped] == ["lm_start_not_converged"] and "max_steps" in stopped[0]["message"]
     check = doc["slip_law_check"]  # the other slip law's LM fit, beside this one law's posterior
     assert check["law"] == "population" and check["status"] == "converged"
     assert set(check["params"]) == {"kA", "kS", "mu0", "A", "B"} and set(check["derived"]) == {

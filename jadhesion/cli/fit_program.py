@@ -7,7 +7,7 @@ raw signals padded to their length bucket: :func:`to_dataset`), ``polach_slip_no
 law's nodes: :func:`slip_nodes`), ``polach_fit`` (the fit of a padded dataset: :func:`fit_polach`),
 ``polach_trust`` (the Jacobian of LM's residual over every row, the HAC covariance, the
 curve's peak with its gradient and the block jackknife's refits: :func:`trust_numbers`) and, for
-``jadhesion posterior``, ``polach_lm_optimum`` (its least-squares start: :func:`lm_optimum`). Each is
+``jadhesion posterior``, ``polach_lm_start`` (its least-squares start: :func:`lm_start`). Each is
 a drop-in for its library function with the same results, bit for bit; a program used twice in a
 process (the fit under both slip laws) is loaded once. A process that finds them
 deserialises and calls them, with the compiled executables from the persistent compilation cache:
@@ -188,25 +188,25 @@ def slip_nodes(dataset, law: str):
     return dataset._replace(node_slips=jnp.asarray(np.asarray(nodes)[:n]))
 
 
-def _optimum_program(observer: bool):
-    """The function kept as program ``polach_lm_optimum``: ``(dataset[, observer terms]) ->
-    params``, the posterior's least-squares start."""
-    from ..identify.laplace import lm_optimum as library_optimum  # on a miss only, as the fit's
+def _start_program(observer: bool):
+    """The function kept as program ``polach_lm_start``: ``(dataset[, observer terms]) -> dict`` of
+    :class:`~jadhesion.identify.lm_result.LMResult`'s fields, the posterior's least-squares start."""
+    from ..identify.laplace import lm_start as library_start  # on a miss only, as the fit's
 
     if observer:
-        return lambda data, obs: library_optimum(data, obs=obs)
-    return lambda data: library_optimum(data)
+        return lambda data, obs: library_start(data, obs=obs)._asdict()
+    return lambda data: library_start(data)._asdict()
 
 
-def lm_optimum(dataset, obs=None):
-    """:func:`jadhesion.identify.laplace.lm_optimum` (the box LM from every start, the best
-    converged one's parameters; with ``obs``, of the observer's view) through a kept program, keyed
-    on the dataset's shapes."""
+def lm_start(dataset, obs=None):
+    """:func:`jadhesion.identify.laplace.lm_start` (the box LM from every start, the best converged
+    one with its status; with ``obs``, of the observer's view) through a kept program, keyed on the
+    dataset's shapes; a named tuple with ``LMResult``'s fields (in alphabetical order)."""
     args = (dataset,) if obs is None else (dataset, obs)
-    make = functools.partial(_optimum_program, obs is not None)
-    if not _enabled():
-        return make()(*args)
-    return _kept("polach_lm_optimum", make, args, {"observer": obs is not None})
+    make = functools.partial(_start_program, obs is not None)
+    static = {"observer": obs is not None}
+    out = make()(*args) if not _enabled() else _kept("polach_lm_start", make, args, static)
+    return _result_type(tuple(out), "LMResult")(**out)
 
 
 def seed_key(seed: int):

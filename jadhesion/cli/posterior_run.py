@@ -34,7 +34,7 @@ from ..plots.posterior import corner_plot, predictive_plot
 from ..status import status_of
 from .common import Progress, UserError, emit_json, require_output_dir, require_seed, table
 from .fit_program import fit_polach as kept_fit_polach
-from .fit_program import lm_optimum, seed_key, slip_nodes
+from .fit_program import lm_start, seed_key, slip_nodes
 from .fit_program import to_dataset as kept_dataset
 from .fit_run import trust_report
 from .loading import load_dataset, load_from_args, say_sidecar_warning, slip_law_used
@@ -79,10 +79,10 @@ def data_warnings(recording, selection, data, result) -> list:
 def slip_law_check(data, law: str, seed: int, result) -> tuple:
     """``(check, warning)``: LM's fit of ``data`` under the other slip law (``law``, ``method``,
     ``params``, ``derived`` at the posterior's reference speed, ``status``, and ``interval90``: its
-    HAC 90 % intervals, :func:`jadhesion.identify.trust.normal_intervals`) and the warning
-    ``slip_law_sensitive`` naming the quantities it puts outside this posterior's own 90 % interval
-    (``None`` where there is none; LM's robust loss may differ from the likelihood too, so the
-    warning says where, not why); ``(None, None)`` without a slip sd."""
+    90 % intervals from ``fit``'s trust block, :func:`jadhesion.identify.trust.normal_intervals`)
+    and the warning ``slip_law_sensitive`` naming the quantities it puts outside this posterior's
+    own 90 % interval (``None`` where there is none; LM's robust loss may differ from the likelihood
+    too, so the warning says where, not why); ``(None, None)`` without a slip sd."""
     if data.slip_sd is None:
         return None, None
     other = other_slip_law(law)
@@ -118,6 +118,20 @@ def slip_law_check(data, law: str, seed: int, result) -> tuple:
         f"this posterior's own); compare --slip-law {other}"
     )
     return check, {"code": "slip_law_sensitive", "params": [n for n, _, _ in moved], "message": message}
+
+
+def start_warning(start) -> list:
+    """``[warning]`` when the least-squares start's solver did not converge (``[]`` when it did): the
+    tempering checks were taken there, and the chain starts about it."""
+    status = status_of(start.status)
+    if status.converged:
+        return []
+    message = (
+        f"the least-squares start (lm_start) stopped with status {status.label}: the residual checks "
+        "(tempering) were taken at a point that may not be a minimum; the chain starts about it, so "
+        "read its diagnostics before the intervals"
+    )
+    return [{"code": "lm_start_not_converged", "params": [], "message": message}]
 
 
 def _auto_note(t: dict) -> str:
@@ -225,7 +239,8 @@ def run(args) -> int:
             f"{selection.summary()}; use --likelihood auto or --start/--end"
         )
     likelihood, obs, note = _choose_likelihood(recording, args.likelihood)
-    theta0 = lm_optimum(data, obs=obs)
+    start = lm_start(data, obs=obs)
+    theta0 = start.params
     # the checks it prints, at the least-squares optimum: the residuals' colour and tails; auto
     # tempers the Gaussian by 1/κ (the Student-t in its place was not better on both generators:
     # benchmarks/results/coverage_posterior_student.json); a requested likelihood runs as asked,
@@ -239,7 +254,8 @@ def run(args) -> int:
     elif args.temper:
         note = f"requested, tempered by 1/κ, κ = {tempering['kappa']:.1f}"
     if likelihood == "student":  # starts at LM's robust (pseudo-Huber) optimum, near its mode
-        theta0 = fit_polach(data, "lm", jax.random.key(args.seed)).params
+        start = fit_polach(data, "lm", jax.random.key(args.seed))
+        theta0 = start.params
     sampled = data
     if auto and (every := thinning(tempering["samples"], tempering["kappa"])) > 1:
         # every d-th sample weighted d/κ: the same n/κ effective samples at 1/d of the cost (their
@@ -275,6 +291,7 @@ def run(args) -> int:
         corner_plot(result).savefig(out / "posterior_corner.png", dpi=90)
         predictive_plot(result, data).savefig(out / "posterior_predictive.png", dpi=110)
     doc = _document(result, theta0, note, "smoothed" if data.slip_sd is not None else "raw")
+    doc["lm_start_status"] = status_of(start.status).label
     doc["tempering"] = tempering
     doc["slip_law"] = slip_law_used(args, data)
     doc["slip_sd_scale"] = sd_scale_summary(data)
@@ -289,6 +306,7 @@ def run(args) -> int:
             join_posterior_intervals(doc[k], check) for k in ("params", "derived")
         )
     found += [] if sensitive is None else [sensitive]
+    found += start_warning(start)
     doc["warnings"] = ([] if sidecar is None else [sidecar]) + found  # the chain's: diagnostics
     if args.json:
         emit_json(doc)

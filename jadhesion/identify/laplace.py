@@ -19,7 +19,7 @@ from ..data.dataset import PolachDataset
 from ..models.polach import BOUNDS
 from .box_lm import box_lm
 from .likelihood import prediction
-from .lm_result import best_of
+from .lm_result import LMResult, best_of
 from .observer_view import ObserverTerms
 from .polach_residuals import polach_residual
 from .uncertainty import colour_factor, covariance, lag1_autocorrelation
@@ -47,14 +47,20 @@ def _residual(obs):
     return observer_residual, lambda data: (data, obs)
 
 
-def lm_optimum(data: PolachDataset, starts=STARTS, obs: ObserverTerms | None = None):
-    """Least-squares optimum in the box ``[0, 1]^5``: the projected box LM (:func:`.box_lm.box_lm`,
-    the one bounded LM of every Polach least-squares problem) from each of ``starts``, the best
-    converged one kept; with ``obs`` (:class:`ObserverTerms`), of the observer's view of the curve."""
+def lm_start(data: PolachDataset, starts=STARTS, obs: ObserverTerms | None = None) -> LMResult:
+    """Least-squares optimum in the box ``[0, 1]^5`` with its solver's status: the projected box LM
+    (:func:`.box_lm.box_lm`, the one bounded LM of every Polach least-squares problem) from each of
+    ``starts``, the best converged one kept (the best of all when none converged); with ``obs``
+    (:class:`ObserverTerms`), of the observer's view of the curve."""
     residual, args = _residual(obs)
     bounds = tuple(jnp.asarray(b) for b in BOUNDS)
     solve = jax.vmap(lambda p0, a: box_lm(residual, p0, a, bounds), in_axes=(0, None))
-    return best_of(solve(jnp.asarray(starts), args(data))).params
+    return best_of(solve(jnp.asarray(starts), args(data)))
+
+
+def lm_optimum(data: PolachDataset, starts=STARTS, obs: ObserverTerms | None = None):
+    """The parameters (5,) of :func:`lm_start`."""
+    return lm_start(data, starts, obs).params
 
 
 def laplace_covariance(theta_hat, data: PolachDataset, obs: ObserverTerms | None = None):
