@@ -121,15 +121,14 @@ def slip_law_check(data, law: str, seed: int, result) -> tuple:
 
 
 def start_warning(start) -> list:
-    """``[warning]`` when the least-squares start's solver did not converge (``[]`` when it did): the
-    tempering checks were taken there, and the chain starts about it."""
+    """``[warning]`` when the LM fit the chain starts from (``lm_start``) did not converge (``[]``
+    when it did)."""
     status = status_of(start.status)
     if status.converged:
         return []
     message = (
-        f"the least-squares start (lm_start) stopped with status {status.label}: the residual checks "
-        "(tempering) were taken at a point that may not be a minimum; the chain starts about it, so "
-        "read its diagnostics before the intervals"
+        f"the LM fit the chain starts from (lm_start) stopped with status {status.label}: it may not "
+        "be a minimum, and the chain starts about it; read the chain's diagnostics before its intervals"
     )
     return [{"code": "lm_start_not_converged", "params": [], "message": message}]
 
