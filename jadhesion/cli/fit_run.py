@@ -279,6 +279,16 @@ def _polach_doc(args, dataset, fit, seconds, check=None) -> dict:
     }
 
 
+def other_law_fits(datasets, law: str, seed: int) -> list:
+    """``(fitted, trust block)`` per dataset (with a slip sd) under slip law ``law``: the LM fit of
+    the dataset with that law's nodes (:func:`.fit_program.slip_nodes`), padded to its length
+    bucket (:func:`.batch_fit.fit_datasets`, key ``seed``), and its :func:`trust_report`, all
+    through the kept programs; ``fit`` and ``posterior`` check their law against this one."""
+    others = [slip_nodes(d, law) for d in datasets]
+    fitted = fit_datasets(others, "lm", seed_key(seed), fit=fit_polach)
+    return [(f, trust_report(d, f.fit)) for d, f in zip(others, fitted, strict=True)]
+
+
 def _slip_law_checks(args, datasets) -> list:
     """Per dataset, the LM fit under the other slip law (:func:`.likelihood.other_slip_law`) and
     its trust block (``law``, ``method``, ``params``, ``mae``, ``status``, ``converged``,
@@ -289,11 +299,9 @@ def _slip_law_checks(args, datasets) -> list:
     if not todo:
         return checks
     law = other_slip_law(args.slip_law)
-    others = [slip_nodes(datasets[i], law) for i in todo]
-    fitted = fit_datasets(others, "lm", seed_key(args.seed), fit=fit_polach)
-    for i, data, f in zip(todo, others, fitted, strict=True):
+    others = other_law_fits([datasets[i] for i in todo], law, args.seed)
+    for i, (f, report) in zip(todo, others, strict=True):
         status = status_of(f.fit.status)
-        report = trust_report(data, f.fit)
         checks[i] = {
             "law": law,
             "method": "lm",

@@ -17,7 +17,6 @@ import numpy as np
 
 from ..data.dataset import sd_scale_summary, thinned, valid_mask
 from ..data.selected import creep_sign_warning
-from ..identify.batch_fit import fit_datasets
 from ..identify.ensemble import ChainTooShortWarning
 from ..identify.laplace import colour_check, initial_spread, thinning
 from ..identify.likelihood import noise_names, other_slip_law, with_slip_law
@@ -33,10 +32,9 @@ from ..models.polach import PARAM_NAMES, adhesion_peak
 from ..plots.posterior import corner_plot, predictive_plot
 from ..status import status_of
 from .common import Progress, UserError, emit_json, require_output_dir, require_seed, table
-from .fit_program import fit_polach as kept_fit_polach
-from .fit_program import lm_start, seed_key, slip_nodes
+from .fit_program import lm_start
 from .fit_program import to_dataset as kept_dataset
-from .fit_run import trust_report
+from .fit_run import other_law_fits
 from .loading import load_dataset, load_from_args, say_sidecar_warning, slip_law_used
 from .posterior import MAX_CHAIN_BYTES, MAX_WALKERS, MIN_WALKERS
 
@@ -86,10 +84,9 @@ def slip_law_check(data, law: str, seed: int, result) -> tuple:
     if data.slip_sd is None:
         return None, None
     other = other_slip_law(law)
-    # as ``fit`` does it: nodes, fit and trust block through its kept programs (tracing them anew
-    # was 1.3 s of a warm 2 000-sample posterior's 7.7 s of CPU; the same numbers bit for bit)
-    other_data = slip_nodes(data._replace(node_slips=None), other)
-    (fitted,) = fit_datasets([other_data], "lm", seed_key(seed), fit=kept_fit_polach)
+    # as ``fit`` does it, through its kept programs (tracing them anew was 1.3 s of a warm
+    # 2 000-sample posterior's 7.7 s of CPU; the same numbers bit for bit)
+    ((fitted, report),) = other_law_fits([data], other, seed)
     fit = fitted.fit
     params = dict(zip(PARAM_NAMES, np.asarray(fit.params).tolist(), strict=True))
     peak = adhesion_peak(fit.params, data.k_eps, result.vehicle_speed)
@@ -100,7 +97,7 @@ def slip_law_check(data, law: str, seed: int, result) -> tuple:
         "params": params,
         "derived": derived,
         "status": status_of(fit.status).label,
-        "interval90": normal_intervals(trust_report(other_data, fit), params, Z90),
+        "interval90": normal_intervals(report, params, Z90),
     }
     ours = {**result.params, **result.derived}
     moved = [
