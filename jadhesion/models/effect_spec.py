@@ -104,12 +104,13 @@ class EffectSpec(NamedTuple):
     def plausible(self, magnitude: float) -> bool:
         """Whether a fitted ``magnitude`` (of :attr:`magnitude_param`) is one the effect has: within
         :data:`IMPLAUSIBLE_BEYOND` × the top of its typical range."""
-        return bool(abs(magnitude) <= IMPLAUSIBLE_BEYOND * self.typical[1])
+        return not self.implausible({self.magnitude_param: magnitude})
 
     def implausible(self, values: Mapping) -> dict:
         """``{parameter: limit}`` of the fitted extension parameters in ``values`` beyond what the
-        effect has: the magnitude beyond :meth:`plausible`'s limit, another parameter beyond its
-        :attr:`Param.plausible_abs`. Empty for a fit the effect can make."""
+        effect has: the magnitude beyond :data:`IMPLAUSIBLE_BEYOND` × the top of its typical range,
+        another parameter beyond its :attr:`Param.plausible_abs`. Empty for a fit the effect can
+        make."""
         limits = {self.magnitude_param: IMPLAUSIBLE_BEYOND * self.typical[1]}
         limits.update({p.name: p.plausible_abs for p in self.extension[1:] if p.plausible_abs is not None})
         return {k: lim for k, lim in limits.items() if k in values and not abs(values[k]) <= lim}
