@@ -66,6 +66,24 @@ def redecide(cases, threshold=GAIN_THRESHOLD) -> None:
         d["indistinguishable"] = [{"name": n} for n in close]
 
 
+#: What a candidate row needs for :func:`~jadhesion.diagnose.select.effects_from` to re-take a
+#: decision offline (with the held-out error and the fitted parameters for other rankings).
+DECISION_KEYS = ("name", "gain", "delta_bic", "sse_reduction", "p_value", "status", "plausible", "params")
+
+
+def decision_table(d: dict) -> dict:
+    """The candidate tables of a diagnosis (both rounds) with :data:`DECISION_KEYS` only: enough to
+    re-decide it under another rule without refitting."""
+
+    def rows(cands):
+        return [{k: c.get(k) for k in DECISION_KEYS} for c in cands]
+
+    second = d.get("second_round")
+    if second:
+        second = {"first": second["first"], "candidates": rows(second["candidates"])}
+    return {"candidates": rows(d["candidates"]), "second_round": second}
+
+
 def clopper_pearson(k: int, n: int, level: float = 0.95) -> list:
     """Exact binomial interval for k successes in n trials."""
     from scipy.stats import beta

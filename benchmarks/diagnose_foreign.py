@@ -23,7 +23,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from benchmarks.diagnose_blind import clopper_pearson, commit
+from benchmarks.diagnose_blind import clopper_pearson, commit, decision_table
 from jadhesion.cli.diagnose_run import diagnose_file
 from jadhesion.config import enable_compilation_cache, enable_x64
 from jadhesion.diagnose.extensions import NAMES
@@ -85,6 +85,7 @@ def main(argv=None) -> int:
                             for c in d["candidates"][:3]
                         ],
                         "seconds": seconds,
+                        "decision": decision_table(d),
                     }
                 )
                 print(f"{name}: {d['verdict']} set {d['verdict_set']} ({seconds:.1f} s)", flush=True)

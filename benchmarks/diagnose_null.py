@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from benchmarks.diagnose_blind import clopper_pearson, commit
+from benchmarks.diagnose_blind import clopper_pearson, commit, decision_table
 from jadhesion.cli.diagnose_run import diagnose_file
 from jadhesion.config import enable_compilation_cache, enable_x64
 from validation.diagnose_cases import run_case
@@ -55,6 +55,7 @@ def summary_of(d: dict) -> dict:
         "used": d.get("selection", {}).get("used"),
         "seconds": d["seconds"],
         "null_error": d["null"]["noise"]["error"] if d["null"]["noise"] else None,
+        "decision": decision_table(d),
     }
 
 
