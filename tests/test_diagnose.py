@@ -491,6 +491,54 @@ def test_effects_the_evidence_cannot_separate_form_a_set():
     assert select.effects_from(rows, None) == (["torque_offset"], [])
 
 
+def _row(name, gain, dbic, p=0.05):
+    return {"name": name, "gain": gain, "delta_bic": dbic, "status": "converged", "p_value": p}
+
+
+def test_bic_names_the_effect_the_held_out_error_detects():
+    """The independent generator's +29 % rail change (seed 300030, steady run): SSE −96 %, ΔBIC
+    −28.6 and p 0.05, but a held-out gain of −224 % from the one fold whose block followed the
+    change; the speed dependence beside it had the best held-out gain (+26 %, ΔBIC −26.6). The
+    held-out test says the base model misses something; BIC among the candidates the null passed
+    names the rail change, with the two the evidence does not separate from it."""
+    rows = [
+        _row("speed_dependence", 0.259, -26.6),
+        _row("thermal_softening", 0.210, -8.9),
+        _row("rail_change", -2.240, -28.6),
+        _row("signal_delay", -0.020, 2.2, p=1.0),
+    ]
+    assert select.effects_from(rows, None) == (["rail_change"], ["speed_dependence", "thermal_softening"])
+    # whether an effect is named at all is the held-out test's: below the threshold, nothing
+    quiet = [_row("speed_dependence", 0.5 * select.GAIN_THRESHOLD, -26.6), rows[2]]
+    assert select.effects_from(quiet, None) == ([], [])
+    # without a null (--replicas 0) only candidates that pass the held-out test are rivals
+    no_null = [{**r, "p_value": None} for r in rows]
+    assert select.effects_from(no_null, None)[0] == ["speed_dependence"]
+
+
+def test_the_explanation_says_when_the_folds_disagree():
+    """A verdict whose cross-validated error does not fall is explained by its in-sample reduction
+    and ΔBIC, never as a fall of the held-out error."""
+    rail = {**_row("rail_change", -2.24, -28.6), "sse_reduction": 0.964}
+    result = {
+        "effects": ["rail_change"],
+        "candidates": [_row("speed_dependence", 0.259, -26.6), rail],
+        "base": {"heldout_mae": 0.0100},
+        "extended": {"heldout_mae": 0.0324, "params": {"drop": -0.18, "t_change_s": 17.8}},
+        "indistinguishable": [],
+        "generic": {"used": False},
+        "sensitivity": {},
+    }
+    text = explain(result, LOCO_22E)
+    assert "lowers the squared error by 96% (ΔBIC -28.6)" in text
+    assert "cross-validated error does not fall (0.0100 → 0.0324)" in text
+    assert "lowers the cross-validated error" not in text
+    result["extended"]["heldout_mae"] = 0.008
+    text = explain(result, LOCO_22E)
+    assert "lowers the cross-validated error (weighted mean |residual| of μ on held-out stretches) " in text
+    assert "from 0.0100 to 0.0080." in text and "squared error" not in text
+
+
 @pytest.mark.parametrize("name", sorted(CLEAR))
 def test_effect_named_and_recovered(name):
     magnitude, param, tol = CLEAR[name]

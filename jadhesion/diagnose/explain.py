@@ -41,10 +41,27 @@ def _blind_spots(sensitivity: dict) -> str:
     )
 
 
+def _improvement(result: dict) -> str:
+    """What modelling the verdict gains: the cross-validated error where it falls; otherwise the
+    in-sample SSE reduction and ΔBIC that named it (:mod:`.select`), and why the folds disagree."""
+    base, extended = result["base"], result["extended"]
+    if extended["heldout_mae"] < base["heldout_mae"]:
+        return (
+            f". Modelling it lowers the cross-validated error (weighted mean |residual| of μ on "
+            f"held-out stretches) from {base['heldout_mae']:.4f} to {extended['heldout_mae']:.4f}."
+        )
+    first = next(c for c in result["candidates"] if c["name"] == result["effects"][0])
+    return (
+        f". Modelling it lowers the squared error by {first['sse_reduction']:.0%} (ΔBIC "
+        f"{first['delta_bic']:.1f}); its cross-validated error does not fall "
+        f"({base['heldout_mae']:.4f} → {extended['heldout_mae']:.4f}): a held-out stretch asks the "
+        "fit to extrapolate to creep, speed or heat the other stretches did not see."
+    )
+
+
 def explain(result: dict, vehicle: Vehicle) -> str:
     """The diagnosis in words: the verdict, what it means, the fit's improvement, ambiguities and
     the effects this recording cannot see."""
-    base, extended = result["base"], result["extended"]
     if not result["effects"]:
         ranked = [c for c in result["candidates"] if c["status"] == "converged"]
         best = (ranked or result["candidates"])[0]
@@ -85,16 +102,9 @@ def explain(result: dict, vehicle: Vehicle) -> str:
         if result["generic"]["used"]:
             text += _GENERIC.format(signal=result["strongest_signal"], gain=result["generic"]["gain"])
         return text + _blind_spots(result["sensitivity"])
-    parts = [effect_sentence(n, extended["params"], vehicle) for n in result["effects"]]
+    parts = [effect_sentence(n, result["extended"]["params"], vehicle) for n in result["effects"]]
     text = "; and ".join(parts)
-    text = (
-        text[0].upper()
-        + text[1:]
-        + (
-            f". Modelling it lowers the cross-validated error (weighted mean |residual| of μ on "
-            f"held-out stretches) from {base['heldout_mae']:.4f} to {extended['heldout_mae']:.4f}."
-        )
-    )
+    text = text[0].upper() + text[1:] + _improvement(result)
     if result["indistinguishable"]:
         alts = ", ".join(
             f"{d['name']} (separate with {d['experiment']})" for d in result["indistinguishable"]

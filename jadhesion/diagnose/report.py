@@ -141,10 +141,11 @@ Extended parameters: {params}.
 
 ![candidate ranking]({figs[2]})
 
-Decision: an effect is accepted when it has the best held-out error, its gain exceeds the
-calibrated {100 * GAIN_THRESHOLD:.1f} %, its max-T p-value against {result["null"]["replicas"]}
-clean re-synthesised replicas of this recording is ≤ {result["null"]["alpha"]}, its fits converged
-and ΔBIC < 0 (n_eff = {result["n_eff"]:.0f}).
+Decision: an effect is found when a candidate whose fits converged has a gain above the
+calibrated {100 * GAIN_THRESHOLD:.1f} %, a max-T p-value against {result["null"]["replicas"]}
+clean re-synthesised replicas of this recording ≤ {result["null"]["alpha"]} and ΔBIC < 0
+(n_eff = {result["n_eff"]:.0f}); the one named is the lowest ΔBIC among the candidates that pass
+the null and BIC, whatever their held-out gain (a held-out block extrapolates the fit).
 
 ## Warnings
 
