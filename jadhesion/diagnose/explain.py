@@ -51,10 +51,10 @@ def _improvement(result: dict) -> str:
             f"held-out stretches) from {base['heldout_mae']:.4f} to {extended['heldout_mae']:.4f}."
         )
     first = next(c for c in result["candidates"] if c["name"] == result["effects"][0])
-    return (
-        f". Modelling it lowers the squared error by {first['sse_reduction']:.0%} (ΔBIC "
-        f"{first['delta_bic']:.1f}); its cross-validated error does not fall "
-        f"({base['heldout_mae']:.4f} → {extended['heldout_mae']:.4f}): a held-out stretch asks the "
+    return (  # round 1's numbers are the first effect's alone: it is named
+        f". Modelling {first['name'].replace('_', ' ')} lowers the squared error by "
+        f"{first['sse_reduction']:.0%} (ΔBIC {first['delta_bic']:.1f}); the cross-validated error does "
+        f"not fall ({base['heldout_mae']:.4f} → {extended['heldout_mae']:.4f}): a held-out stretch asks the "
         "fit to extrapolate to creep, speed or heat the other stretches did not see."
     )
 
