@@ -16,10 +16,11 @@ Nielsen's rule. It stops after an accepted step with ``C − C' ≤ ftol·C`` an
 these three at a point where variables sit on a face with vanishing Jacobian columns — a plateau,
 e.g. ``μ0 = 0`` — is not a minimum when moving them :data:`PROBE` inwards lowers the cost: the run
 continues from there; the probe is evaluated by the next iteration, in place of a trial, and
-counts no step); and a stop whose undamped Gauss–Newton step, projected onto the box, still
-promises more than :data:`GN_GAIN`·C is ``STALLED`` (the damping, not the problem, made the model
-flat; unprojected, a step past a bound the optimum sits near promised a gain no feasible point
-has, and converged fits were called stalled); when
+counts no step); and a stop where the undamped Gauss–Newton step or the Cauchy step, clipped to
+the box (:func:`feasible_gain`), still promises the gain of a move longer than :data:`GN_STEP`
+standard errors is ``STALLED`` (the damping, not the problem, made the model flat; unprojected, a
+step past a bound the optimum sits near promised a gain no feasible point has, and converged fits
+were called stalled); when
 ``λ > 10¹⁶`` (no decrease is representable: status ``STALLED``); or at ``max_steps`` (status
 ``MAX_STEPS``). Only the three tests give ``CONVERGED`` (``success`` true).
 """
@@ -39,20 +40,34 @@ from .small_linalg import solve
 
 #: Inward probe (box-scaled) of variables on a face with a vanishing Jacobian column.
 PROBE = 0.01
-#: A stop counts as converged only if the undamped Gauss–Newton step would lower the cost by less
-#: than this share (a 1-σ parameter change moves the cost by ~1/n of it: far above this).
-GN_GAIN = 1e-8
+#: A stop counts as converged only if the undamped Gauss–Newton step ``s`` is shorter than this
+#: many standard errors (Mahalanobis, ``sᵀHs/σ̂²`` with ``σ̂² = 2C/(n − d)``): its promised gain
+#: ``½sᵀHs`` is then at most ``GN_STEP²·C/(n − d)``. What is left of the step is then far inside
+#: the parameters' own uncertainty; a fixed share of the cost (10⁻⁸ before) called fits stalled
+#: whose remaining step was a few thousandths of a standard error (a rail change's refit, 34 steps).
+GN_STEP = 0.1
 
 
-def gauss_newton_gain(u, g, h):
-    """Decrease ``−gᵀs − ½ sᵀHs`` of the quadratic model promised by the undamped Gauss–Newton
-    step on the free variables, clipped to the box: ``s = clip(u − H_free⁻¹ g, 0, 1) − u``."""
+def feasible_gain(u, g, h):
+    """Decrease ``−gᵀs − ½ sᵀHs`` of the quadratic model promised by the better of two steps into
+    the box on the free variables: the undamped Gauss–Newton step clipped to the box,
+    ``clip(u − H_free⁻¹ g, 0, 1) − u``, and the Cauchy step (the model's minimum along the free
+    gradient, clipped the same way). Both are feasible, so neither promises a gain no point of the
+    box has; the Cauchy step because clipping can turn the Gauss–Newton step of an ill-conditioned
+    valley uphill (a negative promise: a stop 4.6 standard errors from the optimum was called
+    converged)."""
     free = (~(((u <= 0.0) & (g > 0.0)) | ((u >= 1.0) & (g < 0.0)))).astype(u.dtype)
     a = h * free[:, None] * free[None, :] + jnp.diag(
         jnp.where(free > 0, 1e-12 * jnp.max(jnp.diag(h)) + jnp.finfo(u.dtype).tiny, 1.0)
     )
-    s = jnp.clip(u - solve(a, g * free), 0.0, 1.0) - u
-    return -(g @ s) - 0.5 * (s @ (h @ s))
+    gf = g * free
+    t = (gf @ gf) / jnp.maximum(gf @ (h @ gf), jnp.finfo(u.dtype).tiny)
+
+    def model(step):
+        s = jnp.clip(u + step, 0.0, 1.0) - u
+        return -(g @ s) - 0.5 * (s @ (h @ s))
+
+    return jnp.maximum(model(-solve(a, gf)), model(-t * gf))
 
 
 class BoxLMOptions(NamedTuple):
@@ -138,9 +153,13 @@ def _box_lm_stepper(residual, bounds, options, block_rows=None):
     width = hi - lo
     d = lo.shape[0]
 
+    def rows(args):
+        """Length of the residual (static)."""
+        return jax.eval_shape(res, lo, args).shape[0]
+
     def linearise(u, args):
         """``½‖r‖²``, ``Jᵀr``, ``JᵀJ`` and ``max |r|`` at ``u``."""
-        n = jax.eval_shape(res, lo, args).shape[0]
+        n = rows(args)
         if block_rows is None or n <= block_rows:
             return _reductions(res, lo, width, u, args)
         return _blocked_reductions(res, lo, width, u, args, n, block_rows)
@@ -218,9 +237,10 @@ def _box_lm_stepper(residual, bounds, options, block_rows=None):
         stopped = jnp.where(probing, ~escape, stopped & ~probe_next)
         # A test may pass only because heavy damping (λ·D, D a running maximum of diag H) made
         # the model flat: it is a minimum only if even the undamped Gauss–Newton step, clipped to
-        # the box, promises less than GN_GAIN·C; otherwise the run stopped stalled.
-        gn_gain = gauss_newton_gain(u, g, h)
-        converged = stopped & (stationary | (gn_gain <= GN_GAIN * c))
+        # the box, is shorter than GN_STEP standard errors (nor the Cauchy step's promise larger);
+        # otherwise the run stopped stalled.
+        gain = feasible_gain(u, g, h)
+        converged = stopped & (stationary | (gain <= GN_STEP**2 * c / max(rows(args) - d, 1)))
         done = stopped | ((lam > 1e16) & ~probe_next)
         steps = st.steps + jnp.where(fresh | probing, 0, 1)
         return _BoxState(

@@ -7,14 +7,14 @@
 * :mod:`.global_lm` — seeded multi-start box LM.
 """
 
-from .box_lm import GN_GAIN, PROBE, BoxLMOptions, box_lm
+from .box_lm import GN_STEP, PROBE, BoxLMOptions, box_lm
 from .global_lm import global_lm, seed_starts, with_start
 from .lm_optx import from_box, lm_solve, multistart, safe_residual, to_box
 from .lm_queue import box_lm_queue
 from .lm_result import LMResult, best_of, sse_objective, status_code
 
 __all__ = [
-    "GN_GAIN",
+    "GN_STEP",
     "PROBE",
     "BoxLMOptions",
     "LMResult",
