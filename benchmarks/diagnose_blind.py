@@ -72,16 +72,21 @@ DECISION_KEYS = ("name", "gain", "delta_bic", "sse_reduction", "p_value", "statu
 
 
 def decision_table(d: dict) -> dict:
-    """The candidate tables of a diagnosis (both rounds) with :data:`DECISION_KEYS` only: enough to
-    re-decide it under another rule without refitting."""
+    """The effects found and the candidate tables of a diagnosis (both rounds, with round 2's
+    refit of the first effect) with :data:`DECISION_KEYS` only: enough to re-decide it under
+    another rule without refitting."""
 
     def rows(cands):
         return [{k: c.get(k) for k in DECISION_KEYS} for c in cands]
 
     second = d.get("second_round")
     if second:
-        second = {"first": second["first"], "candidates": rows(second["candidates"])}
-    return {"candidates": rows(d["candidates"]), "second_round": second}
+        second = {
+            "first": second["first"],
+            "first_refit": second.get("first_refit"),
+            "candidates": rows(second["candidates"]),
+        }
+    return {"effects": d["effects"], "candidates": rows(d["candidates"]), "second_round": second}
 
 
 def clopper_pearson(k: int, n: int, level: float = 0.95) -> list:
