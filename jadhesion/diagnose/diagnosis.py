@@ -362,7 +362,6 @@ def diagnose(
             n_valid,
             n_replicas,
             seed,
-            recording_sse0=float(t1["sse"][0]),
         )
         ok = np.array([_status(t1, i) == "converged" for i in range(1, len(sets1))])
         tested = null.max_t_pvalues(np.where(ok, observed, -np.inf), null_stats)

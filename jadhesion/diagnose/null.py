@@ -117,9 +117,6 @@ ALPHA = 0.05
 #: Most threads fitting replicas at once: each holds one fit's working memory (at 180 000 samples
 #: the whole diagnosis peaked at 1.46 GB with two), so many cores must not multiply it unbounded.
 MAX_WORKERS = 4
-#: Re-syntheses at a narrower γ when the replicas' base fits misfit more than the recording's
-#: (:func:`misfit_gamma`), at most.
-MISFIT_ROUNDS = 2
 #: Shares γ of the latent speeds' fast part kept as true motion in the replicas, tried from 1 down.
 GAMMA_GRID = 1.0 - np.array(
     [0.0, 0.002, 0.005, 0.01, 0.02, 0.03, 0.05, 0.07, 0.1, 0.15, 0.2, 0.3, 0.5, 0.7, 1.0]
@@ -238,20 +235,6 @@ def fast_power_bound(r, keep) -> float:
     return float(x.mean() + Z90 * se)
 
 
-def misfit_gamma(recording_sse0: float, replica_sse0, noise_sse: float, gamma: float):
-    """A larger γ (less regressor error) where the replicas demonstrably carry more errors-in-
-    variables misfit than the recording: its base fit's weighted SSE lies below the replicas'
-    lower :data:`ALPHA` quantile, although any effect it holds can only raise it. From
-    ``S(γ) ≈ N + (1 − γ)² E`` (the error path scales with ``1 − γ``, its misfit with the square;
-    ``N = noise_sse``, the torque noise's share) the γ whose quantile meets the recording's SSE;
-    None when the recording's SSE is not below the quantile (or γ = 1 already)."""
-    q = float(np.quantile(np.asarray(replica_sse0, float), ALPHA))
-    if gamma >= 1.0 or not recording_sse0 < q or q <= noise_sse:
-        return None
-    spread = (q - noise_sse) / (1.0 - gamma) ** 2
-    return float(1.0 - np.sqrt(max(recording_sse0 - noise_sse, 0.0) / spread))
-
-
 def error_share(data_power: float, torque_power: float, power_of) -> float:
     """The largest γ on :data:`GAMMA_GRID` (from 1 down) whose replica residual fast power
     ``power_of(γ) + torque_power`` (:func:`fast_power`) reaches ``data_power``, the upper
@@ -326,16 +309,7 @@ def fast_slip_error(fast_slip, keep, max_lag: int) -> tuple:
 
 
 def replicas(
-    torque,
-    measured,
-    vehicle: Vehicle,
-    p_truth,
-    n_replicas: int,
-    seed: int,
-    latent,
-    speeds,
-    gamma=None,
-    fresh=None,
+    torque, measured, vehicle: Vehicle, p_truth, n_replicas: int, seed: int, latent, speeds
 ) -> tuple:
     """``([(torque [N·m], regressors (v, v_w, sd_w) [m/s])] × R, {"torque": noise model, "gamma",
     "fast_power", "error"})``: each replica's torque, re-synthesised from the Polach curve
@@ -355,10 +329,7 @@ def replicas(
     recording's; ``measured``: its :class:`Signals` on the latent speeds, whose weights select the
     samples γ is matched on. ``fast_power`` [-, adhesion²]: the recording's residual fast power
     (``recording``) and its upper bound (``upper95``, :func:`fast_power_bound`), the torque
-    noise's (``torque_noise``) and what the whole fixed error path adds at γ = 0 (``error_path``).
-    ``gamma``, ``fresh`` (without coasting): γ and the error's kind given, instead of from the
-    fast powers (:func:`null_statistics` narrows γ where the replicas misfit more than the
-    recording, keeping the kind)."""
+    noise's (``torque_noise``) and what the whole fixed error path adds at γ = 0 (``error_path``)."""
     torque = np.asarray(torque, float)
     keep = np.asarray(measured.weight) > 0
     t = np.asarray(measured.time)
@@ -389,14 +360,11 @@ def replicas(
     max_lag = max(1, int(round(ERROR_MAX_LAG_S / dt)))
     lag_1s = min(max_lag, int(round(1.0 / dt)))
     if coast is None:
-        if gamma is None:
-            power_of = lambda g: fast_power(path_mu(g) - mu_fit, keep)  # noqa: E731
-            gamma = error_share(powers["upper95"], torque_power, power_of)
+        gamma = error_share(powers["upper95"], torque_power, lambda g: fast_power(path_mu(g) - mu_fit, keep))
         mu_gamma = path_mu(gamma)
         clean_torque = (mu_gamma + deriv) * scale
         path_power = fast_power(mu_gamma - mu_fit, keep)
-        fresh = bool(path_power > torque_power) if fresh is None else fresh
-        error = {"source": "fast_part", "fresh": fresh, "path_power": path_power}
+        error = {"source": "fast_part", "fresh": bool(path_power > torque_power), "path_power": path_power}
         if not error["fresh"]:  # the replicas differ by their torque noise: one error path serves
             draws = [(_noisy(clean_torque, model, rng), latent) for _ in range(n_replicas)]
             return draws, {"torque": model, "gamma": gamma, "fast_power": powers, "error": error}
@@ -454,7 +422,6 @@ def null_statistics(
     n_valid: int,
     n_replicas=N_REPLICAS,
     seed=0,
-    recording_sse0=None,
 ) -> tuple:
     """``(statistics (R, C − 1), noise model)``: every replica's :func:`statistic` of the
     round-1 candidates.
@@ -472,17 +439,11 @@ def null_statistics(
     series' noise and its LM ended in a lesser local optimum, so the null of that candidate was
     too narrow. They are fitted on :func:`workers` threads (XLA runs them in parallel; the
     results are those of one after another).
-
-    ``recording_sse0``: the recording's base-fit SSE (same weights). Where γ was matched on the
-    fast power and the recording's SSE lies below the replicas' lower :data:`ALPHA` quantile, the
-    replicas are re-synthesised at the larger γ of :func:`misfit_gamma`, the same error kind and
-    seed (so only γ differs); where that overshoots (the recording's SSE above the new replicas'
-    median) half way back; :data:`MISFIT_ROUNDS` re-syntheses at most, recorded in the noise
-    model's ``base_misfit``.
     """
     torque = columns["traction_torque"]
     on_latent = torque_builder(columns, vehicle, mask=mask, regressors=latent)
     speeds = (columns["vehicle_speed"], columns["wheel_speed"])
+    draws, model = replicas(torque, on_latent(torque), vehicle, p_truth, n_replicas, seed, latent, speeds)
 
     def fit(draw):
         replica_torque, regressors = draw
@@ -495,37 +456,11 @@ def null_statistics(
         drop, u_change, tau_heat = starting_values_at(sig, p_base)
         sig = sig._replace(heat=lowpass_foh(sig.time, sig.power, tau_heat))
         sse, status = _fit_replica(*round_rows(drop, u_change), fitting.pad_signals(sig), n_valid)
-        table = merge({"sse": np.array(sse), "status": np.array(status)})
-        return statistic(table, converged_only=False), float(table["sse"][0])
+        return statistic(merge({"sse": np.array(sse), "status": np.array(status)}), converged_only=False)
 
-    def null(gamma=None, fresh=None):
-        draws, model = replicas(
-            torque, on_latent(torque), vehicle, p_truth, n_replicas, seed, latent, speeds, gamma, fresh
-        )
-        with ThreadPoolExecutor(workers(n_replicas)) as pool:
-            stats, sse0 = zip(*pool.map(fit, draws), strict=True)
-        return np.array(stats), np.array(sse0), model
-
-    stats, sse0, model = null()
-    if recording_sse0 is None or model["gamma"] is None:
-        return stats, model
-    scale = vehicle.axle_load_kg * GRAVITY * vehicle.wheel_radius_m
-    w, tq = np.asarray(mask, float), model["torque"]
-    noise_sse = float(np.sum(w * w)) * (tq["sigma"] ** 2 + tq["q"] ** 2 / 12.0) / scale**2
-    misfit = {"recording_sse0": float(recording_sse0), "noise_sse": noise_sse}
-    misfit["gamma_fast_power"] = model["gamma"]
-    steps = []
-    for _ in range(MISFIT_ROUNDS):
-        gamma = misfit_gamma(recording_sse0, sse0, noise_sse, model["gamma"])
-        if gamma is None and steps and recording_sse0 > np.median(sse0):
-            gamma = 0.5 * (steps[-1]["gamma"] + model["gamma"])  # overshot: half way back
-        if gamma is None:
-            break
-        steps.append({"gamma": model["gamma"], "replica_sse0_q05": float(np.quantile(sse0, ALPHA))})
-        stats, sse0, model = null(gamma, model["error"]["fresh"])
-    misfit.update(narrowed=steps, replica_sse0_q05=float(np.quantile(sse0, ALPHA)))
-    model["base_misfit"] = misfit
-    return stats, model
+    with ThreadPoolExecutor(workers(n_replicas)) as pool:
+        stats = list(pool.map(fit, draws))
+    return np.array(stats), model
 
 
 def workers(n_replicas: int) -> int:
