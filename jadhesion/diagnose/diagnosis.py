@@ -137,24 +137,23 @@ def _fit_round(sig, n, p0, sets):
     return _merger(sets)(table), actives[: len(sets)]
 
 
-def _refit_first(sig, n, t2, first) -> int | None:
-    """Round 2's reference, the first effect alone (row 0 of ``t2``), refitted from each pair's
-    solution with the second effect's parameters neutral. Round 1's start may leave the first
-    effect in a local optimum that a pair's fit leaves (a rail change placed 3.6 s late, found at
-    its time only beside a radius error): the pair's gain is then the first effect's, not the
-    second's. The lowest-SSE converged refit below the reference replaces it in place (full and
-    fold fits); returns the row of the pair it came from, or None."""
-    c = len(t2["sse"])
+def _refit_first(sig, n, t2, first, rows) -> int | None:
+    """Round 2's reference, the first effect alone (row 0 of ``t2``), refitted from the solutions
+    of the pairs ``rows`` (those BIC would accept) with the second effect's parameters neutral.
+    Round 1's start may leave the first effect in a local optimum that a pair's fit leaves (a rail
+    change placed 3.6 s late, found at its time only beside a radius error): the pair's gain is
+    then the first effect's, not the second's. The lowest-SSE converged refit below the reference
+    replaces it in place (full and fold fits); returns the row of the pair it came from, or None.
+    The rows not refitted start at the reference (converged: a few steps each)."""
     starts = np.tile(t2["params"][0], (N_CANDIDATES, 1))
-    starts[:c] = t2["params"]
+    starts[rows] = t2["params"][rows]
     idx = np.tile(fitting.free_indices((first,)), (N_CANDIDATES, 1))
     actives = np.tile(np.asarray(ext.active_mask((first,))), (N_CANDIDATES, 1))
     fits = fitting.fit_candidates(starts, idx, actives, sig, n)._asdict()
     table = {k: np.array(v) for k, v in fits.items()}
-    ok = np.array([_status(table, i) == "converged" for i in range(1, c)])
-    sse = np.where(ok, table["sse"][1:c], np.inf)
-    best = 1 + int(np.argmin(sse))
-    if not (sse[best - 1] < t2["sse"][0] * (1.0 - 1e-9) or (ok.any() and _status(t2, 0) != "converged")):
+    sse = np.array([table["sse"][j] if _status(table, j) == "converged" else np.inf for j in rows])
+    best = rows[int(np.argmin(sse))]
+    if not sse.min() < t2["sse"][0] * (1.0 - 1e-9):
         return None
     for k, v in t2.items():
         v[0] = table[k][best][: v.shape[1]] if v.ndim > 1 else table[k][best]
@@ -395,9 +394,17 @@ def diagnose(
         others = [n for n in ext.NAMES if n != first]
         sets2 = [(first,)] + [(first, n) for n in others]
         t2, act2 = _fit_round(padded, n_valid, t1["params"][i1], sets2)
-        refit = _refit_first(padded, n_valid, t2, first)
-        n_eff2 = select.effective_samples(t2["residual"][0])
-        gain2, dbic2 = select.scores(t2["heldout_mae"], t2["sse"], [_n_extra(s) for s in sets2], 0, n_eff2)
+        k2 = [_n_extra(s) for s in sets2]
+        gain2, dbic2 = select.scores(
+            t2["heldout_mae"], t2["sse"], k2, 0, select.effective_samples(t2["residual"][0])
+        )
+        # a pair BIC would accept may owe its gain to a better optimum of the first effect
+        rows = [j for j in range(1, len(sets2)) if dbic2[j] < 0.0]
+        refit = _refit_first(padded, n_valid, t2, first, rows) if rows else None
+        if refit is not None:
+            gain2, dbic2 = select.scores(
+                t2["heldout_mae"], t2["sse"], k2, 0, select.effective_samples(t2["residual"][0])
+            )
         second_round = {
             "first": first,
             "first_refit": None
