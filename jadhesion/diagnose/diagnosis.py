@@ -8,8 +8,8 @@ Output (JSON-ready dict, DESIGN §3): ``verdict`` (the primary effect's name or 
 ``verdict_set`` (the verdict and those effects: the data name one effect only when it has one
 member),
 ``second_round`` (gains of a second effect given the first, or null; the first alone is refitted
-from every pair's solution and a better refit, ``first_refit``, is the reference and, when no
-second effect is accepted, the extended model), ``base``/``extended``
+from the solution of every pair BIC would accept, and a better refit, ``first_refit``, is the
+reference and, when no second effect is accepted, the extended model), ``base``/``extended``
 (``params``, ``mae``, ``heldout_mae``), ``generic`` (sparse discrepancy on
 the extended model's residual), ``sensitivity`` (per effect, the smallest magnitude this recording
 could detect and the run that would expose it: :mod:`.sensitivity`), ``residual_signatures`` (η² of
