@@ -538,6 +538,17 @@ def test_the_explanation_says_when_the_folds_disagree():
     text = explain(result, LOCO_22E)
     assert "lowers the cross-validated error (weighted mean |residual| of μ on held-out stretches) " in text
     assert "from 0.0100 to 0.0080." in text and "squared error" not in text
+    # round 2 found the change's better optimum: the table's numbers are round 1's, the model's not
+    refit = {"from_pair_with": "wheel_radius_error", "sse_reduction": 0.623, "params": {}}
+    result["second_round"] = {"first": "rail_change", "first_refit": refit, "candidates": []}
+    text = explain(result, LOCO_22E)
+    assert "Round 1's fit of rail change sat in a local optimum: refitted alone from its fit beside " in text
+    assert "wheel radius error, it leaves 62% less squared error than round 1's, and the values above" in text
+    result["effects"] = ["rail_change", "torque_offset"]
+    result["extended"]["params"]["offset"] = 0.01
+    assert "the second effect was judged against that refit." in explain(result, LOCO_22E)
+    result["second_round"]["first_refit"] = None
+    assert "Round 1's fit" not in explain(result, LOCO_22E)
 
 
 @pytest.mark.parametrize("name", sorted(CLEAR))

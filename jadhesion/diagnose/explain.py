@@ -59,6 +59,25 @@ def _improvement(result: dict) -> str:
     )
 
 
+def _refit(result: dict) -> str:
+    """Where round 2 found a better optimum of the first effect than round 1
+    (``second_round.first_refit``): the candidate table's numbers are round 1's, the model's not."""
+    second = result.get("second_round") or {}
+    refit = second.get("first_refit")
+    if not refit or result["effects"][:1] != [second["first"]]:
+        return ""
+    name, other = second["first"].replace("_", " "), refit["from_pair_with"].replace("_", " ")
+    use = (
+        "the values above are that refit's"
+        if len(result["effects"]) == 1
+        else "the second effect was judged against that refit"
+    )
+    return (
+        f" Round 1's fit of {name} sat in a local optimum: refitted alone from its fit beside "
+        f"{other}, it leaves {refit['sse_reduction']:.0%} less squared error than round 1's, and {use}."
+    )
+
+
 def explain(result: dict, vehicle: Vehicle) -> str:
     """The diagnosis in words: the verdict, what it means, the fit's improvement, ambiguities and
     the effects this recording cannot see."""
@@ -104,7 +123,7 @@ def explain(result: dict, vehicle: Vehicle) -> str:
         return text + _blind_spots(result["sensitivity"])
     parts = [effect_sentence(n, result["extended"]["params"], vehicle) for n in result["effects"]]
     text = "; and ".join(parts)
-    text = text[0].upper() + text[1:] + _improvement(result)
+    text = text[0].upper() + text[1:] + _improvement(result) + _refit(result)
     if result["indistinguishable"]:
         alts = ", ".join(
             f"{d['name']} (separate with {d['experiment']})" for d in result["indistinguishable"]
