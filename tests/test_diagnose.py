@@ -577,7 +577,7 @@ def test_round_two_refits_the_first_effect_where_a_pair_found_its_better_optimum
     sets = [("rail_change",), ("rail_change", "wheel_radius_error")] + [("rail_change",)] * (N_ROWS - 2)
     idx = np.array([fitting.free_indices(s) for s in sets])
     idx[0] = [fitting.PAD if i == u else i for i in idx[0]]
-    idx[2:] = idx[0]
+    idx[2:] = fitting.PAD  # padding rows: nothing free
     actives = np.stack([np.asarray(ext.active_mask(s)) for s in sets])
     fits = fitting.fit_candidates(starts, idx, actives, padded, N, folds=False)._asdict()
     t2 = {k: np.array(v)[:2] for k, v in fits.items()}

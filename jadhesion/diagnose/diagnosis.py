@@ -95,15 +95,16 @@ def _with_starts(p_base, drop: float, u_change: float) -> np.ndarray:
 def _round_rows(p0, sets) -> tuple:
     """Rows ``(starts, idx, actives)`` of one round: the effect sets (the first is the reference)
     from ``p0``, plus their extra starts (:func:`_extra_rows`); padded to :data:`N_CANDIDATES` rows
-    and :data:`fitting.WIDTH` indices, so every round runs one compiled program."""
+    and :data:`fitting.WIDTH` indices, so every round runs one compiled program. Padding rows have
+    no free parameter (every index the unused slot): they converge at once and are cut off."""
     extra = _extra_rows(sets)
     rows = list(sets) + [sets[i] for i, _, _ in extra]
     starts = np.tile(np.asarray(p0, float), (N_CANDIDATES, 1))
     for k, (_, col, d) in enumerate(extra):
         starts[len(sets) + k, col] = d
-    rows += [sets[0]] * (N_CANDIDATES - len(rows))
-    actives = np.stack([np.asarray(ext.active_mask(s)) for s in rows])
-    idx = np.array([fitting.free_indices(s) for s in rows])
+    pad = N_CANDIDATES - len(rows)
+    actives = np.stack([np.asarray(ext.active_mask(s)) for s in rows + [()] * pad])
+    idx = np.array([fitting.free_indices(s) for s in rows] + [[fitting.PAD] * fitting.WIDTH] * pad)
     return starts, idx, actives
 
 
