@@ -95,17 +95,22 @@ def _with_starts(p_base, drop: float, u_change: float) -> np.ndarray:
 def _round_rows(p0, sets) -> tuple:
     """Rows ``(starts, idx, actives)`` of one round: the effect sets (the first is the reference)
     from ``p0``, plus their extra starts (:func:`_extra_rows`); padded to :data:`N_CANDIDATES` rows
-    and :data:`fitting.WIDTH` indices, so every round runs one compiled program. Padding rows have
-    no free parameter (every index the unused slot): they converge at once and are cut off."""
+    and :data:`fitting.WIDTH` indices (:func:`_padded`), so every round runs one compiled program."""
     extra = _extra_rows(sets)
     rows = list(sets) + [sets[i] for i, _, _ in extra]
     starts = np.tile(np.asarray(p0, float), (N_CANDIDATES, 1))
     for k, (_, col, d) in enumerate(extra):
         starts[len(sets) + k, col] = d
+    return starts, *_padded(rows)
+
+
+def _padded(rows) -> tuple:
+    """``(idx, actives)`` of the effect sets ``rows`` padded to :data:`N_CANDIDATES` rows with rows
+    that free nothing (every index the unused slot): they converge at once and are cut off."""
     pad = N_CANDIDATES - len(rows)
-    actives = np.stack([np.asarray(ext.active_mask(s)) for s in rows + [()] * pad])
+    actives = np.stack([np.asarray(ext.active_mask(s)) for s in list(rows) + [()] * pad])
     idx = np.array([fitting.free_indices(s) for s in rows] + [[fitting.PAD] * fitting.WIDTH] * pad)
-    return starts, idx, actives
+    return idx, actives
 
 
 def _merger(sets):
@@ -144,21 +149,19 @@ def _refit_first(sig, n, t2, first, rows) -> int | None:
     Round 1's start may leave the first effect in a local optimum that a pair's fit leaves (a rail
     change placed 3.6 s late, found at its time only beside a radius error): the pair's gain is
     then the first effect's, not the second's. The lowest-SSE converged refit below the reference
-    replaces it in place (full and fold fits); returns the row of the pair it came from, or None.
-    The rows not refitted start at the reference (converged: a few steps each)."""
+    replaces it in place (full and fold fits); returns the row of the pair it came from, or None."""
     starts = np.tile(t2["params"][0], (N_CANDIDATES, 1))
-    starts[rows] = t2["params"][rows]
-    idx = np.tile(fitting.free_indices((first,)), (N_CANDIDATES, 1))
-    actives = np.tile(np.asarray(ext.active_mask((first,))), (N_CANDIDATES, 1))
-    fits = fitting.fit_candidates(starts, idx, actives, sig, n)._asdict()
+    starts[: len(rows)] = t2["params"][rows]
+    fits = fitting.fit_candidates(starts, *_padded([(first,)] * len(rows)), sig, n)._asdict()
     table = {k: np.array(v) for k, v in fits.items()}
-    sse = np.array([table["sse"][j] if _status(table, j) == "converged" else np.inf for j in rows])
-    best = rows[int(np.argmin(sse))]
-    if not sse.min() < t2["sse"][0] * (1.0 - 1e-9):
+    ok = [_status(table, i) == "converged" for i in range(len(rows))]
+    sse = np.where(ok, table["sse"][: len(rows)], np.inf)
+    best = int(np.argmin(sse))
+    if not sse[best] < t2["sse"][0] * (1.0 - 1e-9):
         return None
     for k, v in t2.items():
         v[0] = table[k][best][: v.shape[1]] if v.ndim > 1 else table[k][best]
-    return best
+    return rows[best]
 
 
 def _status(table: dict, i: int) -> str:
@@ -396,16 +399,17 @@ def diagnose(
         sets2 = [(first,)] + [(first, n) for n in others]
         t2, act2 = _fit_round(padded, n_valid, t1["params"][i1], sets2)
         k2 = [_n_extra(s) for s in sets2]
-        gain2, dbic2 = select.scores(
-            t2["heldout_mae"], t2["sse"], k2, 0, select.effective_samples(t2["residual"][0])
-        )
+
+        def scores2():  # against row 0, the reference (round 1's fit or, below, a better refit)
+            n_eff2 = select.effective_samples(t2["residual"][0])
+            return select.scores(t2["heldout_mae"], t2["sse"], k2, 0, n_eff2)
+
+        gain2, dbic2 = scores2()
         # a pair BIC would accept may owe its gain to a better optimum of the first effect
         rows = [j for j in range(1, len(sets2)) if dbic2[j] < 0.0]
         refit = _refit_first(padded, n_valid, t2, first, rows) if rows else None
         if refit is not None:
-            gain2, dbic2 = select.scores(
-                t2["heldout_mae"], t2["sse"], k2, 0, select.effective_samples(t2["residual"][0])
-            )
+            gain2, dbic2 = scores2()
         second_round = {
             "first": first,
             "first_refit": None
