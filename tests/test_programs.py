@@ -19,9 +19,11 @@ from jadhesion.cli import fit_program
 from jadhesion.data.dataset import PolachDataset, to_dataset
 from jadhesion.data.recording import load_recording, save_recording
 from jadhesion.data.vehicle import LOCO_22E
+from jadhesion.identify.likelihood import SLIP_LAWS
 from jadhesion.identify.polach_fit import fit_polach
 from jadhesion.identify.trust import trust_numbers
 from jadhesion.programs import ProgramCache, code_key
+from jadhesion.status import Status
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -198,6 +200,25 @@ def test_dataset_and_trust_programs_equal_library_bit_for_bit(programs, tmp_path
         got = fit_program.trust_numbers(params, ref)
         for name, value in want._asdict().items():
             np.testing.assert_array_equal(np.asarray(getattr(got, name)), np.asarray(value), err_msg=name)
+
+
+def test_posterior_start_and_slip_node_programs_equal_library_bit_for_bit(programs, tmp_path, monkeypatch):
+    """The posterior's other kept programs — its least-squares start and either slip law's nodes —
+    give, on a miss and on a hit, what the library traced anew gives (``JADHESION_PROGRAMS=0``)
+    bit for bit."""
+    data = to_dataset(_raw_recording(tmp_path))
+
+    def programs_out():
+        return [fit_program.lm_start(data)] + [fit_program.slip_nodes(data, law) for law in SLIP_LAWS]
+
+    kept = [programs_out(), programs_out()]  # miss (exported), then hit (deserialised)
+    monkeypatch.setenv("JADHESION_PROGRAMS", "0")
+    traced = programs_out()
+    for got in kept:
+        for a, b in zip(got, traced, strict=True):
+            _assert_same(a, b)
+    assert traced[0].status == int(Status.CONVERGED)
+    assert all(np.isfinite(np.asarray(d.node_slips)).all() for d in traced[1:])
 
 
 _LAPACK_PROBE = """

@@ -116,11 +116,12 @@ def _finish(proc) -> dict:
 
 @pytest.fixture(scope="module")
 def workers(tmp_path_factory):
-    """Subprocess sweeps of the toy grid: 4 and 2 forced devices, and 2 processes × 2 devices."""
+    """Subprocess sweeps of the toy grid: 4 forced devices, and 2 processes × 2 devices (two
+    devices per process are exercised there; a separate 2-device run cost ~13 s of CPU)."""
     root = tmp_path_factory.mktemp("workers")
     cache = root / "xla-cache"
     address = f"127.0.0.1:{_free_port()}"
-    procs = {f"devices{n}": _spawn(_worker(root / f"devices{n}.csv"), n, cache=cache) for n in (4, 2)}
+    procs = {"devices4": _spawn(_worker(root / "devices4.csv"), 4, cache=cache)}
     for n in (1, 4):
         procs[f"cli{n}"] = _spawn(
             ["-m", "jadhesion", *CLI_SWEEP, "--out", str(root / f"cli{n}.csv")], n, cache=cache
@@ -268,12 +269,11 @@ def test_code_hash_follows_the_source(tmp_path):
     assert code_hash() == code_hash() != code_hash(toy_simulate)
 
 
-@pytest.mark.parametrize("devices", [4, 2])
-def test_devices_give_the_single_device_table_bit_for_bit(workers, reference, devices):
+def test_four_devices_give_the_single_device_table_bit_for_bit(workers, reference):
     root, procs = workers
-    summary = _finish(procs[f"devices{devices}"])
-    assert summary["devices"] == devices and summary["computed"] == toy_grid().size
-    _assert_same(read_table(root / f"devices{devices}.csv"), reference[1])
+    summary = _finish(procs["devices4"])
+    assert summary["devices"] == 4 and summary["computed"] == toy_grid().size
+    _assert_same(read_table(root / "devices4.csv"), reference[1])
 
 
 def test_real_sweep_on_four_devices_gives_the_one_device_table_bit_for_bit(workers):
