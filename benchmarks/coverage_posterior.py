@@ -54,22 +54,22 @@ QUANTITIES = ("kA", "kS", "mu0", "mu_max", "creep_opt")
 FACE_PARAMS, FACE_TOL = ("kA", "kS", "mu0"), 1e-3
 
 
-def _ours(out: Path, per: int) -> list:
+def _ours(out: Path, per: int, offset: int = 0) -> list:
     cases = []
     for name in ("dry", "wet", "sand"):
         for seed in range(per):
             path = out / f"ours_{name}_{seed}.csv"
             with contextlib.redirect_stdout(io.StringIO()):
-                cli(["simulate", "--scenario", name, "--seed", str(700 + seed), "--out", str(path)])
+                cli(["simulate", "--scenario", name, "--seed", str(700 + offset + seed), "--out", str(path)])
             truth = json.loads(path.with_suffix(".truth.json").read_text())["params"]
             cases.append(("ours", f"{name}/{seed}", path, truth))
     return cases
 
 
-def _foreign(out: Path, n: int) -> list:
+def _foreign(out: Path, n: int, offset: int = 0) -> list:
     cases = []
     for i in range(n):
-        rec = foreign_generator.generate(5100 + i, effect="none")
+        rec = foreign_generator.generate(5100 + offset + i, effect="none")
         path = foreign_generator.write(rec, out / f"foreign_{i}.csv", truth=False)
         cases.append(("foreign", f"{i}", path, rec.truth["params"]))
     return cases
@@ -178,6 +178,13 @@ def main(argv=None):
     p.add_argument("--likelihoods", default="gauss:tempered,student:tempered")
     p.add_argument("--slip-law", default="normal", choices=SLIP_LAWS)
     p.add_argument(
+        "--seed-offset",
+        type=int,
+        default=0,
+        help="added to every recording's seed (ours 700 + offset + i, foreign 5100 + offset + i): "
+        "a fresh set of recordings",
+    )
+    p.add_argument(
         "--save", default=str(Path(__file__).parent / "results" / "coverage_posterior_student.json")
     )
     args = p.parse_args(argv)
@@ -187,7 +194,7 @@ def main(argv=None):
     start = time.perf_counter()
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp)
-        cases = _ours(out, args.per) + _foreign(out, 3 * args.per)
+        cases = _ours(out, args.per, args.seed_offset) + _foreign(out, 3 * args.per, args.seed_offset)
         for gen, label, path, truth in cases:
             doc["tails_at_truth"].append({"generator": gen, "case": label, **tails_at_truth(path, truth)})
             for lik in args.likelihoods.split(","):
