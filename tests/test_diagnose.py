@@ -562,6 +562,24 @@ def test_effect_named_and_recovered(name):
     assert result["extended"]["heldout_mae"] < result["base"]["heldout_mae"]
 
 
+def test_the_extended_model_is_round_ones_fit_unless_round_two_found_a_better_one():
+    """Where the first effect alone is named, the extended model is round 2's reference only if it
+    is a refit from a pair (:func:`diagnosis._refit_first`) or a converged re-run at a lower SSE;
+    a re-run that crawled to the step cap, or converged higher, leaves round 1's fit standing."""
+
+    def table(status, sse, fold=Status.CONVERGED):
+        return {"status": np.array([status]), "fold_status": np.array([fold]), "sse": np.array([sse])}
+
+    done = np.full(2, int(Status.CONVERGED))
+    round1 = {"status": done, "fold_status": done, "sse": np.array([2.0, 1.0])}
+    stands = diagnosis._reference_stands
+    assert not stands(round1, 1, table(Status.MAX_STEPS, 0.99), refitted=False)  # crawled to the cap
+    assert not stands(round1, 1, table(Status.CONVERGED, 0.99, fold=Status.MAX_STEPS), refitted=False)
+    assert not stands(round1, 1, table(Status.CONVERGED, 1.01), refitted=False)
+    assert stands(round1, 1, table(Status.CONVERGED, 0.99), refitted=False)
+    assert stands(round1, 1, table(Status.CONVERGED, 0.8), refitted=True)
+
+
 def test_round_two_refits_the_first_effect_where_a_pair_found_its_better_optimum():
     """Round 1's rail change sits at the wrong time (held at 0.85 of the run: a local optimum, as
     on the independent generator's 300030) while the pair with a radius error found the change at

@@ -164,6 +164,17 @@ def _refit_first(sig, n, t2, first, rows) -> int | None:
     return rows[best]
 
 
+def _reference_stands(t1, i1: int, t2, refitted: bool) -> bool:
+    """Whether round 2's reference (row 0 of ``t2``) is the extended model when the first effect
+    alone is named: where it is a refit from a pair's solution (:func:`_refit_first`), or where
+    re-running round 1's fit (row ``i1`` of ``t1``) converged at a lower SSE. Otherwise round 1's
+    fit is: the re-run starts from it and can crawl along a direction the data leave flat to the
+    step cap (a 600 s steady run at 200 Hz: round 1 put a rail change at 84.6 s, converged; the
+    re-run drifted to 211.8 s, ``max_steps``, at the same in-sample error; the truth 344.9 s, and
+    no sample between them reached the creeps where μ0 shows)."""
+    return refitted or (_status(t2, 0) == "converged" and t2["sse"][0] < t1["sse"][i1])
+
+
 def _status(table: dict, i: int) -> str:
     """Status label of row ``i`` of a fit table: the worse of its full-data and fold fits."""
     return Status(int(max(table["status"][i], table["fold_status"][i]))).label
@@ -434,8 +445,8 @@ def diagnose(
     effects, close = select.effects_from(candidates, second_round)
     if len(effects) == 2:
         table, acts, final = t2, act2, 1 + others.index(effects[1])
-    elif second_round and effects == [first]:
-        table, acts, final = t2, act2, 0  # round 2's reference: round 1's fit or a better refit
+    elif second_round and effects == [first] and _reference_stands(t1, i1, t2, refit is not None):
+        table, acts, final = t2, act2, 0  # round 2's reference: a better refit of the first effect
     elif effects:
         final = names1.index(effects[0])
     ext_params = _row(table["params"][final], acts[final], sig, tau_th)
