@@ -411,7 +411,7 @@ def diagnose(
         t2, act2 = _fit_round(padded, n_valid, t1["params"][i1], sets2)
         k2 = [_n_extra(s) for s in sets2]
 
-        def scores2():  # against row 0, the reference (round 1's fit or, below, a better refit)
+        def scores2():  # against row 0, the reference (a re-run of round 1's fit or, below, a better refit)
             n_eff2 = select.effective_samples(t2["residual"][0])
             return select.scores(t2["heldout_mae"], t2["sse"], k2, 0, n_eff2)
 
@@ -446,7 +446,7 @@ def diagnose(
     if len(effects) == 2:
         table, acts, final = t2, act2, 1 + others.index(effects[1])
     elif second_round and effects == [first] and _reference_stands(t1, i1, t2, refit is not None):
-        table, acts, final = t2, act2, 0  # round 2's reference: a better refit of the first effect
+        table, acts, final = t2, act2, 0  # round 2's reference, better than round 1's fit
     elif effects:
         final = names1.index(effects[0])
     ext_params = _row(table["params"][final], acts[final], sig, tau_th)
