@@ -14,7 +14,8 @@ and above its documented detection threshold (the registry's ``detection.top1``:
 "truth in the reported set" (verdict or its indistinguishable set), the measured 90 % threshold,
 relative error of the recovered magnitude, base-fit parameter errors, seconds per diagnosis, and
 top-1 accuracy above and below each recording's own predicted ``min_detectable`` magnitude
-(:mod:`jadhesion.diagnose.sensitivity`).
+(:mod:`jadhesion.diagnose.sensitivity`), and the coverage of the rail change's time interval
+(``extended.change_time``, :mod:`jadhesion.diagnose.change_time`) where a true change was named.
 
     python -m benchmarks.diagnose_blind [--n 220] [--null 80] [--seed 0] [--coast S] [--json]
     python -m benchmarks.diagnose_blind --from-cases benchmarks/results/diagnose_blind_cases.json
@@ -102,6 +103,24 @@ def clopper_pearson(k: int, n: int, level: float = 0.95) -> list:
 def _rate(hits) -> dict:
     k, n = int(sum(hits)), len(hits)
     return {"k": k, "n": n, "rate": k / n if n else None, "ci95": clopper_pearson(k, n) if n else None}
+
+
+def change_time_coverage(found) -> dict:
+    """Of the true rail changes ``found``, ``(extended.change_time or None, true time [s])`` pairs:
+    how many the extended model holds (``named``), how many of those intervals hold the true time
+    (``covered``, k/n with its 95 % interval; nominal 90 %), with the fit's time inside
+    (``fit_inside``) and the intervals' median width [s]."""
+    named = [(ct, t) for ct, t in found if ct]
+    inside = [ct["t_change_interval_s"][0] <= t <= ct["t_change_interval_s"][1] for ct, t in named]
+    widths = [ct["t_change_interval_s"][1] - ct["t_change_interval_s"][0] for ct, _ in named]
+    return {
+        "true_changes": len(found),
+        "named": len(named),
+        "covered": _rate(inside),
+        "fit_inside": _rate([ct["fit_inside"] for ct, _ in named]),
+        "median_width_s": float(np.median(widths)) if widths else None,
+        "level": named[0][0]["level"] if named else None,
+    }
 
 
 def reported_set(d) -> set:
@@ -225,6 +244,13 @@ def summarise(cases) -> dict:
         "base_params_clean_median_abs_error": {
             k: float(np.median(v)) if v else None for k, v in base_err.items()
         },
+        "change_time": change_time_coverage(
+            [
+                (c["diagnosis"]["extended"].get("change_time"), c["truth"]["rail_change"]["time_s"])
+                for c in main
+                if "rail_change" in c["truth"]
+            ]
+        ),
         "seconds_per_diagnosis": {
             "median": float(np.median(seconds)),
             "p90": float(np.quantile(seconds, 0.9)),
@@ -361,6 +387,7 @@ def report(summary, as_json: bool, out) -> int:
     print(f"single effects: {summary['single_effect']}")
     print(f"pairs: {summary['pairs']}")
     print(f"base params on clean recordings, median |error|: {summary['base_params_clean_median_abs_error']}")
+    print(f"rail change time intervals: {summary['change_time']}")
     print(f"seconds per diagnosis: {summary['seconds_per_diagnosis']}")
     return 0
 

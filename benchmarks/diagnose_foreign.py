@@ -7,7 +7,8 @@ the foreign generator's own typical range (its units: ``rail_change`` is ``μ0 �
 ``drop`` ≈ −m; ``speed_dependence``, ``thermal_softening`` and ``load_transfer`` follow other laws
 than our extensions, so their magnitudes are not compared). Reported: the confusion matrix (truth ×
 verdict), top-1 and "truth in the verdict's indistinguishable set" per effect, the recovered
-magnitude beside the true one where the units agree, and seconds per diagnosis; the result file
+magnitude beside the true one where the units agree, the coverage of the rail change's time
+interval (``extended.change_time``) where a change was named, and seconds per diagnosis; the result file
 records the commit, the settings and the load average (2 shared cores: timings are noisy).
 
     python -m benchmarks.diagnose_foreign [--per-effect 3] [--seed 0] [--duration 30]
@@ -23,7 +24,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from benchmarks.diagnose_blind import clopper_pearson, commit, decision_table
+from benchmarks.diagnose_blind import change_time_coverage, clopper_pearson, commit, decision_table
 from jadhesion.cli.diagnose_run import diagnose_file
 from jadhesion.config import enable_compilation_cache, enable_x64
 from jadhesion.diagnose.extensions import NAMES
@@ -78,6 +79,8 @@ def main(argv=None) -> int:
                         "verdict": d["verdict"],
                         "verdict_set": d["verdict_set"],
                         "recovered": recovered,
+                        "change_time": d["extended"]["change_time"],
+                        "true_change_time_s": rec.truth["effect_detail"].get("time_s"),
                         "base_mu0": d["base"]["params"]["mu0"],
                         "warnings": [w["code"] for w in d["warnings"]],
                         "top": [
@@ -104,9 +107,17 @@ def main(argv=None) -> int:
                         }
                         for n in NAMES
                     },
+                    "change_time": change_time_coverage(
+                        [
+                            (c["change_time"], c["true_change_time_s"])
+                            for c in cases
+                            if c["true_change_time_s"] is not None
+                        ]
+                    ),
                     "cases": cases,
                 }
                 Path(args.out).write_text(json.dumps(doc, indent=1, default=float))
+    print(f"rail change time intervals: {doc['change_time']}")
     for n, r in doc["per_effect"].items():
         print(
             f"{n:20s} top-1 {r['top1']['k']}/{r['top1']['n']}, in set {r['in_set']['k']}/{r['in_set']['n']}"

@@ -10,14 +10,15 @@ member),
 ``second_round`` (gains of a second effect given the first, or null; its reference is round 1's fit of
 the first alone, replaced by a refit from the solution of a pair BIC would accept where that is better,
 ``first_refit``, which is then, when no second effect is accepted, the extended model),
-``base``/``extended`` (``params``, ``mae``, ``heldout_mae``, ``status``), ``generic`` (sparse
-discrepancy on the extended model's residual), ``sensitivity`` (per effect, the smallest magnitude this
-recording could detect and the run that would expose it: :mod:`.sensitivity`), ``residual_signatures``
-(η² of the base residual per signal), ``errors_in_variables`` (the noise levels behind the fits'
-effective-variance weights, :func:`.fitting.eiv_weights`), ``warnings`` (``code``, ``message``: an
-unconverged base fit, candidates whose fits did not converge — their ``p_value`` is null, they are never
-ranked — a null too small or none, a null at its widest, and a base fit at the identification box's edge
-whose replicas come from the fit past it),
+``base``/``extended`` (``params``, ``mae``, ``heldout_mae``, ``status``; the extended model's
+``change_time``: a named rail change's time as a 90 % profile interval, :mod:`.change_time`, else null),
+``generic`` (sparse discrepancy on the extended model's residual), ``sensitivity`` (per effect, the
+smallest magnitude this recording could detect and the run that would expose it: :mod:`.sensitivity`),
+``residual_signatures`` (η² of the base residual per signal), ``errors_in_variables`` (the noise levels
+behind the fits' effective-variance weights, :func:`.fitting.eiv_weights`), ``warnings`` (``code``,
+``message``: an unconverged base fit, candidates whose fits did not converge — their ``p_value`` is
+null, they are never ranked — a null too small or none, a null at its widest, and a base fit at the
+identification box's edge whose replicas come from the fit past it),
 ``explanation``; and ``_series`` (arrays for the report; not JSON, dropped by the CLI).
 """
 
@@ -33,8 +34,8 @@ from ..models.effect_spec import IMPLAUSIBLE_BEYOND
 from ..models.effects import EFFECTS as REGISTRY
 from ..models.polach import PARAM_NAMES
 from ..status import Status
+from . import change_time, features, fitting, null, select, sensitivity
 from . import extensions as ext
-from . import features, fitting, null, select, sensitivity
 from .explain import explain
 from .signals import from_columns
 
@@ -479,6 +480,11 @@ def diagnose(
             "mae": float(table["mae"][final]),
             "heldout_mae": float(table["heldout_mae"][final]),
             "status": _status(table, final),
+            "change_time": change_time.interval(
+                table["params"][final], effects, padded, n_valid, table["residual"][final][keep]
+            )
+            if "rail_change" in effects
+            else None,
         },
         "generic": generic,
         "sensitivity": seen,

@@ -74,8 +74,20 @@ def _refit(result: dict) -> str:
     )
     return (
         f" Round 1's fit of {name} sat in a local optimum: refitted alone from its fit beside "
-        f"{other}, it leaves {refit['sse_reduction']:.0%} less squared error than round 1's, and {use}."
+        f"{other}, it leaves {100 * refit['sse_reduction']:.2g}% less squared error than round 1's, and {use}."
     )
+
+
+def _change_time(result: dict) -> str:
+    """How well the recording places a named rail change in time (``extended.change_time``)."""
+    found = result["extended"].get("change_time")
+    if not found:
+        return ""
+    lo, hi = found["t_change_interval_s"]
+    text = f" The change's time lies within {lo:.1f}–{hi:.1f} s ({found['level']:.0%} profile interval)"
+    if not found["fit_inside"]:
+        text += f"; the profile fits best at {found['best_t_change_s']:.1f} s, not at the time above"
+    return text + "."
 
 
 def explain(result: dict, vehicle: Vehicle) -> str:
@@ -123,7 +135,7 @@ def explain(result: dict, vehicle: Vehicle) -> str:
         return text + _blind_spots(result["sensitivity"])
     parts = [effect_sentence(n, result["extended"]["params"], vehicle) for n in result["effects"]]
     text = "; and ".join(parts)
-    text = text[0].upper() + text[1:] + _improvement(result) + _refit(result)
+    text = text[0].upper() + text[1:] + _improvement(result) + _refit(result) + _change_time(result)
     if result["indistinguishable"]:
         alts = ", ".join(
             f"{d['name']} (separate with {d['experiment']})" for d in result["indistinguishable"]
