@@ -7,8 +7,9 @@ scenario, vehicle and, with probability 0.5, a varied driving profile; magnitude
 (:mod:`validation.foreign_generator`: its own profiles, sampling rates and sensors; its magnitude
 and time, 35–65 % of the run, drawn by it). Reported per generator: how many changes were named,
 how many of their 90 % intervals hold the true time (k/n with a 95 % Clopper–Pearson interval),
-the fitted time inside its own interval, and the intervals' median width; per case the verdict,
-the interval and the truth. The result file records the commit and the settings.
+the fitted time inside its own interval, the intervals' median width, and how often the drop's
+90 % interval (``extended.uncertainty``) holds the true drop; per case the verdict, the intervals
+and the truth. The result file records the commit and the settings.
 
     python -m benchmarks.change_time_coverage [--per 15] [--seed 0] [--duration 30]
 """
@@ -23,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from benchmarks.diagnose_blind import change_time_coverage, commit
+from benchmarks.diagnose_blind import change_time_coverage, commit, rate
 from jadhesion.cli.common import Progress
 from jadhesion.cli.diagnose_run import diagnose_file
 from jadhesion.config import enable_compilation_cache, enable_x64
@@ -33,12 +34,18 @@ from validation.foreign_generator import generate, write
 RESULTS = Path(__file__).resolve().parent / "results"
 
 
-def _case(generator: str, seed: int, magnitude: float, true_time: float, d: dict) -> dict:
+def _case(generator: str, seed: int, drop: float, true_time: float, d: dict) -> dict:
+    """One recording's row: the truth (``drop`` [-] in our extension's sign: μ0 falls by it), the
+    verdict, the time interval and whether it and the drop's 90 % interval hold the truth."""
     found = d["extended"]["change_time"]
+    ci = d["extended"]["uncertainty"]["ci90"].get("drop")
     return {
         "generator": generator,
         "seed": seed,
-        "magnitude": magnitude,
+        "drop": drop,
+        "drop_fitted": d["extended"]["params"].get("drop"),
+        "drop_ci90": ci,
+        "drop_covered": None if ci is None else bool(ci[0] <= drop <= ci[1]),
         "true_time_s": true_time,
         "verdict": d["verdict"],
         "effects": d["effects"],
@@ -93,12 +100,22 @@ def main(argv=None) -> int:
                     )
                     for g in ("ours", "foreign")
                 },
+                "drop_ci90": {
+                    g: rate(
+                        [
+                            c["drop_covered"]
+                            for c in cases
+                            if c["generator"] == g and c["drop_covered"] is not None
+                        ]
+                    )
+                    for g in ("ours", "foreign")
+                },
                 "cases": cases,
             }
             Path(args.out).write_text(json.dumps(doc, indent=1, default=float))
     progress.close()
     for g, r in doc["coverage"].items():
-        print(f"{g}: {r}")
+        print(f"{g}: time {r}; drop's 90 % interval holds it {doc['drop_ci90'][g]}")
     return 0
 
 

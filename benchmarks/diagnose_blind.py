@@ -6,16 +6,17 @@ Each case: random scenario (dry/wet/sand), seed (profile wander, excursions, noi
 published test or, with probability ``--p-varied``, a different one: speed, ramp, creep level,
 wander, excursions, Polach parameters ×0.8–1.2, 1500–3000 samples) and effects with log-uniform
 magnitudes over the effect registry's ``typical`` ranges (reaching well below the detection
-thresholds). The diagnoser sees only the CSV and a vehicle-only sidecar, through the CLI's
-code path. Reported: confusion matrix (true primary effect × verdict), false alarms on clean
-recordings (k/n with a 95 % Clopper–Pearson interval), per effect top-1 accuracy in magnitude bins
-and above its documented detection threshold (the registry's ``detection.top1``:
-:data:`jadhesion.models.effects.DETECTION_PROVENANCE`),
-"truth in the reported set" (verdict or its indistinguishable set), the measured 90 % threshold,
-relative error of the recovered magnitude, base-fit parameter errors, seconds per diagnosis, and
-top-1 accuracy above and below each recording's own predicted ``min_detectable`` magnitude
-(:mod:`jadhesion.diagnose.sensitivity`), and the coverage of the rail change's time interval
-(``extended.change_time``, :mod:`jadhesion.diagnose.change_time`) where a true change was named.
+thresholds). The diagnoser sees only the CSV and a vehicle-only sidecar, through the CLI's code
+path. Reported: confusion matrix (true primary effect × verdict), false alarms on clean recordings
+(k/n with a 95 % Clopper–Pearson interval), per effect top-1 accuracy in magnitude bins and above
+its documented detection threshold (the registry's ``detection.top1``:
+:data:`jadhesion.models.effects.DETECTION_PROVENANCE`), "truth in the reported set" (verdict or its
+indistinguishable set), the measured 90 % threshold, relative error of the recovered magnitude and
+how often its 90 % interval (``extended.uncertainty``) holds the truth where the effect was named,
+base-fit parameter errors, seconds per diagnosis, and top-1 accuracy above and below each
+recording's own predicted ``min_detectable`` magnitude (:mod:`jadhesion.diagnose.sensitivity`), and
+the coverage of the rail change's time interval (``extended.change_time``,
+:mod:`jadhesion.diagnose.change_time`) where a true change was named.
 
     python -m benchmarks.diagnose_blind [--n 220] [--null 80] [--seed 0] [--coast S] [--json]
     python -m benchmarks.diagnose_blind --from-cases benchmarks/results/diagnose_blind_cases.json
@@ -100,7 +101,7 @@ def clopper_pearson(k: int, n: int, level: float = 0.95) -> list:
     return [lo, hi]
 
 
-def _rate(hits) -> dict:
+def rate(hits) -> dict:
     k, n = int(sum(hits)), len(hits)
     return {"k": k, "n": n, "rate": k / n if n else None, "ci95": clopper_pearson(k, n) if n else None}
 
@@ -116,8 +117,8 @@ def change_time_coverage(found) -> dict:
     return {
         "true_changes": len(found),
         "named": len(named),
-        "covered": _rate(inside),
-        "fit_inside": _rate([ct["fit_inside"] for ct, _ in named]),
+        "covered": rate(inside),
+        "fit_inside": rate([ct["fit_inside"] for ct, _ in named]),
         "median_width_s": float(np.median(widths)) if widths else None,
         "level": named[0][0]["level"] if named else None,
     }
@@ -147,16 +148,16 @@ def summarise(cases) -> dict:
         confusion[truth][c["diagnosis"]["verdict"]] += 1
     clean = [c for c in cases if not c["effects"]]
     alarms = {
-        "all_clean": _rate([c["diagnosis"]["verdict"] != "none" for c in clean]),
-        "null_set": _rate([c["diagnosis"]["verdict"] != "none" for c in clean if c.get("set") == "null"]),
-        "varied_vehicle_or_profile": _rate(
+        "all_clean": rate([c["diagnosis"]["verdict"] != "none" for c in clean]),
+        "null_set": rate([c["diagnosis"]["verdict"] != "none" for c in clean if c.get("set") == "null"]),
+        "varied_vehicle_or_profile": rate(
             [
                 c["diagnosis"]["verdict"] != "none"
                 for c in clean
                 if c["vehicle_varied"] or c.get("profile_varied")
             ]
         ),
-        "generic_term_used": _rate([c["diagnosis"]["generic"]["used"] for c in clean]),
+        "generic_term_used": rate([c["diagnosis"]["generic"]["used"] for c in clean]),
     }
     per_effect = {}
     for name in NAMES:
@@ -179,12 +180,15 @@ def summarise(cases) -> dict:
             )
         documented = EFFECTS[name].detection.top1
         above = [i for i, m in enumerate(mags) if documented is not None and m >= documented]
-        errors = []
+        errors, covered = [], []
         for c in single:
             if c["diagnosis"]["verdict"] == name:
+                param = EFFECTS[name].magnitude_param
                 cand = next(x for x in c["diagnosis"]["candidates"] if x["name"] == name)
-                est, true = cand["params"][EFFECTS[name].magnitude_param], c["effects"][0][1]
+                est, true = cand["params"][param], c["effects"][0][1]
                 errors.append(abs(est - true) / abs(true))
+                ci = c["diagnosis"]["extended"].get("uncertainty", {}).get("ci90", {}).get(param)
+                covered.append(ci is not None and ci[0] <= true <= ci[1])
         # The recording's own prediction (diagnosis["sensitivity"]): is |m| above what it can see?
         seen = [i for i, c in enumerate(single) if "sensitivity" in c["diagnosis"]]
         limit = {i: single[i]["diagnosis"]["sensitivity"][name]["min_detectable"] for i in seen}
@@ -195,19 +199,20 @@ def summarise(cases) -> dict:
         per_effect[name] = {
             "n": len(single),
             "bins": bins,
-            "top1": _rate(hits),
-            "in_set": _rate(in_set),
-            "top1_default_profile": _rate([hits[i] for i in default]),
-            "top1_varied_profile": _rate([hits[i] for i in varied]),
+            "top1": rate(hits),
+            "in_set": rate(in_set),
+            "top1_default_profile": rate([hits[i] for i in default]),
+            "top1_varied_profile": rate([hits[i] for i in varied]),
             "measured_threshold": measured_threshold(mags, hits),
             "measured_threshold_in_set": measured_threshold(mags, in_set),
             "documented_threshold": documented,
-            "top1_above_documented": _rate([hits[i] for i in above]),
-            "in_set_above_documented": _rate([in_set[i] for i in above]),
-            "top1_above_min_detectable": _rate([hits[i] for i in visible]),
-            "top1_below_min_detectable": _rate([hits[i] for i in hidden]),
+            "top1_above_documented": rate([hits[i] for i in above]),
+            "in_set_above_documented": rate([in_set[i] for i in above]),
+            "top1_above_min_detectable": rate([hits[i] for i in visible]),
+            "top1_below_min_detectable": rate([hits[i] for i in hidden]),
             "confused_with": {k: v for k, v in confusion[name].items() if v and k != name},
             "median_rel_error": float(np.median(errors)) if errors else None,
+            "ci90_covers_magnitude": rate(covered),
             "cases": [[m, bool(h), bool(s)] for m, h, s in zip(mags, hits, in_set, strict=True)],
         }
     pairs = [c for c in main if len(c["effects"]) == 2]
@@ -228,16 +233,16 @@ def summarise(cases) -> dict:
         "false_alarm_rate": alarms["all_clean"]["rate"],
         "per_effect": per_effect,
         "single_effect": {
-            "top1": _rate([c["diagnosis"]["verdict"] == c["effects"][0][0] for c in single_all]),
-            "in_set": _rate([c["effects"][0][0] in reported_set(c["diagnosis"]) for c in single_all]),
-            "missed": _rate([c["diagnosis"]["verdict"] == "none" for c in single_all]),
+            "top1": rate([c["diagnosis"]["verdict"] == c["effects"][0][0] for c in single_all]),
+            "in_set": rate([c["effects"][0][0] in reported_set(c["diagnosis"]) for c in single_all]),
+            "missed": rate([c["diagnosis"]["verdict"] == "none" for c in single_all]),
         },
         "pairs": {
             "n": len(pairs),
-            "both_named": _rate(
+            "both_named": rate(
                 [set(c["diagnosis"]["effects"]) == t for c, t in zip(pairs, truth_sets, strict=True)]
             ),
-            "one_named": _rate(
+            "one_named": rate(
                 [bool(set(c["diagnosis"]["effects"]) & t) for c, t in zip(pairs, truth_sets, strict=True)]
             ),
         },
@@ -383,6 +388,7 @@ def report(summary, as_json: bool, out) -> int:
                 for r in (s["top1_above_min_detectable"], s["top1_below_min_detectable"])
             )
             + f"; median rel. error {'-' if err is None else f'{err:.3f}'}"
+            + f"; 90 % interval holds it {s['ci90_covers_magnitude']['k']}/{s['ci90_covers_magnitude']['n']}"
         )
     print(f"single effects: {summary['single_effect']}")
     print(f"pairs: {summary['pairs']}")

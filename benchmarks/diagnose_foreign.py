@@ -7,7 +7,8 @@ the foreign generator's own typical range (its units: ``rail_change`` is ``μ0 �
 ``drop`` ≈ −m; ``speed_dependence``, ``thermal_softening`` and ``load_transfer`` follow other laws
 than our extensions, so their magnitudes are not compared). Reported: the confusion matrix (truth ×
 verdict), top-1 and "truth in the verdict's indistinguishable set" per effect, the recovered
-magnitude beside the true one where the units agree, the coverage of the rail change's time
+magnitude beside the true one where the units agree (and whether its 90 % interval,
+``extended.uncertainty``, holds it), the coverage of the rail change's time
 interval (``extended.change_time``) where a change was named, and seconds per diagnosis; the result file
 records the commit, the settings and the load average (2 shared cores: timings are noisy).
 
@@ -24,7 +25,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from benchmarks.diagnose_blind import change_time_coverage, clopper_pearson, commit, decision_table
+from benchmarks.diagnose_blind import change_time_coverage, commit, decision_table, rate
 from jadhesion.cli.diagnose_run import diagnose_file
 from jadhesion.config import enable_compilation_cache, enable_x64
 from jadhesion.diagnose.extensions import NAMES
@@ -38,11 +39,6 @@ COMPARABLE = {
     "signal_delay": ("delay_s", 1.0),
     "torque_offset": ("offset", 1.0),
 }
-
-
-def rate(hits) -> dict:
-    k, n = int(sum(hits)), len(hits)
-    return {"k": k, "n": n, "rate": k / n if n else None, "ci95": clopper_pearson(k, n) if n else None}
 
 
 def main(argv=None) -> int:
@@ -65,10 +61,12 @@ def main(argv=None) -> int:
                 start = time.perf_counter()
                 d, _ = diagnose_file(path)
                 seconds = time.perf_counter() - start
-                recovered = None
+                recovered, covered = None, None
                 if name in COMPARABLE and d["verdict"] == name:
                     param, factor = COMPARABLE[name]
                     recovered = factor * d["extended"]["params"][param]
+                    ci = d["extended"]["uncertainty"]["ci90"].get(param)
+                    covered = ci is not None and ci[0] <= factor * rec.truth["magnitude"] <= ci[1]
                 cases.append(
                     {
                         "seed": seed,
@@ -79,6 +77,7 @@ def main(argv=None) -> int:
                         "verdict": d["verdict"],
                         "verdict_set": d["verdict_set"],
                         "recovered": recovered,
+                        "ci90_covers": covered,
                         "change_time": d["extended"]["change_time"],
                         "true_change_time_s": rec.truth["effect_detail"].get("time_s"),
                         "base_mu0": d["base"]["params"]["mu0"],
@@ -104,6 +103,13 @@ def main(argv=None) -> int:
                         n: {
                             "top1": rate([c["verdict"] == n for c in cases if c["effect"] == n]),
                             "in_set": rate([n in c["verdict_set"] for c in cases if c["effect"] == n]),
+                            "ci90_covers": rate(
+                                [
+                                    c["ci90_covers"]
+                                    for c in cases
+                                    if c["effect"] == n and c["ci90_covers"] is not None
+                                ]
+                            ),
                         }
                         for n in NAMES
                     },
@@ -120,7 +126,8 @@ def main(argv=None) -> int:
     print(f"rail change time intervals: {doc['change_time']}")
     for n, r in doc["per_effect"].items():
         print(
-            f"{n:20s} top-1 {r['top1']['k']}/{r['top1']['n']}, in set {r['in_set']['k']}/{r['in_set']['n']}"
+            f"{n:20s} top-1 {r['top1']['k']}/{r['top1']['n']}, in set {r['in_set']['k']}/{r['in_set']['n']}, "
+            f"90 % interval holds the size {r['ci90_covers']['k']}/{r['ci90_covers']['n']}"
         )
     return 0
 

@@ -11,7 +11,8 @@ member),
 the first alone, replaced by a refit from the solution of a pair BIC would accept where that is better,
 ``first_refit``, which is then, when no second effect is accepted, the extended model),
 ``base``/``extended`` (``params``, ``mae``, ``heldout_mae``, ``status``; the extended model's
-``change_time``: a named rail change's time as a 90 % profile interval, :mod:`.change_time`, else null),
+``change_time``: a named rail change's time as a 90 % profile interval, :mod:`.change_time`, else null;
+``uncertainty``: standard errors and 90 % intervals of its free parameters, :mod:`.standard_errors`),
 ``generic`` (sparse discrepancy on the extended model's residual), ``sensitivity`` (per effect, the
 smallest magnitude this recording could detect and the run that would expose it: :mod:`.sensitivity`),
 ``residual_signatures`` (η² of the base residual per signal), ``errors_in_variables`` (the noise levels
@@ -38,6 +39,7 @@ from . import change_time, features, fitting, null, select, sensitivity
 from . import extensions as ext
 from .explain import explain
 from .signals import from_columns
+from .standard_errors import standard_errors
 
 N_CANDIDATES = fitting.N_CANDIDATES
 assert N_CANDIDATES >= 1 + len(ext.NAMES) + sum(len(e.extra_starts) for e in ext.EFFECTS)
@@ -194,7 +196,8 @@ def _warnings(result: dict) -> list:
     SSE reduction exceeds the null's critical value named in ``above_critical``), a null too small
     to reject at α or none at all (``--replicas``), a base fit at the identification box's edge
     whose release lowers the SSE strongly (ΔBIC below −:data:`.select.BIC_SEPARATION`; the
-    replicas' curve, :func:`.fitting.fit_truth`), and a null at its widest (γ = 0,
+    replicas' curve, :func:`.fitting.fit_truth`), effect parameters of the extended model without
+    a standard error (:mod:`.standard_errors`), and a null at its widest (γ = 0,
     :func:`.null.replicas`)."""
     out = []
     if result["base"]["status"] != "converged":
@@ -266,6 +269,18 @@ def _warnings(result: dict) -> list:
                 + f") the plain Polach model lowers the SSE by {truth['sse_reduction']:.0%} (ΔBIC "
                 f"{truth['delta_bic']:.0f}): the replicas are re-synthesised from that fit, so they carry "
                 "the box's misfit as this recording does, and the null is wider accordingly",
+            }
+        )
+    trust = result["extended"]["uncertainty"]
+    loose = [p for p in trust["at_bound"] + trust["undetermined"] if p not in PARAM_NAMES]
+    if loose:
+        out.append(
+            {
+                "code": "undetermined",
+                "params": loose,
+                "message": f"{', '.join(loose)} of the extended model: no standard error or interval "
+                "(null): on a bound of the parameter's box, a singular direction of the fit, or a "
+                "standard error wider than the box",
             }
         )
     noise = result["null"]["noise"]
@@ -485,6 +500,7 @@ def diagnose(
             )
             if "rail_change" in effects
             else None,
+            "uncertainty": standard_errors(table["params"][final], acts[final], effects, padded, n_valid),
         },
         "generic": generic,
         "sensitivity": seen,

@@ -74,8 +74,20 @@ def _refit(result: dict) -> str:
     )
     return (
         f" Round 1's fit of {name} sat in a local optimum: refitted alone from its fit beside "
-        f"{other}, it leaves {100 * refit['sse_reduction']:.2g}% less squared error than round 1's, and {use}."
+        f"{other}, it leaves {100 * refit['sse_reduction']:.2g}% less squared error than round 1's, "
+        f"and {use}."
     )
+
+
+def _sizes(result: dict) -> str:
+    """The named effects' sizes as 90 % intervals (``extended.uncertainty``), where determined."""
+    ci = result["extended"]["uncertainty"]["ci90"]
+    parts = [
+        f"{p} {ci[p][0]:.3g} to {ci[p][1]:.3g}"
+        for p in (EFFECTS[n].magnitude_param for n in result["effects"])
+        if ci.get(p) is not None
+    ]
+    return f" 90 % intervals, given the model: {'; '.join(parts)}." if parts else ""
 
 
 def _change_time(result: dict) -> str:
@@ -84,7 +96,8 @@ def _change_time(result: dict) -> str:
     if not found:
         return ""
     lo, hi = found["t_change_interval_s"]
-    text = f" The change's time lies within {lo:.1f}–{hi:.1f} s ({found['level']:.0%} profile interval)"
+    level = 100 * found["level"]
+    text = f" The change's time lies within {lo:.1f}–{hi:.1f} s ({level:.0f} % profile interval)"
     if not found["fit_inside"]:
         text += f"; the profile fits best at {found['best_t_change_s']:.1f} s, not at the time above"
     return text + "."
@@ -135,7 +148,8 @@ def explain(result: dict, vehicle: Vehicle) -> str:
         return text + _blind_spots(result["sensitivity"])
     parts = [effect_sentence(n, result["extended"]["params"], vehicle) for n in result["effects"]]
     text = "; and ".join(parts)
-    text = text[0].upper() + text[1:] + _improvement(result) + _refit(result) + _change_time(result)
+    text = text[0].upper() + text[1:] + _improvement(result) + _sizes(result) + _refit(result)
+    text += _change_time(result)
     if result["indistinguishable"]:
         alts = ", ".join(
             f"{d['name']} (separate with {d['experiment']})" for d in result["indistinguishable"]

@@ -42,7 +42,7 @@ from .select import GAIN_THRESHOLD
 
 
 @jax.jit
-def _linearise(params, active, sig):
+def linearise(params, active, sig):
     """Residual ``target − pred`` (n,) and its Jacobian ``∂r/∂params`` (n, N_PARAMS)."""
 
     def residual(p):
@@ -72,7 +72,7 @@ def detectable_magnitudes(
     full = np.concatenate([np.asarray(theta), np.array([float(extras[k]) for k in ext.EXTRA_NAMES])])
     if "rail_change" not in accepted:
         full[5 + ext.EXTRA_NAMES.index("u_change")] = u_change
-    r, jac = _linearise(jnp.asarray(full), jnp.ones(ext.N_EXTRA, bool), sig)
+    r, jac = linearise(jnp.asarray(full), jnp.ones(ext.N_EXTRA, bool), sig)
     keep = np.asarray(sig.weight)[:n_valid] > 0
     r, jac = np.asarray(r)[:n_valid][keep], np.asarray(jac)[:n_valid][keep]
     sse = float(np.sum(r * r))

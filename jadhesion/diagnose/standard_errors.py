@@ -1,0 +1,60 @@
+"""Standard errors of the extended model's parameters, so a named effect's size says how far to
+trust it.
+
+The HAC sandwich of the project's one covariance routine
+(:func:`jadhesion.identify.uncertainty.covariance`) at the final fit, over the parameters that fit
+left free, from the fits' weighted residual ``w·(target − prediction)`` and its Jacobian
+(:func:`.sensitivity.linearise`, the program the sensitivity already runs). As ``fit``'s trust
+report (:mod:`jadhesion.identify.trust`): a parameter within :data:`BOUND_TOL` of a face of its box
+stays free in the covariance but gets no standard error (a local interval means nothing there),
+and one whose standard error is not :func:`~jadhesion.identify.uncertainty.determined` (infinite,
+or wider than its box) gets none either. The errors are conditional on the model: misfit it leaves
+is not in them (the benchmarks measure their coverage), and a rail change's time is better read
+from its profile interval (:mod:`.change_time`), since the change point is not a regular parameter.
+"""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+import numpy as np
+
+from ..identify.uncertainty import Z90, covariance, determined, normal_interval
+from ..models.polach import PARAM_NAMES
+from . import extensions as ext
+from . import fitting
+from .sensitivity import linearise
+
+#: Relative distance (of the box's width) within which a parameter counts as on a bound.
+BOUND_TOL = 1e-6
+_NAMES = tuple(PARAM_NAMES) + tuple(ext.EXTRA_NAMES)
+
+
+def standard_errors(params, active, effects, sig, n_valid: int) -> dict:
+    """``{"stderr": {name: sd or None}, "ci90": {name: [lo, hi] or None}, "at_bound": [...],
+    "undetermined": [...], "lags": L}`` over the free parameters of the model with ``effects``
+    (fitted ``params`` (N_PARAMS,), masks ``active`` (N_EXTRA,)) on the padded signals ``sig`` of
+    ``n_valid`` samples. ``ci90`` is ``value ± 1.645·sd`` clipped to the parameter's box."""
+    theta, extras = ext.unpack(np.asarray(params, float), np.asarray(active))
+    full = np.concatenate([np.asarray(theta), np.array([float(extras[k]) for k in ext.EXTRA_NAMES])])
+    r, jac = linearise(jnp.asarray(full), jnp.ones(ext.N_EXTRA, bool), sig)
+    w = np.asarray(fitting.fold_weights(n_valid, fitting.N_FOLDS, sig.time.shape[0], sig.weight)[0])
+    idx = [i for i in fitting.free_indices(effects) if i != fitting.PAD]
+    cols = np.zeros((w.size, fitting.WIDTH))  # one compiled covariance per padded length
+    cols[:, : len(idx)] = np.asarray(jac)[:, idx] * w[:, None]
+    unused = np.arange(fitting.WIDTH) >= len(idx)
+    cov, lags = covariance(
+        jnp.asarray(cols), jnp.asarray(np.asarray(r) * w), fixed=unused, weight=jnp.asarray(w)
+    )
+    sd = np.sqrt(np.diag(np.asarray(cov)))[: len(idx)]
+    out = {"stderr": {}, "ci90": {}, "at_bound": [], "undetermined": [], "lags": int(lags)}
+    for i, s in zip(idx, sd, strict=True):
+        name, lo, hi = _NAMES[i], float(ext.BOUNDS[0][i]), float(ext.BOUNDS[1][i])
+        on_bound = min(full[i] - lo, hi - full[i]) <= BOUND_TOL * (hi - lo)
+        ok = not on_bound and determined(s, hi - lo)
+        if on_bound:
+            out["at_bound"].append(name)
+        elif not ok:
+            out["undetermined"].append(name)
+        out["stderr"][name] = float(s) if ok else None
+        out["ci90"][name] = normal_interval(float(full[i]), float(s), Z90, lo, hi) if ok else None
+    return out
