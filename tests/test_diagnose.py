@@ -717,8 +717,18 @@ def test_cli_json_and_report(tmp_path, capsys):
     untested = {c["name"] for c in doc["candidates"] if c["status"] != "converged"}
     warned = {n for w in doc["warnings"] if w["code"] == "candidates_not_tested" for n in w["candidates"]}
     assert warned == untested
-    assert "## Warnings" in (tmp_path / "rep" / "report.md").read_text()
-    assert (tmp_path / "rep" / "adhesion_vs_creep.png").exists()
+    report = (tmp_path / "rep" / "report.md").read_text()
+    assert "## Warnings" in report and (tmp_path / "rep" / "adhesion_vs_creep.png").exists()
+    # every fitted parameter of the extended model has a standard error or says why not
+    ext_doc = doc["extended"]
+    trust = ext_doc["uncertainty"]
+    assert set(trust["stderr"]) == set(ext_doc["params"]) - {"t_change_s", "tau_th_s"}
+    assert all(
+        (sd is None) == (k in trust["at_bound"] + trust["undetermined"]) for k, sd in trust["stderr"].items()
+    )
+    sd = trust["stderr"]["mu0"]
+    assert f"| mu0 | {ext_doc['params']['mu0']:.4g} | {'—' if sd is None else f'{sd:.2g}'} |" in report
+    assert (ext_doc["change_time"] is None) == ("rail_change" not in doc["effects"])
 
 
 def test_cli_bad_file(tmp_path, capsys):

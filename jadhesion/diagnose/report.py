@@ -99,6 +99,23 @@ def _p_text(p) -> str:
     return "–" if p is None else f"{p:.2f}"
 
 
+def _stderr(extended: dict, name: str) -> str:
+    """A parameter's standard error (``extended.uncertainty``), or "—" where it has none."""
+    sd = extended["uncertainty"]["stderr"].get(name)
+    return "—" if sd is None else f"{sd:.2g}"
+
+
+def _interval(extended: dict, name: str) -> str:
+    """A parameter's 90 % interval: the profile interval for a rail change's time, else the
+    standard-error one (``extended.uncertainty``); "—" where it has none."""
+    found = extended["change_time"]
+    if name == "t_change_s" and found:
+        lo, hi = found["t_change_interval_s"]
+        return f"{lo:.4g} – {hi:.4g} (profile)"
+    ci = extended["uncertainty"]["ci90"].get(name)
+    return "—" if ci is None else f"{ci[0]:.4g} – {ci[1]:.4g}"
+
+
 def write_report(result: dict, series: dict, directory) -> Path:
     """Write ``report.md`` and its figures into ``directory``; returns the Markdown path."""
     out = Path(directory)
@@ -110,7 +127,10 @@ def write_report(result: dict, series: dict, directory) -> Path:
         f"{c['evidence']['signal']} |"
         for c in result["candidates"]
     )
-    params = ", ".join(f"{k} = {v:.4g}" for k, v in result["extended"]["params"].items())
+    params = "\n".join(
+        f"| {k} | {v:.4g} | {_stderr(result['extended'], k)} | {_interval(result['extended'], k)} |"
+        for k, v in result["extended"]["params"].items()
+    )
     seen = "\n".join(
         f"| {n} | {s['min_detectable']:.3g} | {100 * s['absorbed']:.0f} % | "
         f"{'yes' if s['visible'] else 'no: ' + s['experiment']} |"
@@ -127,7 +147,13 @@ def write_report(result: dict, series: dict, directory) -> Path:
 | extended ({" + ".join(result["effects"]) or "none"}) | {result["extended"]["mae"]:.5f} | \
 {result["extended"]["heldout_mae"]:.5f} |
 
-Extended parameters: {params}.
+| extended parameter | value | standard error | 90 % interval |
+|---|---|---|---|
+{params}
+
+Standard errors and intervals are conditional on the extended model (HAC sandwich at the fit); a
+rail change's time has a profile interval instead ("—": on a bound of its box, not determined by
+the data, or not a fitted parameter).
 
 ![adhesion against creep]({figs[0]})
 
