@@ -355,6 +355,7 @@ def test_a_size_the_effect_does_not_have_is_not_named():
     inside = {"params": {"mu0": 0.4}, "sse_reduction": 0.0, "delta_bic": 0.0}
     result = {
         "base": {"status": "converged"},
+        "extended": {"uncertainty": {"at_bound": [], "undetermined": []}},
         "null": {"critical_sse_reduction": 0.3, "noise": {"gamma": 0.5}, "replicas": 19, "truth": inside},
         "candidates": [rail],
     }
@@ -616,7 +617,8 @@ def test_an_effects_standard_error_is_the_spread_of_its_estimate():
     sandwich at the fit) against the spread of the estimate over 8 recordings (wet rail, seeds
     0–7, realistic sensors, a 20 % rail change): within a factor 2 either way (measured 1.44×; the
     sample sd of 8 has about 25 % relative error). Kept at bound or undetermined, a parameter has
-    no standard error and no interval."""
+    no standard error and no interval. Given the cross-validation fits, the larger of the sandwich
+    and their jackknife spread stands."""
     name, col = "rail_change", 5 + ext.EXTRA_NAMES.index("drop")
     act = np.asarray(ext.active_mask([name]))
     rows = (np.array([fitting.free_indices((name,))]), act[None])
@@ -637,6 +639,13 @@ def test_an_effects_standard_error_is_the_spread_of_its_estimate():
             assert found["stderr"][k] is None and found["ci90"][k] is None
     ratio = np.median(errors) / np.std(estimates, ddof=1)
     assert 0.5 < ratio < 2.0, (ratio, estimates, errors)
+    # the cross-validation fits' spread (delete-a-block jackknife) widens it where larger
+    folds = np.tile(np.asarray(fit.params[0]), (fitting.N_FOLDS, 1))
+    folds[:, col] += np.array([-2.0, -1.0, 0.0, 1.0, 2.0]) * 0.01
+    wide = standard_errors(np.asarray(fit.params[0]), act, (name,), padded, N, folds)
+    assert np.isclose(wide["stderr_jackknife"]["drop"], np.sqrt(0.8 * 10.0) * 0.01)
+    assert wide["stderr"]["drop"] == wide["stderr_jackknife"]["drop"] > found["stderr"]["drop"]
+    assert wide["stderr_jackknife"]["mu0"] == 0.0 and wide["stderr"]["mu0"] == found["stderr"]["mu0"]
 
 
 def test_round_two_reference_is_round_ones_fit_copied_not_refitted(monkeypatch):

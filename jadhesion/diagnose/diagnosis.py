@@ -500,7 +500,9 @@ def diagnose(
             )
             if "rail_change" in effects
             else None,
-            "uncertainty": standard_errors(table["params"][final], acts[final], effects, padded, n_valid),
+            "uncertainty": standard_errors(
+                table["params"][final], acts[final], effects, padded, n_valid, table["fold_params"][final]
+            ),
         },
         "generic": generic,
         "sensitivity": seen,

@@ -110,7 +110,8 @@ class FitTable(NamedTuple):
     prediction|`` over the selected samples; the weights have mean 1 there, :func:`eiv_weights`),
     ``residual`` (C, n) of the full-data fit (zero on padding), ``status`` (C,) int32
     :class:`~jadhesion.status.Status` of the full-data fit, ``fold_status`` (C,) the worst status
-    among its cross-validation fits, ``steps`` (C,) LM steps of the full fit."""
+    among its cross-validation fits, ``steps`` (C,) LM steps of the full fit, ``fold_params``
+    (C, N_FOLDS, P) the cross-validation fits' parameters (NaN without folds)."""
 
     params: jax.Array
     mae: jax.Array
@@ -120,6 +121,7 @@ class FitTable(NamedTuple):
     status: jax.Array
     fold_status: jax.Array
     steps: jax.Array
+    fold_params: jax.Array
 
 
 def fold_weights(n: int, n_folds: int = N_FOLDS, n_total=None, weight=None) -> jax.Array:
@@ -246,7 +248,8 @@ def fit_candidates(p0, idx, actives, sig: Signals, n_valid, folds: bool = True, 
         full, status, steps = _solve(_pad(p), i, a, weights[0], sig, MAX_STEPS, upper)
         r_full = resid(full, a)
         if not folds:
-            return full, status, steps, r_full, jnp.nan, jnp.int32(int(Status.CONVERGED))
+            none = jnp.full((N_FOLDS, full.shape[0]), jnp.nan)
+            return full, status, steps, r_full, jnp.nan, jnp.int32(int(Status.CONVERGED)), none
 
         i_fold = jnp.where(jnp.asarray(_FOLD_FIXED)[i], PAD, i)  # a change time stays put
         t_change = ext.change_time(full[ext.U_CHANGE], sig)
@@ -256,12 +259,12 @@ def fit_candidates(p0, idx, actives, sig: Signals, n_valid, folds: bool = True, 
             one_side = jnp.all(~train | (sig.time < t_change)) | jnp.all(~train | (sig.time > t_change))
             i_k = jnp.where(one_side & jnp.asarray(_PLACED)[i], PAD, i_fold)  # nor sized from one side
             pk, sk, _ = _solve(full, i_k, a, w, sig, MAX_STEPS_FOLD, upper)
-            return jnp.sum(jnp.where(w > 0, 0.0, jnp.abs(resid(pk, a)))), sk  # block k, weighted once
+            return jnp.sum(jnp.where(w > 0, 0.0, jnp.abs(resid(pk, a)))), sk, pk  # block k, weighted once
 
-        held, fold_status = jax.lax.map(fold, weights[1:])
-        return full, status, steps, r_full, jnp.sum(held) / used, jnp.max(fold_status)
+        held, fold_status, fold_full = jax.lax.map(fold, weights[1:])
+        return full, status, steps, r_full, jnp.sum(held) / used, jnp.max(fold_status), fold_full
 
-    full, status, steps, r_full, heldout, fold_status = jax.lax.map(one, (p0, idx, actives))
+    full, status, steps, r_full, heldout, fold_status, fold_full = jax.lax.map(one, (p0, idx, actives))
     sse = jnp.sum(r_full**2, axis=1)
     return FitTable(
         full[:, :PAD],
@@ -272,6 +275,7 @@ def fit_candidates(p0, idx, actives, sig: Signals, n_valid, folds: bool = True, 
         status,
         fold_status,
         steps,
+        fold_full[:, :, :PAD],
     )
 
 
