@@ -674,6 +674,36 @@ def test_round_two_reference_is_round_ones_fit_copied_not_refitted(monkeypatch):
     assert t1["sse"][3] != -1.0
 
 
+def test_a_refit_replaces_round_ones_fit_only_where_the_data_tell_them_apart(monkeypatch):
+    """:func:`diagnosis._refit_first` with the refit's SSE 0.1 % below the reference (ΔBIC ≈ −0.4
+    on 400 white residuals: within :data:`select.BIC_SEPARATION`) leaves the reference; 10 %
+    below (ΔBIC ≈ −42) replaces it."""
+    rng = np.random.default_rng(1)
+    shapes = {"params": (ext.N_PARAMS,), "residual": (400,), "fold_params": (fitting.N_FOLDS, ext.N_PARAMS)}
+    keys = (
+        "params",
+        "mae",
+        "sse",
+        "heldout_mae",
+        "residual",
+        "status",
+        "fold_status",
+        "steps",
+        "fold_params",
+    )
+    t2 = {k: rng.normal(size=(3, *shapes.get(k, ()))) for k in keys}
+    t2["status"][:] = t2["fold_status"][:] = int(Status.CONVERGED)
+    t2["sse"][:] = 1.0
+    for drop, replaced in ((0.001, False), (0.1, True)):
+        fits = {k: rng.normal(size=(N_ROWS, *shapes.get(k, ()))) for k in keys}
+        fits["status"][:] = fits["fold_status"][:] = int(Status.CONVERGED)
+        fits["sse"][:] = 1.0 - drop
+        monkeypatch.setattr(fitting, "fit_candidates", lambda *a, f=fits: fitting.FitTable(**f))
+        table = {k: v.copy() for k, v in t2.items()}
+        assert (diagnosis._refit_first(None, 400, table, "rail_change", [1, 2]) is not None) == replaced
+        assert table["sse"][0] == (1.0 - drop if replaced else 1.0)
+
+
 def test_round_two_refits_the_first_effect_where_a_pair_found_its_better_optimum():
     """Round 1's rail change sits at the wrong time (held at 0.85 of the run: a local optimum, as
     on the independent generator's 300030) while the pair with a radius error found the change at

@@ -151,8 +151,12 @@ def _refit_first(sig, n, t2, first, rows) -> int | None:
     of the pairs ``rows`` (those BIC would accept) with the second effect's parameters neutral.
     Round 1's start may leave the first effect in a local optimum that a pair's fit leaves (a rail
     change placed 3.6 s late, found at its time only beside a radius error): the pair's gain is
-    then the first effect's, not the second's. The lowest-SSE converged refit below the reference
-    replaces it in place (full and fold fits); returns the row of the pair it came from, or None."""
+    then the first effect's, not the second's. The lowest-SSE converged refit replaces the reference
+    in place (full and fold fits) where the data tell the two apart — ``n_eff · ln(SSE_ref/SSE)`` above
+    :data:`.select.BIC_SEPARATION`, ``n_eff`` the reference residual's effective samples — and
+    returns the row of the pair it came from; otherwise None. On a 600 s steady run at 200 Hz a
+    refit with 0.11 % less SSE had moved a rail change from 84.6 s to 393.8 s, and the held-out
+    error from 0.0096 to 0.0228, above the base model's."""
     starts = np.tile(t2["params"][0], (N_CANDIDATES, 1))
     starts[: len(rows)] = t2["params"][rows]
     fits = fitting.fit_candidates(starts, *_padded([(first,)] * len(rows)), sig, n)._asdict()
@@ -160,7 +164,8 @@ def _refit_first(sig, n, t2, first, rows) -> int | None:
     ok = [_status(table, i) == "converged" for i in range(len(rows))]
     sse = np.where(ok, table["sse"][: len(rows)], np.inf)
     best = int(np.argmin(sse))
-    if not sse[best] < t2["sse"][0] * (1.0 - 1e-9):
+    n_eff = select.effective_samples(t2["residual"][0])
+    if not n_eff * np.log(t2["sse"][0] / sse[best]) > select.BIC_SEPARATION:
         return None
     for k, v in t2.items():
         v[0] = table[k][best][: v.shape[1]] if v.ndim > 1 else table[k][best]
