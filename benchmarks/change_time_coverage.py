@@ -74,7 +74,7 @@ def main(argv=None) -> int:
     enable_x64()
     enable_compilation_cache()
     rng = np.random.default_rng(args.seed)
-    cases = []
+    cases, head = [], commit()  # the code this process imported
     progress = Progress(2 * args.per, "diagnoses", enabled=sys.stderr.isatty())
     with tempfile.TemporaryDirectory() as tmp:
         for i in range(args.per):
@@ -87,12 +87,11 @@ def main(argv=None) -> int:
             seed = 200003 * (args.seed + 1) + i
             rec = generate(seed, effect="rail_change", duration_s=args.duration)
             d, _ = diagnose_file(write(rec, Path(tmp) / f"rec_{seed}.csv", truth=False))
-            cases.append(
-                _case("foreign", seed, rec.truth["magnitude"], rec.truth["effect_detail"]["time_s"], d)
-            )
+            drop = -rec.truth["magnitude"]  # its rail change is μ0 → μ0 (1 + m)
+            cases.append(_case("foreign", seed, drop, rec.truth["effect_detail"]["time_s"], d))
             progress.update()
             doc = {
-                "commit": commit(),
+                "commit": head,
                 "settings": {**vars(args), "replicas": 19, "p_varied_profile": 0.5},
                 "coverage": {
                     g: change_time_coverage(
