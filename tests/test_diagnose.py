@@ -587,29 +587,25 @@ def test_effect_named_and_recovered(name):
 def test_a_change_time_the_samples_do_not_place_gets_a_wide_interval():
     """The change's time interval (:mod:`jadhesion.diagnose.change_time`) spans a stretch whose
     samples are left out (weight 0), where any time fits as well: a change at 50 % of the run with
-    30–70 % of the samples out gives an interval over that gap, holding the truth; with every sample
-    in, about two grid steps around it. Sand, seed 11, realistic sensors. Not every recording
-    behaves so: on wet rail, seed 7, the samples before the gap fit a step at its edge better (LR
-    3.0 against the flat profile's), and the interval (5.5–9.3 s) misses the change at 15.0 s."""
+    30–70 % of the samples out gives an interval over that gap, holding the truth (with every
+    sample in, a few grid steps: ``test_effect_named_and_recovered``). Sand, seed 11, realistic
+    sensors. Not every recording behaves so: on wet rail, seed 7, the samples before the gap fit a
+    step at its edge better (LR 3.0 against the flat profile's), and the interval (5.5–9.3 s) misses
+    the change at 15.0 s."""
     name = "rail_change"
     sim = simulate("sand", 11, [(name, 0.2)], N, sensors="realistic")
     sig = from_columns(_raw(sim), sim.vehicle)
     p0 = np.concatenate([list(sim.truth["params"].values()), ext.NEUTRAL])
     p0[ext.U_CHANGE] = 0.5
-    truth = sim.truth["effects"][name]["time_s"]
     gap = (np.arange(N) >= 0.3 * N) & (np.arange(N) < 0.7 * N)
+    padded = fitting.pad_signals(sig._replace(weight=np.where(gap, 0.0, 1.0)))
     rows = (p0[None], np.array([fitting.free_indices((name,))]), np.asarray(ext.active_mask([name]))[None])
-    widths = []
-    for weight in (np.ones(N), np.where(gap, 0.0, 1.0)):
-        padded = fitting.pad_signals(sig._replace(weight=weight))
-        fit = fitting.fit_candidates(*rows, padded, N, folds=False)
-        assert int(fit.status[0]) == Status.CONVERGED
-        residual = np.asarray(fit.residual[0])[:N][weight > 0]
-        found = change_time.interval(fit.params[0], (name,), padded, N, residual)
-        lo, hi = found["t_change_interval_s"]
-        assert lo <= truth <= hi and found["fit_inside"] and found["unconverged"] == 0, found
-        widths.append((hi - lo) / float(sig.duration))
-    assert widths[0] < 0.1 and widths[1] > 0.3, widths
+    fit = fitting.fit_candidates(*rows, padded, N, folds=False)
+    assert int(fit.status[0]) == Status.CONVERGED
+    found = change_time.interval(fit.params[0], (name,), padded, N, np.asarray(fit.residual[0])[:N][~gap])
+    lo, hi = found["t_change_interval_s"]
+    assert lo <= sim.truth["effects"][name]["time_s"] <= hi and found["fit_inside"], found
+    assert found["unconverged"] == 0 and (hi - lo) / float(sig.duration) > 0.3, found
 
 
 def test_an_effects_standard_error_is_the_spread_of_its_estimate():

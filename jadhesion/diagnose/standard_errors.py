@@ -47,12 +47,12 @@ def standard_errors(params, active, effects, sig, n_valid: int, fold_params=None
     r, jac = linearise(jnp.asarray(full), jnp.ones(ext.N_EXTRA, bool), sig)
     w = np.asarray(fitting.fold_weights(n_valid, fitting.N_FOLDS, sig.time.shape[0], sig.weight)[0])
     idx = [i for i in fitting.free_indices(effects) if i != fitting.PAD]
+    used = w > 0  # samples left out and padding count for nothing, whatever the model gives there
     cols = np.zeros((w.size, fitting.WIDTH))  # one compiled covariance per padded length
-    cols[:, : len(idx)] = np.asarray(jac)[:, idx] * w[:, None]
+    cols[used, : len(idx)] = np.asarray(jac)[used][:, idx] * w[used, None]
+    res = np.where(used, np.asarray(r) * w, 0.0)
     unused = np.arange(fitting.WIDTH) >= len(idx)
-    cov, lags = covariance(
-        jnp.asarray(cols), jnp.asarray(np.asarray(r) * w), fixed=unused, weight=jnp.asarray(w)
-    )
+    cov, lags = covariance(jnp.asarray(cols), jnp.asarray(res), fixed=unused, weight=jnp.asarray(w))
     hac = np.sqrt(np.diag(np.asarray(cov)))[: len(idx)]
     jack = np.full(len(idx), np.nan)
     if fold_params is not None:
