@@ -644,14 +644,20 @@ def test_an_effects_standard_error_is_the_spread_of_its_estimate():
     assert wide["stderr_jackknife"]["mu0"] == 0.0 and wide["stderr"]["mu0"] == found["stderr"]["mu0"]
 
 
+def _fake_table(rng, rows: int, n: int) -> dict:
+    """A :class:`fitting.FitTable` as a dict of ``rows`` random fits of ``n`` samples, all converged."""
+    shapes = {"params": (ext.N_PARAMS,), "residual": (n,), "fold_params": (fitting.N_FOLDS, ext.N_PARAMS)}
+    table = {k: rng.normal(size=(rows, *shapes.get(k, ()))) for k in fitting.FitTable._fields}
+    table["status"][:] = table["fold_status"][:] = int(Status.CONVERGED)
+    return table
+
+
 def test_round_two_reference_is_round_ones_fit_copied_not_refitted(monkeypatch):
     """Round 2's row 0 (the first effect alone) is round 1's fit of it, every field (folds
     included) verbatim; only the pairs are fitted, from that fit's parameters. A re-run would be a
     second fit of the same model that can crawl along a flat direction (:func:`diagnosis._round_two`)."""
     rng = np.random.default_rng(0)
-    keys = ("params", "mae", "sse", "heldout_mae", "residual", "status", "fold_status", "steps")
-    shapes = {"params": (ext.N_PARAMS,), "residual": (40,)}
-    t1 = {k: rng.normal(size=(8, *shapes.get(k, ()))) for k in keys}
+    t1 = _fake_table(rng, 8, 40)
     act1 = rng.random((8, ext.N_EXTRA)) < 0.5
     sets = [("rail_change",), ("rail_change", "torque_offset"), ("rail_change", "load_transfer")]
     calls = []
@@ -659,12 +665,14 @@ def test_round_two_reference_is_round_ones_fit_copied_not_refitted(monkeypatch):
     def fit_round(sig, n, p0, fitted):
         calls.append((p0, list(fitted)))
         m = len(fitted)
-        return {k: np.full((m, *shapes.get(k, ())), 7.0) for k in keys}, np.ones((m, ext.N_EXTRA), bool)
+        return {k: np.full_like(v[:m], 7.0) for k, v in t1.items()}, np.ones((m, ext.N_EXTRA), bool)
 
     monkeypatch.setattr(diagnosis, "_fit_round", fit_round)
     t2, act2 = diagnosis._round_two(None, 40, t1, act1, 3, sets)
     assert len(calls) == 1 and calls[0][1] == sets[1:] and np.array_equal(calls[0][0], t1["params"][3])
-    assert all(np.array_equal(t2[k][0], t1[k][3]) and np.all(t2[k][1:] == 7.0) for k in keys)
+    assert all(
+        np.array_equal(t2[k][0], t1[k][3]) and np.all(t2[k][1:] == 7.0) for k in fitting.FitTable._fields
+    )
     assert np.array_equal(act2[0], act1[3]) and act2[1:].all() and len(act2) == len(sets)
     t2["sse"][0] = -1.0  # the refit (:func:`diagnosis._refit_first`) writes row 0 in place
     assert t1["sse"][3] != -1.0
@@ -675,24 +683,10 @@ def test_a_refit_replaces_round_ones_fit_only_where_the_data_tell_them_apart(mon
     on 400 white residuals: within :data:`select.BIC_SEPARATION`) leaves the reference; 10 %
     below (ΔBIC ≈ −42) replaces it."""
     rng = np.random.default_rng(1)
-    shapes = {"params": (ext.N_PARAMS,), "residual": (400,), "fold_params": (fitting.N_FOLDS, ext.N_PARAMS)}
-    keys = (
-        "params",
-        "mae",
-        "sse",
-        "heldout_mae",
-        "residual",
-        "status",
-        "fold_status",
-        "steps",
-        "fold_params",
-    )
-    t2 = {k: rng.normal(size=(3, *shapes.get(k, ()))) for k in keys}
-    t2["status"][:] = t2["fold_status"][:] = int(Status.CONVERGED)
+    t2 = _fake_table(rng, 3, 400)
     t2["sse"][:] = 1.0
     for drop, replaced in ((0.001, False), (0.1, True)):
-        fits = {k: rng.normal(size=(N_ROWS, *shapes.get(k, ()))) for k in keys}
-        fits["status"][:] = fits["fold_status"][:] = int(Status.CONVERGED)
+        fits = _fake_table(rng, N_ROWS, 400)
         fits["sse"][:] = 1.0 - drop
         monkeypatch.setattr(fitting, "fit_candidates", lambda *a, f=fits: fitting.FitTable(**f))
         table = {k: v.copy() for k, v in t2.items()}

@@ -468,8 +468,8 @@ def diagnose(
     effects, close = select.effects_from(candidates, second_round)
     if len(effects) == 2:
         table, acts, final = t2, act2, 1 + others.index(effects[1])
-    elif second_round and effects == [first] and refit is not None:
-        table, acts, final = t2, act2, 0  # the first effect refitted from a pair's solution, better
+    elif second_round and effects == [first]:
+        table, acts, final = t2, act2, 0  # round 2's reference: round 1's fit or a better refit
     elif effects:
         final = names1.index(effects[0])
     ext_params = _row(table["params"][final], acts[final], sig, tau_th)
