@@ -139,6 +139,13 @@ def measured_threshold(mags, hits, target=TARGET_ACCURACY, min_cases=MIN_CASES):
     return float(m[max(ok)]) if ok else None
 
 
+def above_own_limit(diagnosis: dict, name: str, magnitude: float):
+    """Whether ``|magnitude|`` (our units) reaches the recording's own ``min_detectable`` of the
+    effect (:mod:`jadhesion.diagnose.sensitivity`); None where the diagnosis gives no limit."""
+    limit = diagnosis.get("sensitivity", {}).get(name, {}).get("min_detectable")
+    return None if limit is None else bool(abs(magnitude) >= limit)
+
+
 def summarise(cases) -> dict:
     main = [c for c in cases if c.get("set", "main") == "main"]
     labels = ["none", *NAMES]
@@ -190,10 +197,9 @@ def summarise(cases) -> dict:
                 ci = c["diagnosis"]["extended"].get("uncertainty", {}).get("ci90", {}).get(param)
                 covered.append(ci is not None and ci[0] <= true <= ci[1])
         # The recording's own prediction (diagnosis["sensitivity"]): is |m| above what it can see?
-        seen = [i for i, c in enumerate(single) if "sensitivity" in c["diagnosis"]]
-        limit = {i: single[i]["diagnosis"]["sensitivity"][name]["min_detectable"] for i in seen}
-        visible = [i for i in seen if limit[i] is not None and mags[i] >= limit[i]]
-        hidden = [i for i in seen if i not in visible]
+        own = [above_own_limit(c["diagnosis"], name, m) for c, m in zip(single, mags, strict=True)]
+        visible = [i for i, v in enumerate(own) if v]
+        hidden = [i for i, v in enumerate(own) if v is False]
         default = [i for i, c in enumerate(single) if not c.get("profile_varied")]
         varied = [i for i, c in enumerate(single) if c.get("profile_varied")]
         per_effect[name] = {
@@ -223,6 +229,8 @@ def summarise(cases) -> dict:
             for k in PARAM_NAMES:
                 base_err[k].append(abs(c["diagnosis"]["base"]["params"][k] - c["true_params"][k]))
     single_all = [c for c in main if len(c["effects"]) == 1]
+    named = [c["diagnosis"]["verdict"] == c["effects"][0][0] for c in single_all]
+    own = [above_own_limit(c["diagnosis"], *c["effects"][0]) for c in single_all]
     seconds = [c["diagnosis"]["seconds"] for c in cases]
     return {
         "n": len(cases),
@@ -236,6 +244,8 @@ def summarise(cases) -> dict:
             "top1": rate([c["diagnosis"]["verdict"] == c["effects"][0][0] for c in single_all]),
             "in_set": rate([c["effects"][0][0] in reported_set(c["diagnosis"]) for c in single_all]),
             "missed": rate([c["diagnosis"]["verdict"] == "none" for c in single_all]),
+            "top1_above_min_detectable": rate([h for h, v in zip(named, own, strict=True) if v]),
+            "top1_below_min_detectable": rate([h for h, v in zip(named, own, strict=True) if v is False]),
         },
         "pairs": {
             "n": len(pairs),

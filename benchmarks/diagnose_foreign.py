@@ -8,9 +8,11 @@ the foreign generator's own typical range (its units: ``rail_change`` is ``μ0 �
 than our extensions, so their magnitudes are not compared). Reported: the confusion matrix (truth ×
 verdict), top-1 and "truth in the verdict's indistinguishable set" per effect, the recovered
 magnitude beside the true one where the units agree (and whether its 90 % interval,
-``extended.uncertainty``, holds it), the coverage of the rail change's time
-interval (``extended.change_time``) where a change was named, and seconds per diagnosis; the result file
-records the commit, the settings and the load average (2 shared cores: timings are noisy).
+``extended.uncertainty``, holds it), top-1 where the size reaches the recording's own
+``sensitivity.min_detectable`` and where it does not (the effects in our units), the coverage of the
+rail change's time interval (``extended.change_time``) where a change was named, and seconds per
+diagnosis; the result file records the commit, the settings and the load average (2 shared cores:
+timings are noisy).
 
     python -m benchmarks.diagnose_foreign [--per-effect 3] [--seed 0] [--duration 30]
 """
@@ -25,7 +27,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from benchmarks.diagnose_blind import change_time_coverage, commit, decision_table, rate
+from benchmarks.diagnose_blind import above_own_limit, change_time_coverage, commit, decision_table, rate
 from jadhesion.cli.diagnose_run import diagnose_file
 from jadhesion.config import enable_compilation_cache, enable_x64
 from jadhesion.diagnose.extensions import NAMES
@@ -39,6 +41,17 @@ COMPARABLE = {
     "signal_delay": ("delay_s", 1.0),
     "torque_offset": ("offset", 1.0),
 }
+
+
+OWN_LIMIT_KEYS = ("top1_above_min_detectable", "top1_below_min_detectable")
+
+
+def own_limit_rates(cases) -> dict:
+    """Top-1 among the cases whose size (our units, :data:`COMPARABLE` effects only) reaches the
+    recording's own ``min_detectable`` and among those below it."""
+    above = [c["verdict"] == c["effect"] for c in cases if c["above_min_detectable"]]
+    below = [c["verdict"] == c["effect"] for c in cases if c["above_min_detectable"] is False]
+    return dict(zip(OWN_LIMIT_KEYS, (rate(above), rate(below)), strict=True))
 
 
 def main(argv=None) -> int:
@@ -61,7 +74,9 @@ def main(argv=None) -> int:
                 start = time.perf_counter()
                 d, _ = diagnose_file(path)
                 seconds = time.perf_counter() - start
-                recovered, covered = None, None
+                recovered, covered, visible = None, None, None
+                if name in COMPARABLE:  # the size in our units against the recording's own limit
+                    visible = above_own_limit(d, name, COMPARABLE[name][1] * rec.truth["magnitude"])
                 if name in COMPARABLE and d["verdict"] == name:
                     param, factor = COMPARABLE[name]
                     recovered = factor * d["extended"]["params"][param]
@@ -78,6 +93,7 @@ def main(argv=None) -> int:
                         "verdict_set": d["verdict_set"],
                         "recovered": recovered,
                         "ci90_covers": covered,
+                        "above_min_detectable": visible,
                         "change_time": d["extended"]["change_time"],
                         "true_change_time_s": rec.truth["effect_detail"].get("time_s"),
                         "base_mu0": d["base"]["params"]["mu0"],
@@ -110,8 +126,13 @@ def main(argv=None) -> int:
                                     if c["effect"] == n and c["ci90_covers"] is not None
                                 ]
                             ),
+                            **own_limit_rates([c for c in cases if c["effect"] == n]),
                         }
                         for n in NAMES
+                    },
+                    "single_effect": {
+                        "top1": rate([c["verdict"] == c["effect"] for c in cases]),
+                        **own_limit_rates(cases),
                     },
                     "change_time": change_time_coverage(
                         [
@@ -127,8 +148,11 @@ def main(argv=None) -> int:
     for n, r in doc["per_effect"].items():
         print(
             f"{n:20s} top-1 {r['top1']['k']}/{r['top1']['n']}, in set {r['in_set']['k']}/{r['in_set']['n']}, "
-            f"90 % interval holds the size {r['ci90_covers']['k']}/{r['ci90_covers']['n']}"
+            f"90 % interval holds the size {r['ci90_covers']['k']}/{r['ci90_covers']['n']}; "
+            "above / below the recording's min_detectable: "
+            + " / ".join(f"{r[k]['k']}/{r[k]['n']}" for k in OWN_LIMIT_KEYS)
         )
+    print(f"single effects: {doc['single_effect']}")
     return 0
 
 
