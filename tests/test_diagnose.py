@@ -484,6 +484,13 @@ def test_the_explanation_claims_only_what_was_tested():
     assert "68.5%" in text and "traction_ratio" in text and "not tested against a null" in text
     result["generic"] = {"used": False, "gain": 0.005}
     assert "discrepancy" not in explain(result, LOCO_22E)
+    # "none" says how large each effect would have had to be to show, in the registry's units
+    seen = {"min_detectable": 0.17, "visible": True, "experiment": "a torque step"}
+    hidden = {"min_detectable": 0.53, "visible": False, "experiment": "a coasting run"}
+    result["sensitivity"] = {"signal_delay": seen, "torque_offset": hidden}
+    text = explain(result, LOCO_22E)
+    assert "could have shown (the effects' magnitudes): signal delay 0.17 s; smaller ones" in text
+    assert "torque offset — a coasting run" in text and "torque offset 0.53" not in text
 
 
 def test_effects_the_evidence_cannot_separate_form_a_set():

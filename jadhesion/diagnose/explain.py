@@ -41,6 +41,23 @@ def _blind_spots(sensitivity: dict) -> str:
     )
 
 
+def _smallest_visible(sensitivity: dict) -> str:
+    """After a "none" verdict: the smallest size of each effect this recording could have shown
+    (``sensitivity[...].min_detectable``, the registry's units); smaller ones may be present."""
+    seen = [(n, s["min_detectable"]) for n, s in sensitivity.items() if s["visible"] and s["min_detectable"]]
+    if not seen:
+        return ""
+    sizes = []
+    for name, size in seen:
+        unit = EFFECTS[name].unit
+        sizes.append(f"{name.replace('_', ' ')} {size:.2g}{'' if unit == '-' else ' ' + unit}")
+    return (
+        " The smallest sizes this recording could have shown (the effects' magnitudes): "
+        + ", ".join(sizes)
+        + "; smaller ones may be present."
+    )
+
+
 def _improvement(result: dict) -> str:
     """What modelling the verdict gains: the cross-validated error where it falls; otherwise the
     in-sample SSE reduction and ΔBIC that named it (:mod:`.select`), and why the folds disagree."""
@@ -145,7 +162,7 @@ def explain(result: dict, vehicle: Vehicle) -> str:
         text += "."
         if result["generic"]["used"]:
             text += _GENERIC.format(signal=result["strongest_signal"], gain=result["generic"]["gain"])
-        return text + _blind_spots(result["sensitivity"])
+        return text + _smallest_visible(result["sensitivity"]) + _blind_spots(result["sensitivity"])
     parts = [effect_sentence(n, result["extended"]["params"], vehicle) for n in result["effects"]]
     text = "; and ".join(parts)
     text = text[0].upper() + text[1:] + _improvement(result) + _sizes(result) + _refit(result)
