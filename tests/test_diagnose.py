@@ -491,6 +491,15 @@ def test_the_explanation_claims_only_what_was_tested():
     text = explain(result, LOCO_22E)
     assert "could have shown (the effects' magnitudes): signal delay 0.17 s; smaller ones" in text
     assert "torque offset — a coasting run" in text and "torque offset 0.53" not in text
+    # a limit that blind tests found optimistic is flagged with the registry's counts
+    named, above = EFFECTS["signal_delay"].detection.own_limit
+    assert EFFECTS["signal_delay"].detection.limit_holds() is False
+    assert (
+        f"The signal delay limit is optimistic: in blind tests an effect above such a limit was named "
+        f"in {named} of {above} cases." in text
+    )
+    result["sensitivity"] = {"rail_change": seen}
+    assert EFFECTS["rail_change"].detection.limit_holds() and "optimistic" not in explain(result, LOCO_22E)
 
 
 def test_effects_the_evidence_cannot_separate_form_a_set():
@@ -755,6 +764,11 @@ def test_cli_json_and_report(tmp_path, capsys):
     assert warned == untested
     report = (tmp_path / "rep" / "report.md").read_text()
     assert "## Warnings" in report and (tmp_path / "rep" / "adhesion_vs_creep.png").exists()
+    named, above = EFFECTS["thermal_softening"].detection.own_limit  # the registry's record of the limit
+    assert (
+        f"| thermal_softening | {doc['sensitivity']['thermal_softening']['min_detectable']:.3g} |" in report
+    )
+    assert f" | {named} of {above} |" in report
     # every fitted parameter of the extended model has a standard error or says why not
     ext_doc = doc["extended"]
     trust = ext_doc["uncertainty"]

@@ -108,6 +108,10 @@ def test_registry_record_is_complete(name, clean):
     assert len(spec.exposing_run) > 20 and len(spec.factor) > 20
     for threshold in (spec.detection.top1, spec.detection.in_set):
         assert threshold is None or lo <= threshold <= hi, (name, threshold)
+    named, above = spec.detection.own_limit
+    assert 0 <= named <= above and spec.detection.limit_holds() is (
+        None if above == 0 else named >= 0.9 * above
+    )
     # a fitted size is plausible across the typical range and a margin, not far beyond it
     assert all(spec.plausible(s * m) for s in (1, -1) for m in (lo, hi, IMPLAUSIBLE_BEYOND * hi))
     assert not spec.plausible(1.01 * IMPLAUSIBLE_BEYOND * hi) and not spec.plausible(

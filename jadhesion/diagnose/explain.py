@@ -43,7 +43,8 @@ def _blind_spots(sensitivity: dict) -> str:
 
 def _smallest_visible(sensitivity: dict) -> str:
     """After a "none" verdict: the smallest size of each effect this recording could have shown
-    (``sensitivity[...].min_detectable``, the registry's units); smaller ones may be present."""
+    (``sensitivity[...].min_detectable``, the registry's units); smaller ones may be present. Where
+    blind tests found such a limit optimistic (:meth:`.Detection.limit_holds`), it says so."""
     seen = [(n, s["min_detectable"]) for n, s in sensitivity.items() if s["visible"] and s["min_detectable"]]
     if not seen:
         return ""
@@ -51,11 +52,19 @@ def _smallest_visible(sensitivity: dict) -> str:
     for name, size in seen:
         unit = EFFECTS[name].unit
         sizes.append(f"{name.replace('_', ' ')} {size:.2g}{'' if unit == '-' else ' ' + unit}")
-    return (
+    text = (
         " The smallest sizes this recording could have shown (the effects' magnitudes): "
         + ", ".join(sizes)
         + "; smaller ones may be present."
     )
+    weak = [EFFECTS[n] for n, _ in seen if EFFECTS[n].detection.limit_holds() is False]
+    for spec in weak:
+        named, above = spec.detection.own_limit
+        text += (
+            f" The {spec.name.replace('_', ' ')} limit is optimistic: in blind tests an effect above "
+            f"such a limit was named in {named} of {above} cases."
+        )
+    return text
 
 
 def _improvement(result: dict) -> str:

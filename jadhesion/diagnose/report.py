@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..models.effects import EFFECTS
 from .select import GAIN_THRESHOLD
 
 UNITS = {
@@ -133,7 +134,8 @@ def write_report(result: dict, series: dict, directory) -> Path:
     )
     seen = "\n".join(
         f"| {n} | {s['min_detectable']:.3g} | {100 * s['absorbed']:.0f} % | "
-        f"{'yes' if s['visible'] else 'no: ' + s['experiment']} |"
+        f"{'yes' if s['visible'] else 'no: ' + s['experiment']} | "
+        "{} of {} |".format(*EFFECTS[n].detection.own_limit)
         for n, s in result["sensitivity"].items()
     )
     warnings = "\n".join(f"- **{w['code']}**: {w['message']}" for w in result["warnings"]) or "None."
@@ -180,10 +182,12 @@ the null and BIC, whatever their held-out gain (a held-out block extrapolates th
 ## What this recording can see
 
 The smallest magnitude of each effect (catalogue units) whose signature, after the fitted model
-absorbs what it can, would reach the decision threshold (linearised at the final fit).
+absorbs what it can, would reach the decision threshold (linearised at the final fit). The last
+column: of the blind test cases (both generators) whose size reached their recording's own limit,
+how many were named.
 
-| effect | smallest detectable | absorbed by the model | visible at typical magnitudes |
-|---|---|---|---|
+| effect | smallest detectable | absorbed by the model | visible at typical size | blind: named above it |
+|---|---|---|---|---|
 {seen}
 """
     path = out / "report.md"

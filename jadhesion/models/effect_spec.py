@@ -36,6 +36,16 @@ class Detection(NamedTuple):
     top1: Optional[float]
     in_set: Optional[float]
     note: str
+    #: ``(named, above)``: of the blind cases (either generator) whose size reached their recording's
+    #: own ``min_detectable``, how many were named, and how many there were
+    #: (:data:`jadhesion.models.effects.OWN_LIMIT_PROVENANCE`).
+    own_limit: tuple = (0, 0)
+
+    def limit_holds(self) -> Optional[bool]:
+        """Whether the recording's own limit has held (named in ≥ 90 % of the blind cases above it);
+        None where no blind case reached it."""
+        named, above = self.own_limit
+        return None if above == 0 else named >= 0.9 * above
 
 
 def _no_terms(values: Mapping) -> dict:
