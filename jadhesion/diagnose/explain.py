@@ -51,7 +51,7 @@ def _smallest_visible(sensitivity: dict) -> str:
     sizes = []
     for name, size in seen:
         unit = EFFECTS[name].unit
-        sizes.append(f"{name.replace('_', ' ')} {size:.2g}{'' if unit == '-' else ' ' + unit}")
+        sizes.append(f"{name.replace('_', ' ')} {size:.3g}{'' if unit == '-' else ' ' + unit}")
     text = (
         " The smallest sizes this recording could have shown (the effects' magnitudes): "
         + ", ".join(sizes)
