@@ -24,7 +24,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 import numpy as np
 
-from ..identify.uncertainty import Z90, covariance, determined, normal_interval
+from ..identify.uncertainty import Z90, block_jackknife_sd, covariance, determined, normal_interval
 from ..models.polach import PARAM_NAMES
 from . import extensions as ext
 from . import fitting
@@ -56,9 +56,7 @@ def standard_errors(params, active, effects, sig, n_valid: int, fold_params=None
     hac = np.sqrt(np.diag(np.asarray(cov)))[: len(idx)]
     jack = np.full(len(idx), np.nan)
     if fold_params is not None:
-        folds = np.asarray(fold_params, float)[:, idx]
-        k = folds.shape[0]
-        jack = np.sqrt((k - 1) / k * np.sum((folds - folds.mean(axis=0)) ** 2, axis=0))
+        jack = block_jackknife_sd(np.asarray(fold_params, float)[:, idx])
     sd = np.where(np.isfinite(jack), np.maximum(hac, np.nan_to_num(jack)), hac)
     out = {"stderr": {}, "ci90": {}, "stderr_hac": {}, "stderr_jackknife": {}}
     out.update({"at_bound": [], "undetermined": [], "lags": int(lags)})

@@ -69,7 +69,15 @@ from ..status import status_of
 from .batch_fit import bucketed, valid_samples
 from .peak import DERIVED, MU_BOX_MAX, S_MAX, S_MIN, peak_numbers, peak_report, reference_speed
 from .polach_fit import LM_RESIDUAL, RECOMMENDED_SAMPLES, refit_lm, scaled
-from .uncertainty import Z95, correlation, covariance, determined, normal_interval, undetermined_warning
+from .uncertainty import (
+    Z95,
+    block_jackknife_sd,
+    correlation,
+    covariance,
+    determined,
+    normal_interval,
+    undetermined_warning,
+)
 
 #: Distance from a face of the unit box at which a parameter counts as on its bound.
 BOUND_TOL = 1e-6
@@ -127,8 +135,7 @@ def jackknife_sd(replicates) -> np.ndarray:
     replicate is not finite (the delta method's then stands alone)."""
     x = np.array(replicates, float)
     x[:, -1] = np.log(np.where(x[:, -1] > 0, x[:, -1], np.nan))
-    b = x.shape[0]
-    sd = np.sqrt((b - 1) / b * np.sum((x - x.mean(axis=0)) ** 2, axis=0))
+    sd = block_jackknife_sd(x)
     return np.where(np.isfinite(sd), sd, 0.0)
 
 

@@ -58,6 +58,15 @@ def determined(sd, width=1.0) -> bool:
     return bool(np.isfinite(sd) and sd <= width)
 
 
+def block_jackknife_sd(replicates) -> np.ndarray:
+    """Delete-a-block jackknife standard errors (P,) from ``replicates`` (B, P), the estimates
+    refitted without each of B blocks in turn: ``√((B − 1)/B · Σ (x_b − x̄)²)`` (NaN where a
+    replicate is not finite)."""
+    x = np.asarray(replicates, float)
+    b = x.shape[0]
+    return np.sqrt((b - 1) / b * np.sum((x - x.mean(axis=0)) ** 2, axis=0))
+
+
 def undetermined_warning(names) -> dict:
     """The ``undetermined`` warning ``{code, params, message}`` naming the quantities whose
     standard error is not :func:`determined`."""
