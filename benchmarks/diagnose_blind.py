@@ -146,6 +146,17 @@ def above_own_limit(diagnosis: dict, name: str, magnitude: float):
     return None if limit is None else bool(abs(magnitude) >= limit)
 
 
+def own_limit_rates(hits, own) -> dict:
+    """``top1_above_min_detectable`` and ``top1_below_min_detectable``: :func:`rate` of ``hits``
+    among the cases whose size reaches their recording's own limit (``own`` True, from
+    :func:`above_own_limit`) and among those below it (False; None counts in neither)."""
+    pairs = list(zip(hits, own, strict=True))
+    return {
+        "top1_above_min_detectable": rate([h for h, v in pairs if v]),
+        "top1_below_min_detectable": rate([h for h, v in pairs if v is False]),
+    }
+
+
 def summarise(cases) -> dict:
     main = [c for c in cases if c.get("set", "main") == "main"]
     labels = ["none", *NAMES]
@@ -198,8 +209,6 @@ def summarise(cases) -> dict:
                 covered.append(ci is not None and ci[0] <= true <= ci[1])
         # The recording's own prediction (diagnosis["sensitivity"]): is |m| above what it can see?
         own = [above_own_limit(c["diagnosis"], name, m) for c, m in zip(single, mags, strict=True)]
-        visible = [i for i, v in enumerate(own) if v]
-        hidden = [i for i, v in enumerate(own) if v is False]
         default = [i for i, c in enumerate(single) if not c.get("profile_varied")]
         varied = [i for i, c in enumerate(single) if c.get("profile_varied")]
         per_effect[name] = {
@@ -214,8 +223,7 @@ def summarise(cases) -> dict:
             "documented_threshold": documented,
             "top1_above_documented": rate([hits[i] for i in above]),
             "in_set_above_documented": rate([in_set[i] for i in above]),
-            "top1_above_min_detectable": rate([hits[i] for i in visible]),
-            "top1_below_min_detectable": rate([hits[i] for i in hidden]),
+            **own_limit_rates(hits, own),
             "confused_with": {k: v for k, v in confusion[name].items() if v and k != name},
             "median_rel_error": float(np.median(errors)) if errors else None,
             "ci90_covers_magnitude": rate(covered),
@@ -244,8 +252,7 @@ def summarise(cases) -> dict:
             "top1": rate([c["diagnosis"]["verdict"] == c["effects"][0][0] for c in single_all]),
             "in_set": rate([c["effects"][0][0] in reported_set(c["diagnosis"]) for c in single_all]),
             "missed": rate([c["diagnosis"]["verdict"] == "none" for c in single_all]),
-            "top1_above_min_detectable": rate([h for h, v in zip(named, own, strict=True) if v]),
-            "top1_below_min_detectable": rate([h for h, v in zip(named, own, strict=True) if v is False]),
+            **own_limit_rates(named, own),
         },
         "pairs": {
             "n": len(pairs),

@@ -27,7 +27,14 @@ import tempfile
 import time
 from pathlib import Path
 
-from benchmarks.diagnose_blind import above_own_limit, change_time_coverage, commit, decision_table, rate
+from benchmarks.diagnose_blind import (
+    above_own_limit,
+    change_time_coverage,
+    commit,
+    decision_table,
+    own_limit_rates,
+    rate,
+)
 from jadhesion.cli.diagnose_run import diagnose_file
 from jadhesion.config import enable_compilation_cache, enable_x64
 from jadhesion.diagnose.extensions import NAMES
@@ -43,15 +50,12 @@ COMPARABLE = {
 }
 
 
-OWN_LIMIT_KEYS = ("top1_above_min_detectable", "top1_below_min_detectable")
-
-
-def own_limit_rates(cases) -> dict:
-    """Top-1 among the cases whose size (our units, :data:`COMPARABLE` effects only) reaches the
-    recording's own ``min_detectable`` and among those below it."""
-    above = [c["verdict"] == c["effect"] for c in cases if c["above_min_detectable"]]
-    below = [c["verdict"] == c["effect"] for c in cases if c["above_min_detectable"] is False]
-    return dict(zip(OWN_LIMIT_KEYS, (rate(above), rate(below)), strict=True))
+def limit_rates(cases) -> dict:
+    """:func:`~benchmarks.diagnose_blind.own_limit_rates` of the cases (their size in our units,
+    :data:`COMPARABLE` effects only)."""
+    return own_limit_rates(
+        [c["verdict"] == c["effect"] for c in cases], [c["above_min_detectable"] for c in cases]
+    )
 
 
 def main(argv=None) -> int:
@@ -126,13 +130,13 @@ def main(argv=None) -> int:
                                     if c["effect"] == n and c["ci90_covers"] is not None
                                 ]
                             ),
-                            **own_limit_rates([c for c in cases if c["effect"] == n]),
+                            **limit_rates([c for c in cases if c["effect"] == n]),
                         }
                         for n in NAMES
                     },
                     "single_effect": {
                         "top1": rate([c["verdict"] == c["effect"] for c in cases]),
-                        **own_limit_rates(cases),
+                        **limit_rates(cases),
                     },
                     "change_time": change_time_coverage(
                         [
@@ -150,7 +154,7 @@ def main(argv=None) -> int:
             f"{n:20s} top-1 {r['top1']['k']}/{r['top1']['n']}, in set {r['in_set']['k']}/{r['in_set']['n']}, "
             f"90 % interval holds the size {r['ci90_covers']['k']}/{r['ci90_covers']['n']}; "
             "above / below the recording's min_detectable: "
-            + " / ".join(f"{r[k]['k']}/{r[k]['n']}" for k in OWN_LIMIT_KEYS)
+            + " / ".join(f"{r[k]['k']}/{r[k]['n']}" for k in r if k.endswith("_min_detectable"))
         )
     print(f"single effects: {doc['single_effect']}")
     return 0
