@@ -157,7 +157,7 @@ def test_clean_is_none_and_base_fit(clean):
     assert result["verdict"] == "none", result["candidates"][:2]
     assert result["effects"] == []
     # generic starts still find the dry-rail optimum: the base fit is as good as the truth
-    assert result["base"]["mae"] <= 1.02 * clean.truth["envelope"]["true_param_mae"]
+    assert result["base"]["mae"] <= 1.02 * clean.envelope["true_param_mae"]
     # what the recording can see: a torque bias is a constant the saturated Polach curve absorbs
     # (invisible at any catalogue magnitude), a radius error bends the curve (seen from 0.1 %)
     seen = result["sensitivity"]

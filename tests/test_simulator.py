@@ -1,7 +1,7 @@
 """22E traction-test simulator: paper envelopes, true-parameter error, batching, effects, CLI.
 
-Every simulation here has the default length and a batch of 1 or 3 seeds, so the whole module
-compiles the simulator twice.
+Every simulation here has the default length and a batch of 1 or 3 seeds, padded to the same
+batch of 8 (:func:`seed_batch`), so the whole module compiles the simulator once.
 """
 
 import json
@@ -17,7 +17,7 @@ from jadhesion.data import traction_plant as tp
 from jadhesion.data.scenarios import SCENARIOS, envelope, get_scenario, paper_envelope
 from jadhesion.data.sensors import sensor_model
 from jadhesion.data.simulated_datasets import simulate_batch, simulate_dataset
-from jadhesion.data.simulator import _constants, simulate, simulate_many
+from jadhesion.data.simulator import _constants, _simulate_jit, seed_batch, simulate, simulate_many
 from jadhesion.data.traction_profile import COAST_EDGE_S, random_profile
 from jadhesion.data.vehicle import GRAVITY, LOCO_22E
 from jadhesion.errors import InputError
@@ -35,7 +35,7 @@ def test_envelope_and_true_parameter_error_match_the_paper(name, sensors):
     true parameters' error against raw creep grows: see the README's noise table)."""
     paper = paper_envelope(name)
     for result in simulate_many(name, SEEDS, sensors=sensors):
-        env = result.truth["envelope"]
+        env = result.envelope
         for key in ENVELOPE_KEYS:
             assert env[key] == pytest.approx(paper[key], rel=0.15), (result.truth["seed"], key)
         if sensors == "clean":
@@ -51,6 +51,19 @@ def test_batch_equals_single_runs_and_is_a_stacked_dataset():
     for field in ("creep", "slip", "adhesion", "vehicle_speed"):
         np.testing.assert_allclose(getattr(batch, field)[1], getattr(single, field), atol=1e-9)
     assert not np.allclose(batch.adhesion[0], batch.adhesion[1])  # seeds differ
+
+
+def test_seed_batches_share_one_program():
+    """One to eight seeds run as one padded batch of 8 (one program); the padding is dropped."""
+    assert [seed_batch(n) for n in (1, 3, 8, 9, 16, 17, 100)] == [8, 8, 8, 16, 16, 32, 128]
+    simulate_many("wet", [4])
+    programs = _simulate_jit._cache_size()
+    three = simulate_many("wet", [4, 5, 6])
+    assert _simulate_jit._cache_size() == programs and len(three) == 3
+    assert [r.truth["seed"] for r in three] == [4, 5, 6]
+    for k in ("wheel_speed", "traction_torque"):
+        assert three[0].columns[k].shape == (2000,)
+        np.testing.assert_array_equal(three[0].columns[k], simulate("wet", 4).columns[k])
 
 
 def test_recording_columns_and_truth():
@@ -70,7 +83,7 @@ def test_recording_columns_and_truth():
     truth = result.truth
     assert truth["scenario"] == "wet" and truth["seed"] == 5 and truth["effects"] == {}
     assert truth["params"] == {"kA": 1.0, "kS": 1.0, "mu0": 0.261, "A": 0.6858, "B": 0.2251}
-    assert truth["envelope"] == envelope(result)
+    assert "envelope" not in truth and result.envelope == envelope(result)  # computed on first use
     json.dumps(truth, allow_nan=False)
 
 

@@ -150,7 +150,8 @@ def run(args) -> int:
         _readable(result, "simulate" if args.vehicle is None else f"simulate --vehicle {args.vehicle}")
     save_recording(result.columns, result.vehicle, out)
     truth_path = out.with_suffix(".truth.json")
-    truth_path.write_text(json.dumps(result.truth, indent=2, allow_nan=False) + "\n", encoding="utf-8")
+    truth = {**result.truth, "envelope": result.envelope}
+    truth_path.write_text(json.dumps(truth, indent=2, allow_nan=False) + "\n", encoding="utf-8")
     summary = {
         "recording": str(out),
         "sidecar": str(out.with_suffix(".json")),
@@ -164,7 +165,7 @@ def run(args) -> int:
         "effects": result.truth["effects"],
         "coasting": result.truth["coasting"],
         "n_samples": len(result.columns["time"]),
-        "envelope": result.truth["envelope"],
+        "envelope": result.envelope,
     }
     if args.json:
         emit_json(summary)

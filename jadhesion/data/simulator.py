@@ -15,6 +15,7 @@ observer (:mod:`.observer`, paper variant) gives
 from __future__ import annotations
 
 import dataclasses
+import functools
 from typing import Sequence
 
 import jax
@@ -51,7 +52,7 @@ class SimulationResult:
         columns: numpy arrays of the recording, :data:`COLUMNS` in that order (the raw signals plus
             ``creepage``, ``slip_velocity``, ``adhesion`` = ``mu_hat``).
         vehicle: the :class:`Vehicle` (nominal radius).
-        truth: JSON-ready metadata: scenario, seed, true parameters, effects, noise, envelope.
+        truth: JSON-ready metadata: scenario, seed, true parameters, effects, noise.
         latent: noise-free true signals (``creepage``, ``slip_velocity``, ``adhesion``, ``torque``).
     """
 
@@ -59,6 +60,12 @@ class SimulationResult:
     vehicle: Vehicle
     truth: dict
     latent: dict
+
+    @functools.cached_property
+    def envelope(self) -> dict:
+        """The recording's :func:`~.scenarios.envelope` (paper units), computed on first use: it
+        smooths the recording, which most callers never need."""
+        return envelope(self)
 
 
 def _constants(
@@ -129,11 +136,19 @@ def _simulate_core(key, c, n_samples: int, substeps: int = SUBSTEPS, pitch: bool
     return columns, dict(creepage=s, slip_velocity=slip, adhesion=mu, torque=torque)
 
 
-#: One compiled program per (n_samples, substeps, load transfer on): a batch of seeds; single runs
-#: are batches of one.
+#: One compiled program per (seed batch, n_samples, substeps, load transfer on); the batch is padded
+#: to :func:`seed_batch` seeds, so one, three or eight seeds share a program.
 _simulate_jit = jax.jit(
     jax.vmap(_simulate_core, in_axes=(0, None, None, None, None)), static_argnums=(2, 3, 4)
 )
+#: Fewest seeds a batch is padded to (compilation, ~4 s, costs more than simulating 8 seeds).
+MIN_SEED_BATCH = 8
+
+
+def seed_batch(n_seeds: int) -> int:
+    """Seeds a batch of ``n_seeds`` is padded to: the next power of two, at least
+    :data:`MIN_SEED_BATCH` (at most twice the work, a handful of programs for any count)."""
+    return max(MIN_SEED_BATCH, 1 << (max(int(n_seeds), 1) - 1).bit_length())
 
 
 def simulate_arrays(
@@ -158,9 +173,13 @@ def simulate_arrays(
         raise ValueError(f"n_samples must be at least 100, got {n}")
     mags = fx.magnitudes(effects)
     c = _constants(scenario, vehicle, mags, n, model, period, braking)
-    keys = jax.vmap(jax.random.PRNGKey)(jnp.asarray(seeds))
+    seeds = np.asarray(seeds)
+    padded = np.concatenate([seeds, np.repeat(seeds[-1:], seed_batch(len(seeds)) - len(seeds))])
+    keys = jax.vmap(jax.random.PRNGKey)(jnp.asarray(padded))
     pitch = bool(mags[fx.INDEX["load_transfer"]] != 0.0)
-    columns, latent = _simulate_jit(keys, c, n, substeps_for(period), pitch)
+    columns, latent = jax.tree.map(
+        lambda a: a[: len(seeds)], _simulate_jit(keys, c, n, substeps_for(period), pitch)
+    )
     return scenario, mags, c, columns, latent, model
 
 
@@ -233,21 +252,20 @@ def simulate_many(
     sample_period: float = SAMPLE_PERIOD,
     braking: bool = False,
 ) -> list:
-    """:func:`simulate` for several seeds in one vmapped call; a list of results."""
+    """:func:`simulate` for several seeds in one vmapped call (the batch padded to
+    :func:`seed_batch` seeds); a list of results."""
     scenario, mags, c, columns, latent, model = simulate_arrays(
         scenario, seeds, effects, n_samples, vehicle, noise, sensors, sensor_noise, sample_period, braking
     )
-    results = []
-    for i, seed in enumerate(seeds):
-        result = SimulationResult(
+    return [
+        SimulationResult(
             columns={k: np.asarray(columns[k][i]) for k in COLUMNS},
             vehicle=vehicle,
             truth=_truth(scenario, seed, mags, vehicle, float(c["duration"]), model, sample_period, braking),
             latent={k: np.asarray(v[i]) for k, v in latent.items()},
         )
-        result.truth["envelope"] = envelope(result)
-        results.append(result)
-    return results
+        for i, seed in enumerate(seeds)
+    ]
 
 
 def simulate(
