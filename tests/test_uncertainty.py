@@ -117,10 +117,7 @@ def test_a_parameter_on_a_bound_stays_free_for_the_others():
     """The trust block reports no interval for a parameter on a bound but keeps it free in the
     covariance: the others' stderrs are the unconditional ones, not those conditional on it."""
     data = to_dataset(simulate_many("sand", [7], n_samples=1000)[0])  # sand: true kA = 1, A = 0
-    fit = fit_polach_batch(
-        jax.tree.map(lambda a: a[None], data), "lm", jax.random.split(jax.random.key(0), 1)
-    )
-    fit = jax.tree.map(lambda a: a[0], fit)
+    fit = fit_polach(data, "lm", jax.random.key(0))
     theta = np.asarray(fit.params)
     on_bound = (theta <= 1e-6) | (theta >= 1 - 1e-6)
     assert on_bound.any(), theta
@@ -143,10 +140,7 @@ def test_a_mis_scaled_recording_is_said_to_be_one():
     parameters sit on their bounds."""
     data = to_dataset(simulate_many("dry", [3], n_samples=1000)[0])
     data = data._replace(adhesion=3.0 * data.adhesion)
-    fit = jax.tree.map(
-        lambda a: a[0],
-        fit_polach_batch(jax.tree.map(lambda a: a[None], data), "lm", jax.random.split(jax.random.key(0), 1)),
-    )
+    fit = fit_polach(data, "lm", jax.random.key(0))
     codes = [w["code"] for w in fit_report(data, fit)["warnings"]]
     assert "implausible_adhesion" in codes, codes
 
