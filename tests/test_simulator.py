@@ -1,7 +1,8 @@
 """22E traction-test simulator: paper envelopes, true-parameter error, batching, effects, CLI.
 
-Every simulation here has the default length and a batch of 1 or 3 seeds, padded to the same
-batch of 8 (:func:`seed_batch`), so the whole module compiles the simulator once.
+Every simulation here has the default length: ``simulate``, ``simulate_many`` and
+``simulate_dataset`` pad their one or three seeds to a batch of 8 (:func:`padded_seeds`), and
+``simulate_batch`` runs its three as given, so the whole module compiles the simulator twice.
 """
 
 import json

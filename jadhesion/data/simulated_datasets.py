@@ -9,7 +9,7 @@ import jax
 import jax.numpy as jnp
 
 from .dataset import PolachDataset
-from .simulator import SimulationResult, simulate_arrays
+from .simulator import SimulationResult, padded_seeds, simulate_arrays
 from .vehicle import LOCO_22E, Vehicle
 
 
@@ -47,8 +47,14 @@ def simulate_dataset(
 ) -> PolachDataset:
     """The fitting dataset (recorded creep, slip, speed and observer output) of one recording."""
     data = simulate_batch(
-        scenario, [seed], effects, n_samples, vehicle=vehicle, sensors=sensors, sensor_noise=sensor_noise
-    )
+        scenario,
+        padded_seeds([seed]),
+        effects,
+        n_samples,
+        vehicle=vehicle,
+        sensors=sensors,
+        sensor_noise=sensor_noise,
+    )  # padded: one program for every single recording and small batch of simulate_many
     return jax.tree_util.tree_map(lambda a: a[0], data)
 
 
@@ -64,7 +70,9 @@ def simulate_batch(
 ) -> PolachDataset:
     """Datasets for many seeds in one vmapped, jitted call: every field gains a leading seed axis
     (``k_eps`` too, shape (n_seeds,)), so the result vmaps straight into a fit. Creep and slip are
-    the raw differences of the recorded speeds (:func:`.dataset.to_dataset` smooths them)."""
+    the raw differences of the recorded speeds (:func:`.dataset.to_dataset` smooths them). One
+    program per number of seeds: pad a varying count with :func:`.simulator.padded_seeds` (a
+    sweep's chunks have a fixed count)."""
     _, _, c, columns, _, _ = simulate_arrays(
         scenario, seeds, effects, n_samples, vehicle, True, sensors, sensor_noise
     )

@@ -136,8 +136,8 @@ def _simulate_core(key, c, n_samples: int, substeps: int = SUBSTEPS, pitch: bool
     return columns, dict(creepage=s, slip_velocity=slip, adhesion=mu, torque=torque)
 
 
-#: One compiled program per (seed batch, n_samples, substeps, load transfer on); the batch is padded
-#: to :func:`seed_batch` seeds, so one, three or eight seeds share a program.
+#: One compiled program per (number of seeds, n_samples, substeps, load transfer on). Callers whose
+#: count varies pad it (:func:`padded_seeds`); a sweep passes a fixed count of its own.
 _simulate_jit = jax.jit(
     jax.vmap(_simulate_core, in_axes=(0, None, None, None, None)), static_argnums=(2, 3, 4)
 )
@@ -149,6 +149,13 @@ def seed_batch(n_seeds: int) -> int:
     """Seeds a batch of ``n_seeds`` is padded to: the next power of two, at least
     :data:`MIN_SEED_BATCH` (at most twice the work, a handful of programs for any count)."""
     return max(MIN_SEED_BATCH, 1 << (max(int(n_seeds), 1) - 1).bit_length())
+
+
+def padded_seeds(seeds) -> np.ndarray:
+    """``seeds`` followed by repeats of the last up to :func:`seed_batch` of their count (the
+    results of the repeats are dropped by the caller)."""
+    seeds = np.asarray(seeds)
+    return np.concatenate([seeds, np.repeat(seeds[-1:], seed_batch(len(seeds)) - len(seeds))])
 
 
 def simulate_arrays(
@@ -173,13 +180,9 @@ def simulate_arrays(
         raise ValueError(f"n_samples must be at least 100, got {n}")
     mags = fx.magnitudes(effects)
     c = _constants(scenario, vehicle, mags, n, model, period, braking)
-    seeds = np.asarray(seeds)
-    padded = np.concatenate([seeds, np.repeat(seeds[-1:], seed_batch(len(seeds)) - len(seeds))])
-    keys = jax.vmap(jax.random.PRNGKey)(jnp.asarray(padded))
+    keys = jax.vmap(jax.random.PRNGKey)(jnp.asarray(seeds))
     pitch = bool(mags[fx.INDEX["load_transfer"]] != 0.0)
-    columns, latent = jax.tree.map(
-        lambda a: a[: len(seeds)], _simulate_jit(keys, c, n, substeps_for(period), pitch)
-    )
+    columns, latent = _simulate_jit(keys, c, n, substeps_for(period), pitch)
     return scenario, mags, c, columns, latent, model
 
 
@@ -255,7 +258,16 @@ def simulate_many(
     """:func:`simulate` for several seeds in one vmapped call (the batch padded to
     :func:`seed_batch` seeds); a list of results."""
     scenario, mags, c, columns, latent, model = simulate_arrays(
-        scenario, seeds, effects, n_samples, vehicle, noise, sensors, sensor_noise, sample_period, braking
+        scenario,
+        padded_seeds(seeds),
+        effects,
+        n_samples,
+        vehicle,
+        noise,
+        sensors,
+        sensor_noise,
+        sample_period,
+        braking,
     )
     return [
         SimulationResult(
