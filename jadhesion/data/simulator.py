@@ -257,17 +257,9 @@ def simulate_many(
 ) -> list:
     """:func:`simulate` for several seeds in one vmapped call (the batch padded to
     :func:`seed_batch` seeds); a list of results."""
+    padded = padded_seeds(seeds)
     scenario, mags, c, columns, latent, model = simulate_arrays(
-        scenario,
-        padded_seeds(seeds),
-        effects,
-        n_samples,
-        vehicle,
-        noise,
-        sensors,
-        sensor_noise,
-        sample_period,
-        braking,
+        scenario, padded, effects, n_samples, vehicle, noise, sensors, sensor_noise, sample_period, braking
     )
     return [
         SimulationResult(
