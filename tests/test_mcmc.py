@@ -361,6 +361,11 @@ def test_cli_posterior_json(tmp_path, capsys):
     assert set(doc["params"]) == {"kA", "kS", "mu0", "A", "B", "sigma"}
     assert set(doc["derived"]["mu_max"]) == {"median", "q05", "q95"}
     assert doc["diagnostics"]["warnings"] and set(doc["diagnostics"]["tau"]) == set(doc["params"])
+    # 300 steps are short of 50 τ: said at the top, not only in the diagnostics
+    assert doc["status"] == "chain_too_short"
+    (chain,) = [w for w in doc["warnings"] if w["code"] == "chain_too_short"]
+    tau = doc["diagnostics"]["tau"]
+    assert chain["params"][0] == max(tau, key=tau.get) and set(chain["params"]) <= set(tau)
     assert (tmp_path / "fig" / "posterior_corner.png").exists()
     bad = tmp_path / "bad.csv"
     bad.write_text("creepage,vehicle_speed\n0.1,1.0\n")
@@ -386,7 +391,7 @@ def test_cli_posterior_warns_of_the_data_as_fit_does(tmp_path, capsys):
     argv = ["posterior", str(path), "--walkers", "12", "--steps", "60", "--single-law"]  # the data's warnings
     assert main([*argv, "--json"]) == 0
     codes = [w["code"] for w in json.loads(capsys.readouterr().out)["warnings"]]
-    assert codes == ["few_samples", "narrow_creep_range", "peak_extrapolated"]
+    assert codes == ["few_samples", "narrow_creep_range", "peak_extrapolated", "chain_too_short"]
     assert main(argv) == 0
     assert "warning [narrow_creep_range]: the samples' creep spans only" in capsys.readouterr().out
 

@@ -1,10 +1,12 @@
 """``jadhesion posterior``'s work: LM start, emcee, diagnostics, figures (arguments: :mod:`.posterior`).
 
 Unknown sidecar keys are said on stderr as soon as the recording is loaded and listed in the
-document's ``warnings`` (``sidecar_unknown_key``, :func:`jadhesion.data.sidecar.sidecar_warning`;
-the chain's own warnings stay in ``diagnostics``), followed by what ``fit`` warns of the data
-themselves, by fit's own rules (:func:`data_warnings`): a posterior on such data is the prior's and
-the model's extrapolation however narrow its intervals."""
+document's ``warnings`` (``sidecar_unknown_key``, :func:`jadhesion.data.sidecar.sidecar_warning`),
+followed by what ``fit`` warns of the data themselves, by fit's own rules (:func:`data_warnings`): a
+posterior on such data is the prior's and the model's extrapolation however narrow its intervals;
+last, a chain shorter than 50 autocorrelation times (``chain_too_short``, naming the slow
+coordinates; its message stays in ``diagnostics.warnings`` too, and ``status`` says
+``"chain_too_short"`` instead of ``"converged"``)."""
 
 from __future__ import annotations
 
@@ -279,14 +281,16 @@ def run(args) -> int:
             weight=tempering["weight"],
             callback=progress,
         )
-    for message in result.diagnostics.warnings:
-        sys.stderr.write(f"jadhesion: warning: {message}\n")
+    chain = result.chain_warning()
+    if chain is not None and args.json:  # the text output lists it with the other warnings
+        sys.stderr.write(f"jadhesion: warning: {chain['message']}\n")
     if args.plot:
         out = Path(args.plot)
         out.mkdir(parents=True, exist_ok=True)
         corner_plot(result).savefig(out / "posterior_corner.png", dpi=90)
         predictive_plot(result, data).savefig(out / "posterior_predictive.png", dpi=110)
     doc = _document(result, theta0, note, "smoothed" if data.slip_sd is not None else "raw")
+    doc["status"] = "converged" if chain is None else chain["code"]
     doc["lm_start_status"] = status_of(start.status).label
     doc["tempering"] = tempering
     doc["slip_law"] = slip_law_used(args, data)
@@ -303,7 +307,7 @@ def run(args) -> int:
         )
     found += [] if sensitive is None else [sensitive]
     found += start_warning(start)
-    doc["warnings"] = ([] if sidecar is None else [sidecar]) + found  # the chain's: diagnostics
+    doc["warnings"] = ([] if sidecar is None else [sidecar]) + found + ([] if chain is None else [chain])
     if args.json:
         emit_json(doc)
         return 0

@@ -66,6 +66,18 @@ class PosteriorResult(NamedTuple):
     likelihood: str
     vehicle_speed: float  # speed [m/s] at which the derived quantities are evaluated (median |v|)
 
+    def chain_warning(self) -> Optional[dict]:
+        """``{code: "chain_too_short", params, message}`` when the kept chain is shorter than
+        :data:`MIN_TAU_MULTIPLE` autocorrelation times of some coordinates (``params``: those, the
+        slowest first), else None. The message is the diagnostics' own."""
+        if not self.diagnostics.warnings:
+            return None
+        tau = np.asarray(self.diagnostics.tau, float)
+        kept = self.chain.shape[0]
+        slow = [self.names[i] for i in np.argsort(-tau) if MIN_TAU_MULTIPLE * tau[i] > kept]
+        message = f"{self.diagnostics.warnings[-1]}; intervals from this chain are rough"
+        return {"code": "chain_too_short", "params": slow, "message": message}
+
     def theta(self) -> np.ndarray:
         """Samples of the five Polach parameters, (n_samples, 5)."""
         return self.samples[:, :5]
