@@ -237,6 +237,20 @@ def test_a_chain_extended_to_fifty_autocorrelation_times_is_one_long_run():
     assert capped.steps == 400 and capped.warnings
 
 
+def test_a_chain_whose_walkers_never_move_is_not_mixed():
+    """Every proposal rejected: τ is undefined (NaN, no NumPy warning), and the chain says it did
+    not mix instead of passing the 50 τ check that NaN never fails."""
+    p0 = np.random.default_rng(2).standard_normal((12, 2))
+    start = {tuple(row) for row in p0}
+    log_prob = lambda x: np.array([0.0 if tuple(row) in start else -np.inf for row in x])  # noqa: E731
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        with pytest.warns(ChainTooShortWarning, match="did not mix"):
+            chain, diag = run_ensemble(log_prob, p0, 60, 0, max_steps=600)
+    assert np.all(np.isnan(diag.tau)) and diag.steps == 60 and "did not mix" in diag.warnings[0]
+    np.testing.assert_array_equal(chain[-1], p0)
+
+
 def test_seed_reproducible_and_short_chain_warns(data):
     theta0 = np.asarray(lm_optimum(data))
     with pytest.warns(ChainTooShortWarning):

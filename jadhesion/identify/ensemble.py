@@ -43,8 +43,11 @@ class Diagnostics(NamedTuple):
 
 def integrated_time(chain: np.ndarray) -> np.ndarray:
     """emcee's integrated autocorrelation time per coordinate of ``chain`` (steps, walkers, d),
-    computed whatever the chain length (``tol=0``; judge it against the length yourself)."""
-    return emcee.autocorr.integrated_time(chain, tol=0)
+    computed whatever the chain length (``tol=0``; judge it against the length yourself). NaN for a
+    coordinate in which some walker never moved (its autocorrelation is 0/0), without NumPy's
+    warning: :func:`run_ensemble` reports it as a chain that did not mix."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return emcee.autocorr.integrated_time(chain, tol=0)
 
 
 def run_ensemble(
@@ -91,7 +94,14 @@ def run_ensemble(
         total, state = min(max_steps, max(int(1.2 * need), int(1.25 * done))), sampler.get_last_sample()
     seconds = time.perf_counter() - start
     messages = []
-    if chain.shape[0] < MIN_TAU_MULTIPLE * tau_max:
+    if not np.all(np.isfinite(tau)):
+        messages.append(
+            f"the chain did not mix: in {int(np.sum(~np.isfinite(tau)))} of {dim} coordinates a walker "
+            "never moved (autocorrelation time undefined); start the walkers elsewhere or check the "
+            "posterior's support"
+        )
+        warnings.warn(messages[-1], ChainTooShortWarning, stacklevel=3)
+    elif chain.shape[0] < MIN_TAU_MULTIPLE * tau_max:
         messages.append(
             f"chain of {chain.shape[0]} kept steps is shorter than {MIN_TAU_MULTIPLE} "
             f"autocorrelation times (tau_max = {tau_max:.1f} steps): run at least {need} steps"

@@ -68,13 +68,15 @@ class PosteriorResult(NamedTuple):
 
     def chain_warning(self) -> Optional[dict]:
         """``{code: "chain_too_short", params, message}`` when the kept chain is shorter than
-        :data:`MIN_TAU_MULTIPLE` autocorrelation times of some coordinates (``params``: those, the
-        slowest first), else None. The message is the diagnostics' own."""
+        :data:`MIN_TAU_MULTIPLE` autocorrelation times of some coordinates or did not mix in some
+        (a walker that never moved: τ undefined) — ``params``: those, the unmixed and then the
+        slowest first — else None. The message is the diagnostics' own."""
         if not self.diagnostics.warnings:
             return None
         tau = np.asarray(self.diagnostics.tau, float)
+        order = np.argsort(-np.where(np.isfinite(tau), tau, np.inf))
         kept = self.chain.shape[0]
-        slow = [self.names[i] for i in np.argsort(-tau) if MIN_TAU_MULTIPLE * tau[i] > kept]
+        slow = [self.names[i] for i in order if not np.isfinite(tau[i]) or MIN_TAU_MULTIPLE * tau[i] > kept]
         message = f"{self.diagnostics.warnings[-1]}; intervals from this chain are rough"
         return {"code": "chain_too_short", "params": slow, "message": message}
 
