@@ -50,6 +50,14 @@ def integrated_time(chain: np.ndarray) -> np.ndarray:
         return emcee.autocorr.integrated_time(chain, tol=0)
 
 
+def unmixed(tau: np.ndarray, kept: int) -> np.ndarray:
+    """Per coordinate (bool, like ``tau``): a chain of ``kept`` steps holds fewer than
+    :data:`MIN_TAU_MULTIPLE` of its autocorrelation times, or τ is undefined (a walker never
+    moved). The one rule behind :class:`ChainTooShortWarning`."""
+    tau = np.asarray(tau, float)
+    return ~np.isfinite(tau) | (kept < MIN_TAU_MULTIPLE * np.where(np.isfinite(tau), tau, 0.0))
+
+
 def run_ensemble(
     log_prob: Callable[[np.ndarray], np.ndarray],
     p0: np.ndarray,
@@ -94,14 +102,14 @@ def run_ensemble(
         total, state = min(max_steps, max(int(1.2 * need), int(1.25 * done))), sampler.get_last_sample()
     seconds = time.perf_counter() - start
     messages = []
-    if not np.all(np.isfinite(tau)):
+    if not np.all(np.isfinite(tau)):  # unmixed(), first case
         messages.append(
             f"the chain did not mix: in {int(np.sum(~np.isfinite(tau)))} of {dim} coordinates a walker "
             "never moved (autocorrelation time undefined); start the walkers elsewhere or check the "
             "posterior's support"
         )
         warnings.warn(messages[-1], ChainTooShortWarning, stacklevel=3)
-    elif chain.shape[0] < MIN_TAU_MULTIPLE * tau_max:
+    elif np.any(unmixed(tau, chain.shape[0])):
         messages.append(
             f"chain of {chain.shape[0]} kept steps is shorter than {MIN_TAU_MULTIPLE} "
             f"autocorrelation times (tau_max = {tau_max:.1f} steps): run at least {need} steps"

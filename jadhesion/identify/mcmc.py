@@ -29,6 +29,7 @@ from .ensemble import (  # noqa: F401
     Diagnostics,
     integrated_time,
     run_ensemble,
+    unmixed,
 )
 from .likelihood import (
     AUTOREGRESSIVE,
@@ -74,9 +75,8 @@ class PosteriorResult(NamedTuple):
         if not self.diagnostics.warnings:
             return None
         tau = np.asarray(self.diagnostics.tau, float)
-        order = np.argsort(-np.where(np.isfinite(tau), tau, np.inf))
-        kept = self.chain.shape[0]
-        slow = [self.names[i] for i in order if not np.isfinite(tau[i]) or MIN_TAU_MULTIPLE * tau[i] > kept]
+        short = unmixed(tau, self.chain.shape[0])
+        slow = [self.names[i] for i in np.argsort(-np.where(np.isfinite(tau), tau, np.inf)) if short[i]]
         message = f"{self.diagnostics.warnings[-1]}; intervals from this chain are rough"
         return {"code": "chain_too_short", "params": slow, "message": message}
 
