@@ -17,8 +17,10 @@ LM's under the other slip law): the share of 90 % intervals holding the truth of
 the derived μ_max, creep_opt (at the recording's median speed, from the true parameters; a truth on
 a face of the prior box is left out of that parameter's share and counted), the median interval
 width, the median |posterior median − truth|, and per recording the truth, the interval, the
-median and the ``tempering`` block (κ, tail check); per recording, the maximum-likelihood
-Student-t ν of the residuals at the truth (``tails_at_truth``; on the normal slip law).
+median, the ``tempering`` block (κ, tail check), the status and the chain's run (slowest τ, steps,
+acceptance, seconds; per cell: converged runs, median slowest τ and seconds); per recording, the
+maximum-likelihood Student-t ν of the residuals at the truth (``tails_at_truth``; on the normal slip
+law).
 ``--slip-law`` is passed to every run. The JSON records the git commit, the settings and
 ``os.getloadavg()``.
 """
@@ -130,6 +132,17 @@ def _scored(q: dict, truth: dict, suffix: str = "") -> dict:
     }
 
 
+def _chain(diag: dict) -> dict:
+    """The sampler's run: the slowest coordinate's τ (steps), steps run, acceptance, wall time."""
+    tau = [t for t in diag["tau"].values() if t is not None and np.isfinite(t)]
+    return {
+        "tau_max": max(tau) if tau else None,
+        "steps": diag["steps"],
+        "acceptance": diag["acceptance"],
+        "seconds": diag["seconds"],
+    }
+
+
 def _tail_pick_rows(rows: list) -> list:
     """Per recording, the tempered run of the likelihood the tail check picks (module docstring)."""
     runs = {(r["generator"], r["case"], r["likelihood"]): r for r in rows}
@@ -155,6 +168,11 @@ def summarise(rows: list) -> dict:
             cell = {"n": len(sel), "failed": len(sel) - len(ok), "coverage90": {}, "median_width90": {}}
             cell["median_abs_error"] = {}
             cell["on_face"] = {q: sum(r["hit"][q] is None for r in ok) for q in FACE_PARAMS}
+            ran = [r for r in ok if "chain" in r]
+            if ran:  # how well the chains mixed: converged = 50 τ of every coordinate kept
+                cell["converged"] = sum(r["status"] == "converged" for r in ran)
+                cell["median_tau_max"] = float(np.median([r["chain"]["tau_max"] or np.nan for r in ran]))
+                cell["median_seconds"] = float(np.median([r["chain"]["seconds"] for r in ran]))
             for q in QUANTITIES if ok else ():
                 hits = [r["hit"][q] for r in ok if r["hit"][q] is not None]
                 cell["coverage90"][q] = float(np.mean(hits)) if hits else None
@@ -210,6 +228,7 @@ def main(argv=None):
                 for name, suffix in ((lik, ""), (f"{lik}/own", "_posterior")):
                     row = _scored(q, truth, suffix)
                     row.update(generator=gen, case=label, likelihood=name, tempering=res["tempering"])
+                    row.update(status=res["status"], chain=_chain(res["diagnostics"]))
                     doc["rows"].append(row)
                     print(gen, label, name, row["hit"], flush=True)
             doc["summary"] = summarise(doc["rows"] + _tail_pick_rows(doc["rows"]))
