@@ -397,8 +397,9 @@ def test_misspelled_sidecar_keys_are_said_by_fit_online_and_posterior(tmp_path, 
         first = doc["warnings"][0]
         assert first["code"] == "sidecar_unknown_key" and note in first["message"], command
         assert first["params"] == ["axle_lod_kg", "wheel_radius"]
-    assert main(["fit", str(path), "--method", "lm", one_law, "--json"]) == 0
-    assert json.loads(capsys.readouterr().out)["vehicle"] == {
+        if command == "fit":
+            vehicle = doc["vehicle"]
+    assert vehicle == {
         "name": "typo",
         "axle_load_kg": LOCO_22E.axle_load_kg,
         "wheel_radius_m": LOCO_22E.wheel_radius_m,
