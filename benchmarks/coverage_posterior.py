@@ -21,7 +21,7 @@ median, the ``tempering`` block (κ, tail check), the status and the chain's run
 acceptance, seconds; per cell: converged runs, median slowest τ and seconds); per recording, the
 maximum-likelihood Student-t ν of the residuals at the truth (``tails_at_truth``; on the normal slip
 law).
-``--slip-law`` is passed to every run. The JSON records the git commit, the settings and
+``--slip-law`` and ``--moves`` are passed to every run. The JSON records the git commit, the settings and
 ``os.getloadavg()``.
 """
 
@@ -101,11 +101,11 @@ def tails_at_truth(path: Path, truth: dict) -> dict:
     return {"nu_ml": float(nu), "scale_ml": float(scale)}
 
 
-def _run(path: Path, entry: str, steps: int, walkers: int, slip_law: str = "normal") -> dict | None:
+def _run(path: Path, entry: str, steps: int, walkers: int, slip_law: str, moves: str) -> dict | None:
     buf = io.StringIO()
     likelihood, _, mode = entry.partition(":")
-    args = ["posterior", str(path), "--json", "--steps", str(steps), "--walkers", str(walkers)]
-    args += ["--slip-law", slip_law]
+    args = ["posterior", str(path), "--json", "--walkers", str(walkers), "--moves", moves]
+    args += ["--slip-law", slip_law] + (["--steps", str(steps)] if steps > 0 else [])
     args += ["--likelihood", likelihood] + (["--temper"] if mode == "tempered" else [])
     with contextlib.redirect_stdout(buf), contextlib.redirect_stderr(io.StringIO()):
         code = cli(args)
@@ -191,7 +191,13 @@ def summarise(rows: list) -> dict:
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--per", type=int, default=8, help="recordings per scenario of ours (foreign: 3×)")
-    p.add_argument("--steps", type=int, default=2000)
+    p.add_argument(
+        "--steps",
+        type=int,
+        default=2000,
+        help="steps per chain; 0: the command's default (5000, extended until 50 τ, up to 20000)",
+    )
+    p.add_argument("--moves", default="stretch", help="emcee's moves (posterior --moves)")
     p.add_argument("--walkers", type=int, default=32)
     p.add_argument("--likelihoods", default="gauss:tempered,student:tempered")
     p.add_argument("--slip-law", default="normal", choices=SLIP_LAWS)
@@ -216,7 +222,7 @@ def main(argv=None):
         for gen, label, path, truth in cases:
             doc["tails_at_truth"].append({"generator": gen, "case": label, **tails_at_truth(path, truth)})
             for lik in args.likelihoods.split(","):
-                res = _run(path, lik, args.steps, args.walkers, args.slip_law)
+                res = _run(path, lik, args.steps, args.walkers, args.slip_law, args.moves)
                 if res is None:
                     doc["rows"].append(
                         {"generator": gen, "case": label, "likelihood": lik, "truth": truth, "hit": None}

@@ -15,9 +15,10 @@ from scipy import stats
 
 from jadhesion import LOCO_22E
 from jadhesion.cli import main
+from jadhesion.cli.posterior import MOVES as OFFERED_MOVES
 from jadhesion.data.recording import save_recording
 from jadhesion.experiments.mcmc_row import table2_row
-from jadhesion.identify.ensemble import ChainTooShortWarning, Diagnostics, run_ensemble
+from jadhesion.identify.ensemble import MOVES, ChainTooShortWarning, Diagnostics, run_ensemble
 from jadhesion.identify.laplace import POSTERIOR_SAMPLES, laplace_covariance, lm_optimum, thinning
 from jadhesion.identify.likelihood import (
     LOG_SCALE_BOUNDS,
@@ -195,12 +196,17 @@ def test_laplace_scale_maximum_is_mae(data):
     assert ll[1] > ll[0] and ll[1] > ll[2]
 
 
-def test_wrapper_samples_a_known_gaussian():
+@pytest.mark.parametrize("moves", sorted(MOVES))
+def test_wrapper_samples_a_known_gaussian(moves):
+    """Every move set samples a correlated Gaussian: mean, covariance and a KS test of one
+    coordinate at every τ-th step; the command line offers exactly these moves."""
+    assert set(OFFERED_MOVES) == set(MOVES)
     cov = np.array([[1.0, 0.8, 0.0], [0.8, 1.0, -0.3], [0.0, -0.3, 2.0]])
     prec = np.linalg.inv(cov)
     log_prob = lambda x: -0.5 * np.einsum("wi,ij,wj->w", x, prec, x)  # noqa: E731
     p0 = 1e-3 * np.random.default_rng(0).standard_normal((32, 3))
-    chain, diag = run_ensemble(log_prob, p0, 3000, 0, burn=500)
+    chain, diag = run_ensemble(log_prob, p0, 3000, 0, burn=500, moves=moves)
+    assert diag.moves == moves
     samples = chain.reshape(-1, 3)
     assert 0.2 < diag.acceptance < 0.9
     tol = 5 * np.sqrt(np.diag(cov) / diag.ess)  # ESS-aware: 5 standard errors
@@ -270,7 +276,9 @@ def test_posterior_agrees_with_laplace_where_well_identified(data, posterior):
     np.testing.assert_allclose(ratio[:3], 1.0, atol=0.25)  # kA, kS, mu0: Gaussian, interior
     for name, q in posterior.params.items():
         assert q["q05"] < q["median"] < q["q95"], name
-    assert posterior.params["sigma"]["q05"] < 0.013 < posterior.params["sigma"]["q95"]
+    # the noise sd's truth in its 99 % interval (a 90 % one misses it one run in ten by design)
+    sigma = posterior.samples[:, posterior.names.index("sigma")]
+    assert np.quantile(sigma, 0.005) < 0.013 < np.quantile(sigma, 0.995)
 
 
 def _coverage_sets(m, seed):

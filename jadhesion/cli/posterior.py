@@ -53,6 +53,9 @@ MIN_WALKERS, MAX_WALKERS = 12, 512
 #: The largest chain ``--walkers`` × ``--steps`` may make, walkers × steps × coordinates × 8 bytes
 #: (1 GiB; the process's peak grew by about 1.5× the chain, measured).
 MAX_CHAIN_BYTES = 2**30
+#: emcee's move sets offered (:data:`jadhesion.identify.ensemble.MOVES`; literal so ``--help``
+#: imports no sampler code).
+MOVES = ("stretch", "de")
 
 
 def register(sub) -> None:
@@ -97,6 +100,13 @@ def register(sub) -> None:
     )
     add_slip_law_option(p)
     add_single_law_option(p, "90 %% intervals (q05, q95)")
+    p.add_argument(
+        "--moves",
+        choices=MOVES,
+        default="stretch",
+        help="emcee's moves: stretch (default: the affine-invariant stretch move) or de "
+        "(differential evolution, 80 %% DEMove and 20 %% DESnookerMove)",
+    )
     p.add_argument("--seed", type=int, default=0, help="0 to 2**63 - 1 (default 0)")
     p.add_argument("--json", action="store_true", help="one JSON document on stdout")
     add_recording_options(p)

@@ -176,6 +176,7 @@ def _document(result, theta0, note="", creep="raw") -> dict:
         "derived": result.derived,
         "vehicle_speed": result.vehicle_speed,
         "diagnostics": {
+            "moves": diag.moves,
             "acceptance": diag.acceptance,
             "tau": dict(zip(result.names, diag.tau.tolist(), strict=True)),
             "ess": dict(zip(result.names, diag.ess.tolist(), strict=True)),
@@ -280,6 +281,7 @@ def run(args) -> int:
             obs=obs,
             weight=tempering["weight"],
             callback=progress,
+            moves=args.moves,
         )
     chain = result.chain_warning()
     if chain is not None and args.json:  # the text output lists it with the other warnings

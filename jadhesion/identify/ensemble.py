@@ -1,6 +1,6 @@
 """A thin, reproducible driver around ``emcee.EnsembleSampler`` for vectorised log-probabilities.
 
-``run_ensemble(log_prob, p0, steps, seed)`` runs the affine-invariant stretch move with
+``run_ensemble(log_prob, p0, steps, seed)`` runs one of emcee's move sets (:data:`MOVES`) with
 ``vectorize=True`` (``log_prob`` maps a (W, d) array of walkers to W values in one call), discards
 burn-in, thins, and measures the integrated autocorrelation time τ per coordinate. With
 ``max_steps`` the chain is extended in rounds until it holds ``MIN_TAU_MULTIPLE`` τ_max kept
@@ -21,6 +21,14 @@ import numpy as np
 #: A chain shorter than this many integrated autocorrelation times triggers a warning.
 MIN_TAU_MULTIPLE = 50
 
+#: emcee's moves by name, each with its probability: ``"stretch"``, the affine-invariant stretch
+#: move (Goodman & Weare 2010); ``"de"``, differential evolution (ter Braak & Vrugt 2008) in the mix
+#: emcee's documentation suggests, 80 % ``DEMove`` and 20 % ``DESnookerMove``.
+MOVES = {
+    "stretch": ((emcee.moves.StretchMove(), 1.0),),
+    "de": ((emcee.moves.DEMove(), 0.8), (emcee.moves.DESnookerMove(), 0.2)),
+}
+
 
 class ChainTooShortWarning(UserWarning):
     """The chain is shorter than ``MIN_TAU_MULTIPLE`` autocorrelation times: intervals are rough."""
@@ -39,6 +47,7 @@ class Diagnostics(NamedTuple):
     seconds: float  # wall time of the sampling loop [s]
     warnings: tuple  # messages (e.g. chain too short)
     compile_seconds: float = 0.0  # first (compiling) log-probability calls, outside ``seconds``
+    moves: str = "stretch"  # the move set run, a name in MOVES
 
 
 def integrated_time(chain: np.ndarray) -> np.ndarray:
@@ -69,9 +78,11 @@ def run_ensemble(
     max_steps: Optional[int] = None,
     callback: Optional[Callable[[int, int], None]] = None,
     callback_every: int = 100,
+    moves: str = "stretch",
 ):
-    """Run emcee from walkers ``p0`` (W, d); returns ``(chain, diagnostics)`` with ``chain`` of shape
-    (kept steps, W, d) after discarding ``burn`` steps and keeping every ``thin``-th.
+    """Run emcee from walkers ``p0`` (W, d) with the :data:`MOVES` named ``moves``; returns
+    ``(chain, diagnostics)`` with ``chain`` of shape (kept steps, W, d) after discarding ``burn``
+    steps and keeping every ``thin``-th.
 
     ``seed`` (an int or a NumPy Generator) fixes emcee's random state, so runs are reproducible.
     ``max_steps`` (> ``steps``): extend the chain while it is shorter than ``MIN_TAU_MULTIPLE``
@@ -83,7 +94,7 @@ def run_ensemble(
         raise ValueError(f"burn must be in [0, steps), got burn={burn}, steps={steps}")
     rng = np.random.default_rng(seed)
     walkers, dim = p0.shape
-    sampler = emcee.EnsembleSampler(walkers, dim, log_prob, vectorize=True)
+    sampler = emcee.EnsembleSampler(walkers, dim, log_prob, moves=list(MOVES[moves]), vectorize=True)
     sampler.random_state = np.random.RandomState(int(rng.integers(2**32))).get_state()
     start = time.perf_counter()
     done, total, state = 0, steps, p0
@@ -126,4 +137,5 @@ def run_ensemble(
         thin,
         seconds,
         tuple(messages),
+        moves=moves,
     )

@@ -166,6 +166,7 @@ def sample_posterior(
     callback_every: int = 100,
     obs: Optional[ObserverTerms] = None,
     weight: float = 1.0,
+    moves: str = "stretch",
 ) -> PosteriorResult:
     """Sample the posterior of ``[kA, kS, mu0, A, B]`` (and the noise scale) with emcee.
 
@@ -187,6 +188,7 @@ def sample_posterior(
         max_steps: extend the chain until it holds 50 autocorrelation times, up to this many
             steps in all (:func:`.ensemble.run_ensemble`); ``None``: exactly ``steps``.
         callback: ``callback(done, total)`` every ``callback_every`` steps (progress).
+        moves: emcee's move set, a name in :data:`.ensemble.MOVES`.
         obs: :class:`ObserverTerms` of the recording (``"observer"`` only).
         weight: the log-likelihood's tempering 1/κ (1: none): with κ the residuals' colour factor
             (:func:`jadhesion.identify.uncertainty.colour_factor`) the posterior counts n/κ
@@ -218,6 +220,7 @@ def sample_posterior(
         max_steps=max_steps,
         callback=callback,
         callback_every=callback_every,
+        moves=moves,
     )
     diagnostics = diagnostics._replace(compile_seconds=compile_seconds)
     if fixed_scale is None:
