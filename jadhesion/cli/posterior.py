@@ -105,7 +105,7 @@ def register(sub) -> None:
         choices=MOVES,
         default="stretch",
         help="emcee's moves: stretch (default: the affine-invariant stretch move) or de "
-        "(differential evolution, 80 %% DEMove and 20 %% DESnookerMove)",
+        "(differential evolution, emcee's DEMove)",
     )
     p.add_argument("--seed", type=int, default=0, help="0 to 2**63 - 1 (default 0)")
     p.add_argument("--json", action="store_true", help="one JSON document on stdout")
