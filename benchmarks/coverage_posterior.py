@@ -197,7 +197,7 @@ def main(argv=None):
         default=2000,
         help="steps per chain; 0: the command's default (5000, extended until 50 τ, up to 20000)",
     )
-    p.add_argument("--moves", default="stretch", help="emcee's moves (posterior --moves)")
+    p.add_argument("--moves", default="de", help="emcee's moves (posterior --moves)")
     p.add_argument("--walkers", type=int, default=32)
     p.add_argument("--likelihoods", default="gauss:tempered,student:tempered")
     p.add_argument("--slip-law", default="normal", choices=SLIP_LAWS)

@@ -55,7 +55,7 @@ MIN_WALKERS, MAX_WALKERS = 12, 512
 MAX_CHAIN_BYTES = 2**30
 #: emcee's move sets offered (:data:`jadhesion.identify.ensemble.MOVES`; literal so ``--help``
 #: imports no sampler code).
-MOVES = ("stretch", "de")
+MOVES = ("de", "stretch")
 
 
 def register(sub) -> None:
@@ -103,9 +103,9 @@ def register(sub) -> None:
     p.add_argument(
         "--moves",
         choices=MOVES,
-        default="stretch",
-        help="emcee's moves: stretch (default: the affine-invariant stretch move) or de "
-        "(differential evolution, emcee's DEMove)",
+        default="de",
+        help="emcee's moves: de (default: differential evolution, emcee's DEMove) or stretch "
+        "(the affine-invariant stretch move, the default before 2026-12-02)",
     )
     p.add_argument("--seed", type=int, default=0, help="0 to 2**63 - 1 (default 0)")
     p.add_argument("--json", action="store_true", help="one JSON document on stdout")

@@ -166,7 +166,7 @@ def sample_posterior(
     callback_every: int = 100,
     obs: Optional[ObserverTerms] = None,
     weight: float = 1.0,
-    moves: str = "stretch",
+    moves: str = "de",
 ) -> PosteriorResult:
     """Sample the posterior of ``[kA, kS, mu0, A, B]`` (and the noise scale) with emcee.
 
