@@ -188,11 +188,15 @@ def test_reproduce_table2_json_rows_include_mcmc():
     for row in (r for r in rows["clean"] if r["method"] == "mcmc"):
         assert row["likelihood"] == doc["mcmc"]["likelihood"] and row["paper"] is None
         assert set(row["width90"]) >= {"kA", "kS", "mu0", "A", "B", "mu_max", "creep_opt"}
-        assert (
-            row["iterations"] >= row["steps_run"] // 3
-            and row["evaluations"] == row["iterations"] * row["walkers"]
-        )
-        assert 0.005 < row["error"] < 0.05 and row["seconds"] > 0
+        if row["tau_max"] is None:  # a walker never moved in these few steps: no cost estimate
+            assert row["iterations"] is None and row["seconds"] is None and not row["converged"]
+        else:
+            assert (
+                row["iterations"] >= row["steps_run"] // 3
+                and row["evaluations"] == row["iterations"] * row["walkers"]
+            )
+            assert row["seconds"] > 0
+        assert 0.005 < row["error"] < 0.05
         assert row["status"] == ("converged" if row["converged"] else "max_steps")
     # Realistic sensors beside them (smoothed creep, as `fit` does): every cell, with its status; the
     # paper has no such numbers, and the sensors' noise adds to the floor of every scenario.

@@ -86,7 +86,8 @@ def table2_row(
     plus ``50 τ_max`` steps, seconds scaled from this run's warm wall time (``converged``: this run
     was already that long; otherwise τ comes from a shorter chain and the cost is an estimate);
     ``width90``: 90 % interval widths of the parameters and derived quantities; with ``truth``,
-    ``param_abs_error`` |median − truth|.
+    ``param_abs_error`` |median − truth|. A chain in which a walker never moved has no τ: then
+    ``tau_max``, ``steps``, ``evaluations`` and ``seconds`` are None (no estimate of the cost).
     """
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ChainTooShortWarning)
@@ -103,21 +104,22 @@ def table2_row(
         )
     d = result.diagnostics
     median = np.array([result.params[n]["median"] for n in PARAM_NAMES])
-    needed = int(np.ceil(d.burn + MIN_TAU_MULTIPLE * np.max(d.tau) * d.thin))
+    mixed = bool(np.all(np.isfinite(d.tau)))  # else unmixed(): a walker never moved
+    needed = int(np.ceil(d.burn + MIN_TAU_MULTIPLE * np.max(d.tau) * d.thin)) if mixed else None
     row = {
         "method": "mcmc",
         "likelihood": likelihood,
         "error": float(polach_mae(jnp.asarray(median), data)),
         "params": dict(zip(PARAM_NAMES, median.tolist(), strict=True)),
         "steps": needed,
-        "evaluations": needed * walkers,
-        "seconds": d.seconds * needed / d.steps,
+        "evaluations": needed * walkers if mixed else None,
+        "seconds": d.seconds * needed / d.steps if mixed else None,
         "converged": not d.warnings,
         "steps_run": d.steps,
         "seconds_run": d.seconds,
         "log_prob_compile_seconds": d.compile_seconds,
         "walkers": walkers,
-        "tau_max": float(np.max(d.tau)),
+        "tau_max": float(np.max(d.tau)) if mixed else None,
         "acceptance": d.acceptance,
         "width90": {n: q["q95"] - q["q05"] for n, q in {**result.params, **result.derived}.items()},
         "interval90": {n: [q["q05"], q["q95"]] for n, q in {**result.params, **result.derived}.items()},

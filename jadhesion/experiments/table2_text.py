@@ -70,8 +70,10 @@ def format_text(result) -> str:
                         "sensors": r.get("sensors", "clean"),
                         "scenario": r["scenario"],
                         **{n: r["width90"][n] for n in names},
-                        "tau": f"{r['tau_max']:.0f}",
-                        "converged": "yes" if r["converged"] else "estimate",
+                        "tau": "-" if r["tau_max"] is None else f"{r['tau_max']:.0f}",
+                        "converged": "yes"
+                        if r["converged"]
+                        else ("estimate" if r["tau_max"] is not None else "did not mix"),
                     }
                     for r in mc
                 ],
