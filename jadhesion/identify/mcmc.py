@@ -1,4 +1,5 @@
-"""Bayesian posterior of the Polach parameters with emcee's affine-invariant ensemble sampler.
+"""Bayesian posterior of the Polach parameters with emcee's ensemble sampler (differential-evolution
+moves by default, :data:`jadhesion.identify.ensemble.MOVES`).
 
 The whole ensemble's log-probability is one jitted, vmapped JAX call
 (:func:`jadhesion.identify.likelihood.ensemble_log_prob`, ``vectorize=True``); priors and
