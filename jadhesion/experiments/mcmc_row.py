@@ -16,7 +16,7 @@ import numpy as np
 
 from ..data.dataset import PolachDataset
 from ..data.scenarios import get_scenario
-from ..identify.ensemble import MIN_TAU_MULTIPLE, ChainTooShortWarning
+from ..identify.ensemble import ChainTooShortWarning, steps_needed
 from ..identify.laplace import initial_spread, observer_residual
 from ..identify.lm import box_lm
 from ..identify.mcmc import sample_posterior
@@ -104,8 +104,8 @@ def table2_row(
         )
     d = result.diagnostics
     median = np.array([result.params[n]["median"] for n in PARAM_NAMES])
-    mixed = bool(np.all(np.isfinite(d.tau)))  # else unmixed(): a walker never moved
-    needed = int(np.ceil(d.burn + MIN_TAU_MULTIPLE * np.max(d.tau) * d.thin)) if mixed else None
+    needed = steps_needed(d.tau, d.burn, d.thin)
+    mixed = needed is not None
     row = {
         "method": "mcmc",
         "likelihood": likelihood,

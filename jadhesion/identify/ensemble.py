@@ -72,6 +72,14 @@ def unmixed(tau: np.ndarray, kept: int) -> np.ndarray:
     return ~np.isfinite(tau) | (kept < MIN_TAU_MULTIPLE * np.where(np.isfinite(tau), tau, 0.0))
 
 
+def steps_needed(tau: np.ndarray, burn: int, thin: int) -> Optional[int]:
+    """Steps a chain with autocorrelation times ``tau`` (kept steps) must run, burn-in included, to
+    keep :data:`MIN_TAU_MULTIPLE` of the slowest; None where some τ is undefined (a walker never
+    moved: no length would do)."""
+    tau_max = np.max(tau)
+    return int(math.ceil(MIN_TAU_MULTIPLE * tau_max * thin + burn)) if np.isfinite(tau_max) else None
+
+
 def run_ensemble(
     log_prob: Callable[[np.ndarray], np.ndarray],
     p0: np.ndarray,
@@ -111,14 +119,13 @@ def run_ensemble(
         chain = sampler.get_chain(discard=burn, thin=thin)
         # tol=0: emcee logs nothing; the chain-length check is ours (ChainTooShortWarning).
         tau = integrated_time(chain)
-        tau_max = np.max(tau)  # NaN for a coordinate that never moved: nothing to extend for
-        need = int(math.ceil(MIN_TAU_MULTIPLE * tau_max * thin + burn)) if np.isfinite(tau_max) else done
-        if max_steps is None or done >= max_steps or done >= need:
+        need = steps_needed(tau, burn, thin)  # None for a coordinate that never moved: nothing to extend for
+        if max_steps is None or done >= max_steps or need is None or done >= need:
             break
         total, state = min(max_steps, max(int(1.2 * need), int(1.25 * done))), sampler.get_last_sample()
     seconds = time.perf_counter() - start
     messages = []
-    if not np.all(np.isfinite(tau)):  # unmixed(), first case
+    if need is None:  # unmixed(), first case
         messages.append(
             f"the chain did not mix: in {int(np.sum(~np.isfinite(tau)))} of {dim} coordinates a walker "
             "never moved (autocorrelation time undefined); start the walkers elsewhere or check the "
@@ -128,7 +135,7 @@ def run_ensemble(
     elif np.any(unmixed(tau, chain.shape[0])):
         messages.append(
             f"chain of {chain.shape[0]} kept steps is shorter than {MIN_TAU_MULTIPLE} "
-            f"autocorrelation times (tau_max = {tau_max:.1f} steps): run at least {need} steps"
+            f"autocorrelation times (tau_max = {np.max(tau):.1f} steps): run at least {need} steps"
         )
         warnings.warn(messages[-1], ChainTooShortWarning, stacklevel=3)
     n = chain.shape[0] * walkers
