@@ -35,7 +35,8 @@ recording (:func:`noise_model`: white level σ, quantisation step q); the target
 the same latent derivative in recording and replica
 (:func:`jadhesion.diagnose.signals.from_columns`), is then ``μ_base`` + torque noise. The replicas
 share the recording's errors-in-variables weights (the ``mask`` of :func:`null_statistics`). The
-regressor error of such a replica is one fixed path, so replicas differ only by their torque noise.
+fast part of the regressor error of such a replica is one fixed path, so replicas differ only by
+their torque noise (and the white noise's smoother error, below).
 That serves where the torque noise dominates the replicas' fast residual; where the fixed path
 adds more (``path_power``, the fast power of ``μ(x̄ + γ(x̂ − x̄)) − μ(x̂)``, above the torque
 noise's: the independent generator's coloured sensor noise, 3 to 6 850× the torque noise's), the
@@ -49,6 +50,16 @@ the independent generator's 41 clean recordings without coasting and 4 of our 96
 false alarms 8 → 5 of 96 there and 4 → 3 of 96 on ours, with no verdict lost on either blind set.
 On every recording without coasting, whatever the powers, it cost our blind set 4 of its 7 named
 effects: there the fast part is mostly real slip motion, and as error it widened the null.
+**The smoother's own error from white sensor noise** is in every replica without coasting too
+(:func:`white_smoother_errors`, ``error.white``): the smoother re-run on the latent speeds plus
+fresh white noise at each speed channel's measured level and quantisation, its departure from
+the latent speeds added to the replica's regressors. White sensor noise is what the smoother's
+third-difference estimate measures, so this much error the recording's regressors carry for
+certain; the smoother turns it into slow error (averaged over the seconds the slip may vary),
+which the fast-part share above cannot reach. Without it, clean recordings of a third, kinematic
+generator (mainline speeds, white speed noise of 0.01 m/s at 50 Hz, no coasting) were named a
+rail change (p = 0.05 against a critical SSE reduction of 0.022) and a radius error (0.008);
+with it their critical values were 0.09 and 0.11, and the verdict none.
 
 **Where the recording coasts** (:func:`coasting_error`: at least
 :data:`~jadhesion.data.creep_state.COAST_MIN_SAMPLES` samples moving with ``|μ̂|`` below
@@ -308,6 +319,31 @@ def fast_slip_error(fast_slip, keep, max_lag: int) -> tuple:
     return level, error_autocorrelation(z, runs_of(keep), max_lag)
 
 
+def white_smoother_errors(time, latent, sensors, vehicle: Vehicle, n_replicas: int, rng) -> list:
+    """What white sensor noise alone leaves in the smoother's latent speeds, one draw per replica:
+    ``[(δv, δv_w)] × R`` [m/s], the smoother (:func:`jadhesion.data.creep_state.smooth_creep`)
+    re-run on the latent speeds ``latent = (v̂, v̂_w, …)`` plus fresh white noise, quantised, at
+    each channel's measured level (``sensors``, :func:`noise_model` of the raw speeds: the
+    smoother's own third-difference estimate), less the latent speeds. The smoother averages such
+    noise over the seconds its process model lets the slip vary, so its error is slow, correlated
+    over seconds, and at low creep steep enough on Polach's curve to look like a slow effect."""
+    zeros = np.zeros_like(np.asarray(time, float))
+    out = []
+    for _ in range(n_replicas):
+        est = smooth_creep(
+            time,
+            _noisy(latent[1], sensors[1], rng),
+            _noisy(latent[0], sensors[0], rng),
+            zeros,
+            vehicle.wheelset_inertia_kgm2,
+            vehicle.wheel_radius_m,
+            vehicle.axle_load_kg,
+        )
+        v = np.asarray(est.vehicle_speed)
+        out.append((v - latent[0], v + np.asarray(est.slip) - latent[1]))
+    return out
+
+
 def replicas(
     torque, measured, vehicle: Vehicle, p_truth, n_replicas: int, seed: int, latent, speeds
 ) -> tuple:
@@ -322,7 +358,9 @@ def replicas(
     (``gamma`` None; ``error``: ``source`` "coasting", ``coasting_samples``, ``sd_scale``,
     ``autocorrelation_1s``, ``colour_level`` [m/s], ``colour_tau_s`` [s], ``sensors``); otherwise
     the truth is the speeds ``x̄ + γ (x̂ − x̄)``
-    and the regressors the latent speeds (``error.source`` "fast_part", with ``path_power`` and
+    and the regressors the latent speeds plus the white sensor noise's smoother error
+    (:func:`white_smoother_errors`; ``error.white``: its ``slip_rms`` [m/s] and the ``sensors``)
+    (``error.source`` "fast_part", with ``path_power`` and
     ``fresh``: where that path's fast power beats the torque noise's, each replica's regressor
     wheel speed swaps the fast part for a fresh path of its ``level`` [m/s] and
     ``autocorrelation_1s``). ``torque``: the
@@ -365,15 +403,24 @@ def replicas(
         clean_torque = (mu_gamma + deriv) * scale
         path_power = fast_power(mu_gamma - mu_fit, keep)
         error = {"source": "fast_part", "fresh": bool(path_power > torque_power), "path_power": path_power}
-        if not error["fresh"]:  # the replicas differ by their torque noise: one error path serves
-            draws = [(_noisy(clean_torque, model, rng), latent) for _ in range(n_replicas)]
-            return draws, {"torque": model, "gamma": gamma, "fast_power": powers, "error": error}
-        fast_slip = (latent[1] - slow[1]) - (latent[0] - slow[0])
-        level, rho = fast_slip_error(fast_slip, keep, max_lag)
-        paths = gaussian_paths(rho, t.size, n_replicas, rng)
-        shifts = [(1.0 - gamma) * (level * z - fast_slip) for z in paths]
-        draws = [(_noisy(clean_torque, model, rng), (latent[0], latent[1] + d, latent[2])) for d in shifts]
-        error.update(level=level, autocorrelation_1s=float(rho[lag_1s]))
+        sensors = [noise_model(x) for x in speeds]
+        white = white_smoother_errors(t, latent, sensors, vehicle, n_replicas, rng)
+        error["white"] = {
+            "slip_rms": float(np.sqrt(np.mean([np.mean((dw - dv)[keep] ** 2) for dv, dw in white]))),
+            "sensors": {"vehicle_speed": sensors[0], "wheel_speed": sensors[1]},
+        }
+        if error["fresh"]:
+            fast_slip = (latent[1] - slow[1]) - (latent[0] - slow[0])
+            level, rho = fast_slip_error(fast_slip, keep, max_lag)
+            paths = gaussian_paths(rho, t.size, n_replicas, rng)
+            shifts = [(1.0 - gamma) * (level * z - fast_slip) for z in paths]
+            error.update(level=level, autocorrelation_1s=float(rho[lag_1s]))
+        else:  # the fast part's error is one fixed path, shared by every replica
+            shifts = [0.0] * n_replicas
+        draws = [
+            (_noisy(clean_torque, model, rng), (latent[0] + dv, latent[1] + d + dw, latent[2]))
+            for d, (dv, dw) in zip(shifts, white, strict=True)
+        ]
         return draws, {"torque": model, "gamma": gamma, "fast_power": powers, "error": error}
     rho = error_autocorrelation(coast["z"], coast["runs"], max_lag)
     clean_torque = (mu_fit + deriv) * scale
