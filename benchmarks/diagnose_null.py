@@ -1,17 +1,22 @@
-"""False alarms of ``jadhesion diagnose`` on clean recordings of both generators, with the
+"""False alarms of ``jadhesion diagnose`` on clean recordings of three generators, with the
 per-recording null (:mod:`jadhesion.diagnose.null`).
 
 ``ours``: :func:`validation.diagnose_cases.run_case` without effects (random scenario, seed,
 vehicle, driving profile; the simulator's default ``sensors="realistic"``; ``--coast S`` gives every
 recording an S-second coasting gap, :attr:`jadhesion.data.scenarios.Scenario.coast_s`). ``foreign``:
 :func:`validation.foreign_generator.generate` with ``effect="none"`` (its own vehicles, profiles,
-sampling rates 20–200 Hz and realistic sensor model). Every recording goes through a CSV and the
-CLI's code path. Reported per generator: false alarms k/n with a 95 % Clopper–Pearson interval,
-the verdicts, the smallest p-value per recording, the generic discrepancy's held-out gain (and how
-many passed its threshold), the warnings, seconds per diagnosis; the result file records
-the commit, the settings and the load average (2 shared cores: timings are noisy).
+sampling rates 20–200 Hz and realistic sensor model). ``kinematic``:
+:func:`validation.kinematic_generator.generate`, its four profiles in turn (mainline, braking —
+diagnosed with ``--phase braking`` —, walking pace, constant-speed sweeps), each with random
+Polach parameters, vehicle, logger rate (20–200 Hz) and white speed noise (0.002–0.02 m/s,
+log-uniform), written as its logger file. Every recording goes through a file and the CLI's code
+path. Reported per generator: false alarms k/n with a 95 % Clopper–Pearson interval, the verdicts,
+the smallest p-value per recording, the generic discrepancy's held-out gain (and how many passed
+its threshold), the warnings, seconds per diagnosis; the result file records the commit, the
+settings and the load average (2 shared cores: timings are noisy).
 
-    python -m benchmarks.diagnose_null [--n 10] [--seed 0] [--duration 30] [--coast S] [--out FILE]
+    python -m benchmarks.diagnose_null [--n 10] [--seed 0] [--duration 30] [--coast S]
+        [--generators ours,foreign,kinematic] [--out FILE]
 """
 
 from __future__ import annotations
@@ -29,7 +34,9 @@ import numpy as np
 from benchmarks.diagnose_blind import clopper_pearson, commit, decision_table
 from jadhesion.cli.diagnose_run import diagnose_file
 from jadhesion.config import enable_compilation_cache, enable_x64
+from validation import kinematic_generator
 from validation.diagnose_cases import run_case
+from validation.foreign import physics
 from validation.foreign_generator import generate, write
 
 RESULTS = Path(__file__).resolve().parent / "results"
@@ -75,6 +82,24 @@ def foreign_case(seed: int, directory, duration: float) -> dict:
     }
 
 
+def kinematic_case(seed: int, directory, duration: float) -> dict:
+    rng = np.random.default_rng(seed)
+    kind = kinematic_generator.KINDS[seed % len(kinematic_generator.KINDS)]
+    settings = {
+        "params": tuple(physics.random_params(rng).values()),
+        "vehicle": str(rng.choice(sorted(physics.VEHICLES))),
+        "rate_hz": float(rng.choice([20.0, 50.0, 100.0, 200.0])),
+        "speed_noise": float(np.exp(rng.uniform(np.log(0.002), np.log(0.02)))),
+    }
+    rec = kinematic_generator.generate(seed, kind, duration_s=duration, **settings)
+    path = kinematic_generator.write(rec, Path(directory) / f"kinematic_{seed}.csv")
+    phase = "braking" if kind == "braking" else "traction"
+    start = time.perf_counter()
+    result, _ = diagnose_file(path, phase=phase)
+    result["seconds"] = time.perf_counter() - start
+    return {"seed": seed, "kind": kind, "phase": phase, **settings, **summary_of(result)}
+
+
 def ours_case(rng, directory, coast_s: float = 0.0) -> dict:
     case = run_case([], rng, directory, p_varied_profile=0.3, coast_s=coast_s)
     return {
@@ -96,8 +121,10 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=int, default=10, help="clean recordings per generator (default 10)")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--duration", type=float, default=30.0, help="foreign recordings' length [s]")
-    parser.add_argument("--generators", default="ours,foreign")
+    parser.add_argument(
+        "--duration", type=float, default=30.0, help="foreign and kinematic recordings' length [s]"
+    )
+    parser.add_argument("--generators", default="ours,foreign", help="ours, foreign, kinematic")
     parser.add_argument(
         "--coast",
         type=float,
@@ -116,11 +143,12 @@ def main(argv=None) -> int:
     with tempfile.TemporaryDirectory() as tmp:
         for i in range(args.n):  # interleaved, so a cut-short run has both generators
             for g in gens:
-                case = (
-                    ours_case(rng, tmp, args.coast)
-                    if g == "ours"
-                    else foreign_case(args.seed * 1000 + i, tmp, args.duration)
-                )
+                if g == "ours":
+                    case = ours_case(rng, tmp, args.coast)
+                elif g == "kinematic":
+                    case = kinematic_case(args.seed * 1000 + i, tmp, args.duration)
+                else:
+                    case = foreign_case(args.seed * 1000 + i, tmp, args.duration)
                 cases[g].append(case)
                 print(f"{g} {i}: {case['verdict']} min p {case['min_p']} {case['seconds']:.1f} s", flush=True)
                 doc = {
