@@ -319,28 +319,36 @@ def fast_slip_error(fast_slip, keep, max_lag: int) -> tuple:
     return level, error_autocorrelation(z, runs_of(keep), max_lag)
 
 
+def resmoothed(time, speed, wheel, sensors, vehicle: Vehicle, rng) -> tuple:
+    """``(v, v_w)`` [m/s]: the smoother's latent speeds
+    (:func:`jadhesion.data.creep_state.smooth_creep`, which does not use the torque for them) of the
+    raw vehicle and wheel speeds ``speed``, ``wheel`` [m/s] plus fresh white noise, quantised, at
+    the levels of ``sensors = (vehicle_speed, wheel_speed)`` (:func:`noise_model` of the
+    recording's raw speeds)."""
+    est = smooth_creep(
+        time,
+        _noisy(wheel, sensors[1], rng),
+        _noisy(speed, sensors[0], rng),
+        np.zeros_like(np.asarray(time, float)),
+        vehicle.wheelset_inertia_kgm2,
+        vehicle.wheel_radius_m,
+        vehicle.axle_load_kg,
+    )
+    v = np.asarray(est.vehicle_speed)
+    return v, v + np.asarray(est.slip)
+
+
 def white_smoother_errors(time, latent, sensors, vehicle: Vehicle, n_replicas: int, rng) -> list:
     """What white sensor noise alone leaves in the smoother's latent speeds, one draw per replica:
-    ``[(δv, δv_w)] × R`` [m/s], the smoother (:func:`jadhesion.data.creep_state.smooth_creep`)
-    re-run on the latent speeds ``latent = (v̂, v̂_w, …)`` plus fresh white noise, quantised, at
-    each channel's measured level (``sensors``, :func:`noise_model` of the raw speeds: the
-    smoother's own third-difference estimate), less the latent speeds. The smoother averages such
-    noise over the seconds its process model lets the slip vary, so its error is slow, correlated
-    over seconds, and at low creep steep enough on Polach's curve to look like a slow effect."""
-    zeros = np.zeros_like(np.asarray(time, float))
+    ``[(δv, δv_w)] × R`` [m/s], :func:`resmoothed` of the latent speeds ``latent = (v̂, v̂_w, …)``
+    less the latent speeds (``sensors``: the smoother's own third-difference levels). The smoother
+    averages such noise over the seconds its process model lets the slip vary, so its error is
+    slow, correlated over seconds, and at low creep steep enough on Polach's curve to look like a
+    slow effect."""
     out = []
     for _ in range(n_replicas):
-        est = smooth_creep(
-            time,
-            _noisy(latent[1], sensors[1], rng),
-            _noisy(latent[0], sensors[0], rng),
-            zeros,
-            vehicle.wheelset_inertia_kgm2,
-            vehicle.wheel_radius_m,
-            vehicle.axle_load_kg,
-        )
-        v = np.asarray(est.vehicle_speed)
-        out.append((v - latent[0], v + np.asarray(est.slip) - latent[1]))
+        v, vw = resmoothed(time, latent[0], latent[1], sensors, vehicle, rng)
+        out.append((v - latent[0], vw - latent[1]))
     return out
 
 
@@ -434,17 +442,8 @@ def replicas(
     draws = []
     for c in colour:
         replica_torque = _noisy(clean_torque, model, rng)
-        est = smooth_creep(
-            t,
-            _noisy(latent[1] + level * c, sensors[1], rng),
-            _noisy(latent[0], sensors[0], rng),
-            replica_torque,
-            vehicle.wheelset_inertia_kgm2,
-            vehicle.wheel_radius_m,
-            vehicle.axle_load_kg,
-        )
-        v = np.asarray(est.vehicle_speed)
-        draws.append((replica_torque, (v, v + np.asarray(est.slip), latent[2])))
+        v, vw = resmoothed(t, latent[0], latent[1] + level * c, sensors, vehicle, rng)
+        draws.append((replica_torque, (v, vw, latent[2])))
     error = {
         "source": "coasting",
         "coasting_samples": coast["samples"],
