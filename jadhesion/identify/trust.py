@@ -262,7 +262,9 @@ def fit_report(data, fit, numbers=None) -> dict:
                 on_bound,
                 (
                     f"{where} on the bound of [0, 1]: no local standard error (null); the other "
-                    "parameters' errors include their trade-off with it"
+                    "parameters' errors include their trade-off with it to first order only (along a "
+                    "curved trade-off, as A's with B, their intervals can fall short; posterior "
+                    "samples it)"
                 ),
             )
         )
