@@ -103,15 +103,13 @@ def generate(
         step = COLUMNS[key][2]
         return np.round(x / step) * step
 
-    rpm_per_rad_s = 60.0 / (2.0 * math.pi)
-    columns = {
-        "Zeit_ms": EPOCH_MS + np.round(t * 1e3),
-        "v_Lok": logged(3.6 * (v + speed_noise * rng.standard_normal(t.size)), "vehicle_speed"),
-        "n_Rad": logged(
-            rpm_per_rad_s * (omega + speed_noise / r * rng.standard_normal(t.size)), "wheel_speed"
-        ),
-        "M_Rad": logged((torque + torque_noise_nm * rng.standard_normal(t.size)) / 1e3, "traction_torque"),
+    signals = {  # in the logger's units (COLUMNS)
+        "time": EPOCH_MS + 1e3 * t,
+        "vehicle_speed": 3.6 * (v + speed_noise * rng.standard_normal(t.size)),
+        "wheel_speed": 60.0 / (2.0 * math.pi) * (omega + speed_noise / r * rng.standard_normal(t.size)),
+        "traction_torque": (torque + torque_noise_nm * rng.standard_normal(t.size)) / 1e3,
     }
+    columns = {COLUMNS[key][0]: logged(x, key) for key, x in signals.items()}
     sidecar = veh.sidecar() | {"columns": {k: f"{h}[{u}]" for k, (h, u, _) in COLUMNS.items()}}
     truth = {
         "generator": NAME,

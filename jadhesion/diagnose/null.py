@@ -403,6 +403,7 @@ def replicas(
     rng = np.random.default_rng(seed)
     deriv = np.asarray(measured.deriv_mu)
     coast = coasting_error(latent, measured.adhesion)
+    sensors = [noise_model(x) for x in speeds]
     max_lag = max(1, int(round(ERROR_MAX_LAG_S / dt)))
     lag_1s = min(max_lag, int(round(1.0 / dt)))
     if coast is None:
@@ -411,7 +412,6 @@ def replicas(
         clean_torque = (mu_gamma + deriv) * scale
         path_power = fast_power(mu_gamma - mu_fit, keep)
         error = {"source": "fast_part", "fresh": bool(path_power > torque_power), "path_power": path_power}
-        sensors = [noise_model(x) for x in speeds]
         white = white_smoother_errors(t, latent, sensors, vehicle, n_replicas, rng)
         error["white"] = {
             "slip_rms": float(np.sqrt(np.mean([np.mean((dw - dv)[keep] ** 2) for dv, dw in white]))),
@@ -435,7 +435,6 @@ def replicas(
     lag = min(max_lag, max(1, int(round(COLOUR_LAG_S / dt))))
     level = coast["scale"] * float(np.median(np.asarray(latent[2], float)))
     tau = -lag * dt / float(np.log(np.clip(rho[lag], 0.01, 0.99)))
-    sensors = [noise_model(x) for x in speeds]
     colour = np.asarray(
         ar1_paths(jnp.asarray(rng.standard_normal((n_replicas, t.size))), np.exp(-dt / tau), 1.0)
     )
