@@ -7,7 +7,11 @@ For every set of recordings — ``ours/<scenario>/<level>`` from our simulator (
 historical 5e-5 m/s white sensors; a number: that multiple of the realistic sensor model of
 :mod:`jadhesion.data.sensors`) and ``foreign/start/<preset>`` from
 :mod:`validation.foreign_generator` (no effects, walking-pace starts, written to CSV and read back
-as the CLI does) — the fit's own path runs: the samples ``jadhesion fit`` keeps
+as the CLI does) and ``kinematic/<kind>`` from :mod:`validation.kinematic_generator` (prescribed
+mainline, braking, walking-pace and constant-speed-sweep motions; random Polach parameters, vehicle,
+logger rate 20–200 Hz and white speed noise 0.002–0.02 m/s as ``benchmarks.diagnose_null`` draws
+them; written as its logger file and read back; braking fitted with ``--phase braking``) — the
+fit's own path runs: the samples ``jadhesion fit`` keeps
 (:func:`jadhesion.data.selected.selected_dataset`, its default ``--phase traction``: standstill
 below 0.2 m/s, coasting and direction changes excluded; creep ``smoothed``, the default, and
 ``raw`` for comparison), global LM on the errors-in-variables
@@ -67,6 +71,8 @@ from jadhesion.identify.peak import DERIVED  # noqa: E402
 from jadhesion.identify.polach_fit import fit_polach_batch  # noqa: E402
 from jadhesion.identify.trust import fit_report, joined_interval  # noqa: E402
 from jadhesion.models.polach import PARAM_NAMES, adhesion_peak  # noqa: E402
+from validation import kinematic_generator  # noqa: E402
+from validation.foreign import physics  # noqa: E402
 from validation.foreign_generator import generate, write  # noqa: E402
 
 CREEPS = ("smoothed", "raw")
@@ -95,6 +101,23 @@ def foreign_starts(preset, per, tmp, rate=None, duration=30.0):
     for seed in range(per):
         fr = generate(seed, effect="none", sensor=preset, profile="start", rate_hz=rate, duration_s=duration)
         yield load_recording(write(fr, Path(tmp) / f"{preset}_{seed}.csv")), fr
+
+
+def kinematic_runs(kind, per, tmp, duration=60.0):
+    """``(recording, truth)`` of ``per`` clean recordings of the kinematic generator's profile
+    ``kind`` (seeds 0 … per − 1; random parameters, vehicle, rate and speed noise, module docstring),
+    written as its logger file in ``tmp`` and read back as the CLI reads a user's file."""
+    for seed in range(per):
+        rng = np.random.default_rng([seed, kinematic_generator.KINDS.index(kind)])
+        settings = {
+            "params": tuple(physics.random_params(rng).values()),
+            "vehicle": str(rng.choice(sorted(physics.VEHICLES))),
+            "rate_hz": float(rng.choice([20.0, 50.0, 100.0, 200.0])),
+            "speed_noise": float(np.exp(rng.uniform(np.log(0.002), np.log(0.02)))),
+        }
+        rec = kinematic_generator.generate(seed, kind, duration_s=duration, **settings)
+        path = kinematic_generator.write(rec, Path(tmp) / f"{kind}_{seed}.csv")
+        yield load_recording(path), rec.truth
 
 
 def _fits(datasets):
@@ -133,13 +156,13 @@ def _rows(datasets, truths, k_eps):
     return rows
 
 
-def score(recordings, truths, k_eps=None, creeps=CREEPS, slip_law="normal"):
+def score(recordings, truths, k_eps=None, creeps=CREEPS, slip_law="normal", phase=PHASE):
     """Per creep option, the :func:`_rows` of one set; with ``slip_law`` ``"both"`` (``jadhesion
     fit``'s default) the normal law's, each with the population law's fit as ``other`` (its
     ``estimate``, ``stderr``, ``derived``, ``converged``), whose intervals :func:`summarise` joins."""
     out = {}
     for creep in creeps:
-        base = [selected_dataset(r, PHASE, creep=creep)[0] for r in recordings]
+        base = [selected_dataset(r, phase, creep=creep)[0] for r in recordings]
         law = "normal" if slip_law == "both" else slip_law
         rows = _rows([with_slip_law(d, law) for d in base], truths, k_eps)
         if slip_law == "both" and base[0].slip_sd is not None:
@@ -240,7 +263,7 @@ def summarise(rows):
 def figure(summary, path):
     """Error and 90 % coverage against the speed-sensor noise sd, per generator and creep option."""
     fig, axes = plt.subplots(1, 4, figsize=(18, 4.2))
-    for gen, marker in (("ours", "o"), ("foreign", "s")):
+    for gen, marker in (("ours", "o"), ("foreign", "s"), ("kinematic", "^")):
         for creep, ls in zip(CREEPS, ("-", "--"), strict=True):
             keys = [k for k in summary if k.startswith(gen + "/") and k.endswith("/" + creep)]
             pts = sorted(((summary[k]["noise_sd"], summary[k]) for k in keys), key=lambda p: p[0])
@@ -264,7 +287,7 @@ def figure(summary, path):
                     xs,
                     mean(f"{p}_coverage90"),
                     marker + ls,
-                    color=f"C{2 * i + (gen == 'foreign')}",
+                    color=f"C{3 * i + ('ours', 'foreign', 'kinematic').index(gen)}",
                     label=f"{p}, {label}",
                 )
     axes[0].axhline(0.25, color="k", lw=0.6)
@@ -279,7 +302,8 @@ def figure(summary, path):
     for ax, title in zip(axes, titles, strict=True):
         ax.set_xscale("log")
         ax.set_xlabel("speed-sensor noise sd [m/s]")
-        ax.set_title(title + " (ours: mean of 3 scenarios)", fontsize=9)
+        note = "(ours: mean of 3 scenarios; kinematic: a profile at its median noise)"
+        ax.set_title(f"{title}\n{note}", fontsize=9)
         ax.legend(fontsize=6)
     fig.tight_layout()
     fig.savefig(path, dpi=100)
@@ -294,6 +318,8 @@ def main(argv=None):
     p.add_argument("--foreign-sensors", default="clean,mild,realistic")
     p.add_argument("--foreign-rate", type=float, default=50.0)
     p.add_argument("--foreign-duration", type=float, default=30.0)
+    p.add_argument("--kinematic", default=",".join(kinematic_generator.KINDS), help="kinematic profiles")
+    p.add_argument("--kinematic-duration", type=float, default=60.0)
     p.add_argument("--save", default=str(RESULTS / "coverage_fit.json"))
     p.add_argument("--figure", default=str(RESULTS / "coverage_fit.png"))
     p.add_argument("--creeps", default=",".join(CREEPS), help="creep options to fit")
@@ -312,8 +338,8 @@ def main(argv=None):
     doc = {"commit": commit(), "settings": vars(args), "results": {}, "summary": {}}
     start = time.perf_counter()
 
-    def record(key, recordings, truths, noise_sd, k_eps=None):
-        scored = score(recordings, truths, k_eps, tuple(args.creeps.split(",")), args.slip_law)
+    def record(key, recordings, truths, noise_sd, k_eps=None, phase=PHASE):
+        scored = score(recordings, truths, k_eps, tuple(args.creeps.split(",")), args.slip_law, phase)
         for creep, rows in scored.items():
             doc["results"][f"{key}/{creep}"] = rows
             doc["summary"][f"{key}/{creep}"] = {"noise_sd": noise_sd, **summarise(rows)}
@@ -321,9 +347,9 @@ def main(argv=None):
         Path(args.save).write_text(json.dumps(doc, indent=1) + "\n")
         print(key, json.dumps(doc["summary"][f"{key}/smoothed"]), flush=True)
 
-    for level in args.levels.split(","):
+    for level in filter(None, args.levels.split(",")):
         sd = CLEAN.speed_sd() if level == "clean" else float(level) * REALISTIC.speed_sd()
-        for name in args.scenarios.split(","):
+        for name in filter(None, args.scenarios.split(",")):
             recs = _recordings_ours(name, level, args.per, args.points)
             record(f"ours/{name}/{level}", recs, [SCENARIOS[name].params] * args.per, sd)
     with tempfile.TemporaryDirectory() as tmp:
@@ -332,6 +358,13 @@ def main(argv=None):
             truths = [[fr.truth["params"][k] for k in PARAM_NAMES] for _, fr in pairs]
             k_eps = [fr.truth["vehicle"]["k_eps"] for _, fr in pairs]
             record(f"foreign/start/{preset}", [r for r, _ in pairs], truths, FOREIGN_SD[preset], k_eps)
+        for kind in filter(None, args.kinematic.split(",")):
+            pairs = list(kinematic_runs(kind, args.per, tmp, args.kinematic_duration))
+            truths = [[t["params"][k] for k in PARAM_NAMES] for _, t in pairs]
+            k_eps = [physics.VEHICLES[t["vehicle"]].k_eps() for _, t in pairs]
+            noise_sd = float(np.median([t["speed_noise_m_s"] for _, t in pairs]))
+            phase = "braking" if kind == "braking" else PHASE
+            record(f"kinematic/{kind}", [r for r, _ in pairs], truths, noise_sd, k_eps, phase)
     figure(doc["summary"], args.figure)
 
 
