@@ -278,6 +278,8 @@ def figure(summary, path):
                 return [np.mean([s[key] for s in groups[v]]) for v in xs]
 
             label = f"{gen}, LM {creep}"
+            # the kinematic sets are profiles, not noise levels: points, each named, no line
+            ls = "" if gen == "kinematic" else ls
             axes[0].plot(xs, mean("slope_rel_error_median"), marker + ls, label=label)
             axes[1].plot(xs, mean("mu0_abs_error_median"), marker + ls, label=label)
             axes[3].plot(xs, mean("slope_within25"), marker + ls, label=label)
@@ -290,6 +292,18 @@ def figure(summary, path):
                     color=f"C{3 * i + ('ours', 'foreign', 'kinematic').index(gen)}",
                     label=f"{p}, {label}",
                 )
+            if gen == "kinematic":
+                panels = {
+                    0: ("slope_rel_error_median",),
+                    1: ("mu0_abs_error_median",),
+                    2: tuple(f"{p}_coverage90" for p in shown),
+                    3: ("slope_within25",),
+                }
+                for k in keys:
+                    for i, names in panels.items():
+                        for name in names:
+                            at = (summary[k]["noise_sd"], summary[k][name])
+                            axes[i].annotate(k.split("/")[1], at, fontsize=5)
     axes[0].axhline(0.25, color="k", lw=0.6)
     axes[2].axhspan(0.85, 0.95, color="0.85")
     axes[3].axhline(0.9, color="k", lw=0.6)
@@ -302,7 +316,7 @@ def figure(summary, path):
     for ax, title in zip(axes, titles, strict=True):
         ax.set_xscale("log")
         ax.set_xlabel("speed-sensor noise sd [m/s]")
-        note = "(ours: mean of 3 scenarios; kinematic: a profile at its median noise)"
+        note = "(ours: mean of 3 scenarios; kinematic: per profile)"
         ax.set_title(f"{title}\n{note}", fontsize=9)
         ax.legend(fontsize=6)
     fig.tight_layout()
