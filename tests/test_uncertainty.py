@@ -26,6 +26,7 @@ from jadhesion.identify.trust import (
 )
 from jadhesion.identify.uncertainty import Z90, Z95, bandwidth, colour_factor, covariance
 from jadhesion.models.polach import PARAM_NAMES, adhesion_peak
+from validation.calibration import synthetic_dataset
 
 
 def ar1(key, n, rho, sigma=1.0):
@@ -177,6 +178,19 @@ def test_crowded_slips_are_warned_where_the_slip_law_matters():
     assert crowded_slips(spread) is None and crowded_slips(base) is None
     assert crowded_slips(pad_dataset(spread, 1200)) is None
     assert "crowded_slips" in {w["code"] for w in data_warnings(crowd)}
+
+
+def test_one_speed_is_warned_of():
+    """Samples at one vehicle speed (a rig's constant-speed creep sweep, ±1 % speed noise) warn
+    ``single_speed`` naming the five parameters, padded to a bucket too (its padding rows are not
+    samples); speeds over a factor 1.5 (a start's) do not."""
+    rng, theta = np.random.default_rng(3), (0.43, 0.6, 0.36, 0.36, 0.13)
+    rig = synthetic_dataset(rng, theta, n=400, speed=(11.9, 12.1))
+    for data in (rig, pad_dataset(rig, 512)):
+        (warned,) = [w for w in data_warnings(data) if w["code"] == "single_speed"]
+        assert warned["params"] == list(PARAM_NAMES) and "11.9" in warned["message"]
+    start = synthetic_dataset(rng, theta, n=400, speed=(1.0, 1.5))
+    assert "single_speed" not in {w["code"] for w in data_warnings(start)}
 
 
 def _report(values, half, derived_half=0.005):
