@@ -58,6 +58,11 @@ def test_identifiability_rules():
     assert peaked == []
     few = identifiability(s[:50] + 0.01, s[:50], s[:50])
     assert [n["code"] for n in few] == ["few_samples", "slip_range", "no_peak", "no_small_creep"]
+    # the same curve seen at one speed (3 m/s ± 1 %, a rig's) and over a start's speeds
+    mu, rng = 0.4 * s / (0.01 + s) * np.exp(-3 * s), np.random.default_rng(0)
+    rig = identifiability(s, s * 3.0, mu, rng.uniform(2.97, 3.03, s.size))
+    assert [n["code"] for n in rig] == ["single_speed"] and "2.97" in rig[0]["message"]
+    assert identifiability(s, s * 3.0, mu, rng.uniform(1.0, 3.0, s.size)) == []
 
 
 def test_sampling_jitter():

@@ -4,8 +4,9 @@ Walkers start around the LM optimum; the output gives per-parameter medians and 
 the derived peak adhesion and optimal creepage, and sampler diagnostics (acceptance, τ, ESS, and a
 warning when the chain is shorter than 50 τ). Its ``warnings`` are ``fit``'s about the recording and
 the data, by fit's code: ``creep_sign``, ``few_samples``, ``narrow_creep_range``,
-``single_speed``, ``crowded_slips``, ``implausible_adhesion``, and ``peak_extrapolated`` when the median ``creep_opt`` lies outside the
-samples' creep: the intervals are then the model's extrapolation, however narrow.
+``single_speed``, ``crowded_slips``, ``implausible_adhesion``, and ``peak_extrapolated`` when the
+median ``creep_opt`` lies outside the samples' creep: the intervals are then the model's
+extrapolation, however narrow.
 
 ``--likelihood auto`` (the default) is the Gaussian likelihood (errors in variables included)
 tempered by 1/κ, κ the residuals' colour factor at the LM optimum

@@ -47,12 +47,10 @@ Warning codes:
   creep look covered): the curve is seen at (nearly) one creep value, where its initial slope, its
   bend and its peak cannot be told apart; the parameters and the peak are the model's
   extrapolation.
-* ``single_speed`` — the samples' vehicle speed spans less than a factor :data:`SPEED_SPAN` (1st to
-  99th percentile): slip velocity and creep are then proportional, so the curve's slip-velocity
-  factor (A, B) trades against its creep shape (kA, kS, μ0) along a curved valley the linear errors
-  do not follow. On 12 constant-speed creep sweeps of the kinematic generator the 90 % intervals
-  held kS 8 and μ0 7 times (mainline runs at 20 → 30 m/s: 11 and 11;
-  ``benchmarks/results/coverage_fit_kinematic.json``).
+* ``single_speed`` — the samples' vehicle speed spans less than a factor
+  :data:`jadhesion.data.inspection.SPEED_SPAN` (:func:`jadhesion.data.inspection.single_speed`):
+  slip velocity and creep proportional, A and B traded against kA, kS and μ0 beyond the linear
+  errors.
 * ``slip_law_sensitive`` — (:func:`join_slip_laws`) the fit under the other slip law puts a
   parameter or peak quantity outside this fit's own 95 % interval; the reported ``ci95`` join
   both laws' (a posterior's 90 % intervals likewise: :func:`join_posterior_intervals`).
@@ -69,7 +67,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..data.dataset import valid_mask
-from ..data.inspection import implausible_adhesion
+from ..data.inspection import implausible_adhesion, single_speed
 from ..models.polach import PARAM_NAMES, adhesion_peak
 from ..status import status_of
 from .batch_fit import bucketed, valid_samples
@@ -95,10 +93,6 @@ JACKKNIFE_BLOCKS = 8
 #: A 99th-to-1st percentile ratio of the samples' |creep| below this (less than a third of a
 #: decade) is too narrow a creep range to determine the curve's shape.
 CREEP_SPAN = 2.0
-#: A 99th-to-1st percentile ratio of the samples' |vehicle speed| below this is one speed
-#: (``single_speed``): a rig's or a held run's. Our simulator's starts span 1.49, the independent
-#: generator's steady runs 1.37–2.5, the kinematic mainline 1.49 and its sweeps 1.0.
-SPEED_SPAN = 1.1
 
 
 def _warning(code, params, message):
@@ -197,21 +191,8 @@ def data_warnings(data) -> list:
                 ),
             )
         )
-    speed = np.abs(np.asarray(data.vehicle_speed, float))[valid_mask(data)]
-    lo, hi = np.percentile(speed, [1, 99]) if speed.size else (0.0, 0.0)
-    if hi < SPEED_SPAN * lo:
-        out.append(
-            _warning(
-                "single_speed",
-                PARAM_NAMES,
-                (
-                    f"the vehicle speed stays within {lo:.4g}–{hi:.4g} m/s (1st–99th percentile, less "
-                    f"than a factor {SPEED_SPAN:g}): slip velocity and creep are proportional, so the "
-                    "curve's slip-velocity factor (A, B) trades against its creep shape (kA, kS, mu0) and "
-                    "their intervals can fall short; runs over a range of speeds separate them"
-                ),
-            )
-        )
+    if (note := single_speed(np.asarray(data.vehicle_speed)[valid_mask(data)])) is not None:
+        out.append(_warning(note["code"], PARAM_NAMES, note["message"]))
     if (note := crowded_slips(data)) is not None:
         out.append(note)
     return out
