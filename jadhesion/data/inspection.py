@@ -47,7 +47,8 @@ def single_speed(speed):
     proportional, so Polach's slip-velocity factor (A, B) trades against the creep shape (kA, kS,
     μ0) along a curved valley that linear errors do not follow (on 12 constant-speed creep sweeps of
     the kinematic generator the fit's 90 % intervals held kS 8 and μ0 7 times; mainline runs at
-    20 → 30 m/s 11 and 11: ``benchmarks/results/coverage_fit_kinematic.json``)."""
+    20 → 30 m/s 11 and 11: ``benchmarks/results/coverage_fit_kinematic.json``; the posterior's
+    90 % intervals on one such sweep held kA, kS and μ0, kS's [0, 1] and μ0's [0.09, 0.71])."""
     speed = np.abs(np.asarray(speed, dtype=np.float64))
     lo, hi = np.percentile(speed, [1, 99]) if speed.size else (0.0, 0.0)
     if not hi < SPEED_SPAN * lo:
@@ -58,7 +59,8 @@ def single_speed(speed):
             f"the vehicle speed stays within {lo:.4g}–{hi:.4g} m/s (1st–99th percentile, less than a "
             f"factor {SPEED_SPAN:g}): slip velocity and creep are proportional, so the curve's "
             "slip-velocity factor (A, B) trades against its creep shape (kA, kS, mu0) and their "
-            "intervals can fall short; runs over a range of speeds separate them"
+            "intervals can fall short (posterior samples that trade-off); runs over a range of speeds "
+            "separate them"
         ),
     }
 
