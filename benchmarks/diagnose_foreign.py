@@ -14,7 +14,16 @@ rail change's time interval (``extended.change_time``) where a change was named,
 diagnosis; the result file records the commit, the settings and the load average (2 shared cores:
 timings are noisy).
 
+``--generator kinematic`` conceals instead the three effects the kinematic generator
+(:mod:`validation.kinematic_generator`) prescribes — rail change, wheel-radius error, torque offset,
+in our units — in its mainline and braking runs (alternately; braking diagnosed with ``--phase
+braking``), each with random Polach parameters, vehicle, logger rate (20–200 Hz) and white speed
+noise (0.002–0.02 m/s) as ``benchmarks.diagnose_null`` draws them, and magnitudes log-uniform over
+the catalogue's typical range (:attr:`jadhesion.models.effect_spec.EffectSpec.typical`; a random
+sign where the effect is signed).
+
     python -m benchmarks.diagnose_foreign [--per-effect 3] [--seed 0] [--duration 30]
+        [--generator foreign|kinematic]
 """
 
 from __future__ import annotations
@@ -27,6 +36,8 @@ import tempfile
 import time
 from pathlib import Path
 
+import numpy as np
+
 from benchmarks.diagnose_blind import (
     above_own_limit,
     change_time_coverage,
@@ -38,6 +49,9 @@ from benchmarks.diagnose_blind import (
 from jadhesion.cli.diagnose_run import diagnose_file
 from jadhesion.config import enable_compilation_cache, enable_x64
 from jadhesion.diagnose.extensions import NAMES
+from jadhesion.models.effects import EFFECTS
+from validation import kinematic_generator
+from validation.foreign import physics
 from validation.foreign_generator import generate, write
 
 RESULTS = Path(__file__).resolve().parent / "results"
@@ -48,6 +62,57 @@ COMPARABLE = {
     "signal_delay": ("delay_s", 1.0),
     "torque_offset": ("offset", 1.0),
 }
+
+
+#: The kinematic generator's effects are in our units: each magnitude is its parameter's.
+KINEMATIC = {
+    "rail_change": ("drop", 1.0),
+    "wheel_radius_error": ("delta_r", 1.0),
+    "torque_offset": ("offset", 1.0),
+}
+
+
+def foreign_case(seed: int, name: str, directory, duration: float):
+    """The independent generator's recording with effect ``name``: ``(path, phase, truth)``."""
+    rec = generate(seed, effect=name, duration_s=duration)
+    truth = {
+        "magnitude": rec.truth["magnitude"],
+        "rate_hz": rec.truth["rate_hz"],
+        "profile": rec.truth["profile"]["kind"],
+        "change_time_s": rec.truth["effect_detail"].get("time_s"),
+    }
+    return write(rec, Path(directory) / f"rec_{seed}.csv", truth=False), "traction", truth
+
+
+def kinematic_case(seed: int, name: str, directory, duration: float):
+    """The kinematic generator's recording with effect ``name`` (module docstring): ``(path, phase,
+    truth)``."""
+    rng = np.random.default_rng([seed, 17])
+    kind = ("mainline", "braking")[seed % 2]
+    lo, hi = EFFECTS[name].typical
+    magnitude = float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
+    if EFFECTS[name].signed:
+        magnitude *= float(rng.choice([-1.0, 1.0]))
+    rec = kinematic_generator.generate(
+        seed,
+        kind,
+        params=tuple(physics.random_params(rng).values()),
+        vehicle=str(rng.choice(sorted(physics.VEHICLES))),
+        rate_hz=float(rng.choice([20.0, 50.0, 100.0, 200.0])),
+        speed_noise=float(np.exp(rng.uniform(np.log(0.002), np.log(0.02)))),
+        duration_s=duration,
+        effect=name,
+        magnitude=magnitude,
+    )
+    truth = {
+        "magnitude": magnitude,
+        "rate_hz": rec.truth["rate_hz"],
+        "profile": kind,
+        "change_time_s": rec.truth["change_time_s"],
+        "speed_noise_m_s": rec.truth["speed_noise_m_s"],
+    }
+    path = kinematic_generator.write(rec, Path(directory) / f"kinematic_{seed}.csv")
+    return path, "braking" if kind == "braking" else "traction", truth
 
 
 def limit_rates(cases) -> dict:
@@ -63,43 +128,45 @@ def main(argv=None) -> int:
     parser.add_argument("--per-effect", type=int, default=3)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--duration", type=float, default=30.0, help="recording length [s]")
+    parser.add_argument("--generator", choices=("foreign", "kinematic"), default="foreign")
     parser.add_argument("--out", default=str(RESULTS / "diagnose_foreign.json"))
     args = parser.parse_args(argv)
+    kinematic = args.generator == "kinematic"
+    names, comparable = (tuple(KINEMATIC), KINEMATIC) if kinematic else (NAMES, COMPARABLE)
+    make = kinematic_case if kinematic else foreign_case
     enable_x64()
     enable_compilation_cache()
     head, cases = commit(), []
     labels = ["none", *NAMES]
     with tempfile.TemporaryDirectory() as tmp:
         for i in range(args.per_effect):
-            for j, name in enumerate(NAMES):
-                seed = args.seed * 100003 + i * len(NAMES) + j
-                rec = generate(seed, effect=name, duration_s=args.duration)
-                path = write(rec, Path(tmp) / f"rec_{seed}.csv", truth=False)
+            for j, name in enumerate(names):
+                seed = args.seed * 100003 + i * len(names) + j
+                path, phase, truth = make(seed, name, tmp, args.duration)
                 start = time.perf_counter()
-                d, _ = diagnose_file(path)
+                d, _ = diagnose_file(path, phase=phase)
                 seconds = time.perf_counter() - start
                 recovered, covered, visible = None, None, None
-                if name in COMPARABLE:  # the size in our units against the recording's own limit
-                    visible = above_own_limit(d, name, COMPARABLE[name][1] * rec.truth["magnitude"])
-                if name in COMPARABLE and d["verdict"] == name:
-                    param, factor = COMPARABLE[name]
+                if name in comparable:  # the size in our units against the recording's own limit
+                    visible = above_own_limit(d, name, comparable[name][1] * truth["magnitude"])
+                if name in comparable and d["verdict"] == name:
+                    param, factor = comparable[name]
                     recovered = factor * d["extended"]["params"][param]
                     ci = d["extended"]["uncertainty"]["ci90"].get(param)
-                    covered = ci is not None and ci[0] <= factor * rec.truth["magnitude"] <= ci[1]
+                    covered = ci is not None and ci[0] <= factor * truth["magnitude"] <= ci[1]
                 cases.append(
                     {
                         "seed": seed,
                         "effect": name,
-                        "magnitude": rec.truth["magnitude"],
-                        "rate_hz": rec.truth["rate_hz"],
-                        "profile": rec.truth["profile"]["kind"],
+                        "phase": phase,
+                        **truth,
                         "verdict": d["verdict"],
                         "verdict_set": d["verdict_set"],
                         "recovered": recovered,
                         "ci90_covers": covered,
                         "above_min_detectable": visible,
                         "change_time": d["extended"]["change_time"],
-                        "true_change_time_s": rec.truth["effect_detail"].get("time_s"),
+                        "true_change_time_s": truth["change_time_s"],
                         "base_mu0": d["base"]["params"]["mu0"],
                         "warnings": [w["code"] for w in d["warnings"]],
                         "top": [
@@ -111,12 +178,17 @@ def main(argv=None) -> int:
                     }
                 )
                 print(f"{name}: {d['verdict']} set {d['verdict_set']} ({seconds:.1f} s)", flush=True)
-                confusion = {t: {p: 0 for p in labels} for t in NAMES}
+                confusion = {t: {p: 0 for p in labels} for t in names}
                 for c in cases:
                     confusion[c["effect"]][c["verdict"]] += 1
                 doc = {
                     "commit": head,
-                    "settings": {**vars(args), "replicas": 19, "phase": "traction", "sensors": "realistic"},
+                    "settings": {
+                        **vars(args),
+                        "replicas": 19,
+                        "phase": "braking on braking runs" if kinematic else "traction",
+                        "sensors": "white, 0.002–0.02 m/s" if kinematic else "realistic",
+                    },
                     "loadavg_end": os.getloadavg(),
                     "confusion": confusion,
                     "per_effect": {
@@ -132,7 +204,7 @@ def main(argv=None) -> int:
                             ),
                             **limit_rates([c for c in cases if c["effect"] == n]),
                         }
-                        for n in NAMES
+                        for n in names
                     },
                     "single_effect": {
                         "top1": rate([c["verdict"] == c["effect"] for c in cases]),

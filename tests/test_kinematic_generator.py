@@ -38,3 +38,31 @@ def test_logger_file_reads_back_in_si_units(kind, tmp_path):
     )
     np.testing.assert_allclose(mu, lat["mu"], atol=5.0 / (veh.axle_weight_n * veh.wheel_radius_m) + 1e-9)
     assert np.all(np.sign(lat["mu"]) == np.sign(lat["creep"]))
+
+
+def test_concealed_effects_are_what_they_say(tmp_path):
+    """Noise-free, against the same run without the effect: a rail change leaves μ before
+    ``CHANGE_AT`` and lowers it after; a radius error 1 + m divides the logged wheel speed (read at
+    the sidecar's nominal radius) by 1 + m; a torque offset adds m · m_axle g r to the torque."""
+    quiet = {"duration_s": 10.0, "rate_hz": 50.0, "speed_noise": 0.0, "torque_noise_nm": 0.0}
+    veh = physics.VEHICLES["bobo_20t"]
+
+    def read(effect, m):
+        rec = kg.generate(0, "mainline", effect=effect, magnitude=m, **quiet)
+        return rec, load_recording(kg.write(rec, tmp_path / f"{effect}.csv")).columns
+
+    base, clean = read("none", 0.0)
+    rail, _ = read("rail_change", 0.2)
+    after = base.latent["time"] >= kg.CHANGE_AT * 10.0
+    np.testing.assert_array_equal(rail.latent["mu"][~after], base.latent["mu"][~after])
+    ratio = rail.latent["mu"][after] / base.latent["mu"][after]
+    assert np.all(ratio < 1.0) and ratio.min() < 0.85  # μ0 scales the saturated part, not the slope
+    assert rail.truth["change_time_s"] == pytest.approx(6.0) and rail.truth["magnitude"] == 0.2
+    _, radius = read("wheel_radius_error", 0.03)
+    rpm_step = 0.05 * 2.0 * math.pi / 60.0 * veh.wheel_radius_m
+    np.testing.assert_allclose(radius["wheel_speed"], clean["wheel_speed"] / 1.03, atol=rpm_step)
+    _, offset = read("torque_offset", 0.02)
+    shift = 0.02 * veh.axle_weight_n * veh.wheel_radius_m
+    np.testing.assert_allclose(offset["traction_torque"] - clean["traction_torque"], shift, atol=10.0 + 1e-9)
+    with pytest.raises(ValueError, match="unknown effect"):
+        kg.generate(0, effect="ice")

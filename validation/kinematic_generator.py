@@ -18,6 +18,12 @@ Profiles (``kind``), over ``duration_s``, ``u = t / duration_s``:
 - ``"sweeps"``: v = 12 m/s, creep 0.05 % + 2 % |sin(3π u)| (three sweeps, each reversing sharply
   at its low end: a step in the slip rate).
 
+Concealed effects (``effect``, ``magnitude`` in jadhesion's catalogue units, prescribed here from
+their physics, not from :mod:`jadhesion.models.effects`): ``"rail_change"`` — μ0 → μ0 (1 − m) from
+:data:`CHANGE_AT` of the run on (a hard step); ``"wheel_radius_error"`` — the true rolling radius is
+r (1 + m) while the sidecar states r, so the logged rpm and the torque follow the true radius;
+``"torque_offset"`` — the logged torque is T + m · m_axle g r.
+
 API: :func:`generate` → :class:`KinematicRecording`, :func:`write` (CSV, sidecar, truth).
 """
 
@@ -34,6 +40,9 @@ from validation.foreign import physics
 
 NAME, VERSION = "jadhesion-kinematic-generator", "1.0"
 KINDS = ("mainline", "braking", "walk", "sweeps")
+EFFECTS = ("none", "rail_change", "wheel_radius_error", "torque_offset")
+#: Time of the rail change as a fraction of the run [-].
+CHANGE_AT = 0.6
 #: Dry rail of paper 001's 22E fit (kA, kS, μ0, A, B).
 DRY = physics.CONDITIONS["dry_22e"]
 #: The logger's columns: (header, unit, quantisation step in that unit).
@@ -81,6 +90,8 @@ def generate(
     duration_s: float = 120.0,
     speed_noise: float = 0.01,
     torque_noise_nm: float = 300.0,
+    effect: str = "none",
+    magnitude: float = 0.0,
 ) -> KinematicRecording:
     """One recording of profile ``kind``; deterministic in ``seed``.
 
@@ -88,16 +99,29 @@ def generate(
         params: Polach (kA, kS, μ0, A, B); vehicle: a name in ``physics.VEHICLES``.
         rate_hz: logger rate [Hz]; duration_s [s].
         speed_noise: white noise sd of each speed sensor [m/s]; torque_noise_nm: of the torque [N·m].
+        effect: one of :data:`EFFECTS`, of size ``magnitude`` (module docstring).
     """
+    if effect not in EFFECTS:
+        raise ValueError(f"unknown effect {effect!r}; choose one of {', '.join(EFFECTS)}")
     rng = np.random.default_rng(seed)
     veh = physics.VEHICLES[vehicle]
     r, k_eps = veh.wheel_radius_m, veh.k_eps()
+    r_true = r * (1.0 + magnitude) if effect == "wheel_radius_error" else r
     t = np.arange(0.0, duration_s, 1.0 / rate_hz)
     v, creep = motion(kind, t, duration_s)
     slip = v * creep
-    mu = np.array([physics.polach(c, w, *params, k_eps) for c, w in zip(creep, slip, strict=True)])
-    omega = (v + slip) / r
-    torque = mu * veh.axle_weight_n * r + veh.wheelset_inertia_kgm2 * np.gradient(omega, t)
+    changed = (effect == "rail_change") & (t >= CHANGE_AT * duration_s)
+    mu0 = np.where(changed, params[2] * (1.0 - magnitude), params[2])
+    mu = np.array(
+        [
+            physics.polach(c, w, params[0], params[1], m0, params[3], params[4], k_eps)
+            for c, w, m0 in zip(creep, slip, mu0, strict=True)
+        ]
+    )
+    omega = (v + slip) / r_true
+    torque = mu * veh.axle_weight_n * r_true + veh.wheelset_inertia_kgm2 * np.gradient(omega, t)
+    if effect == "torque_offset":
+        torque = torque + magnitude * veh.axle_weight_n * r
 
     def logged(x, key):
         step = COLUMNS[key][2]
@@ -122,7 +146,9 @@ def generate(
         "duration_s": duration_s,
         "speed_noise_m_s": speed_noise,
         "torque_noise_nm": torque_noise_nm,
-        "effect": "none",
+        "effect": effect,
+        "magnitude": magnitude if effect != "none" else None,
+        "change_time_s": CHANGE_AT * duration_s if effect == "rail_change" else None,
     }
     latent = {"time": t, "vehicle_speed": v, "slip": slip, "creep": creep, "mu": mu}
     return KinematicRecording(columns, sidecar, truth, latent)
