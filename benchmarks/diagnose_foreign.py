@@ -108,7 +108,10 @@ def kinematic_case(seed: int, name: str, directory, duration: float):
         "magnitude": magnitude,
         "rate_hz": rec.truth["rate_hz"],
         "profile": kind,
-        "change_time_s": rec.truth["change_time_s"],
+        # on the recording's own clock, as the diagnosis reports it: ms since the epoch
+        "change_time_s": None
+        if rec.truth["change_time_s"] is None
+        else kinematic_generator.EPOCH_MS / 1e3 + rec.truth["change_time_s"],
         "speed_noise_m_s": rec.truth["speed_noise_m_s"],
     }
     path = kinematic_generator.write(rec, Path(directory) / f"kinematic_{seed}.csv")
