@@ -109,12 +109,7 @@ def kinematic_runs(kind, per, tmp, duration=60.0):
     written as its logger file in ``tmp`` and read back as the CLI reads a user's file."""
     for seed in range(per):
         rng = np.random.default_rng([seed, kinematic_generator.KINDS.index(kind)])
-        settings = {
-            "params": tuple(physics.random_params(rng).values()),
-            "vehicle": str(rng.choice(sorted(physics.VEHICLES))),
-            "rate_hz": float(rng.choice([20.0, 50.0, 100.0, 200.0])),
-            "speed_noise": float(np.exp(rng.uniform(np.log(0.002), np.log(0.02)))),
-        }
+        settings = kinematic_generator.random_settings(rng)
         rec = kinematic_generator.generate(seed, kind, duration_s=duration, **settings)
         path = kinematic_generator.write(rec, Path(tmp) / f"{kind}_{seed}.csv")
         yield load_recording(path), rec.truth

@@ -51,7 +51,6 @@ from jadhesion.config import enable_compilation_cache, enable_x64
 from jadhesion.diagnose.extensions import NAMES
 from jadhesion.models.effects import EFFECTS
 from validation import kinematic_generator
-from validation.foreign import physics
 from validation.foreign_generator import generate, write
 
 RESULTS = Path(__file__).resolve().parent / "results"
@@ -93,16 +92,9 @@ def kinematic_case(seed: int, name: str, directory, duration: float):
     magnitude = float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
     if EFFECTS[name].signed:
         magnitude *= float(rng.choice([-1.0, 1.0]))
+    settings = kinematic_generator.random_settings(rng)
     rec = kinematic_generator.generate(
-        seed,
-        kind,
-        params=tuple(physics.random_params(rng).values()),
-        vehicle=str(rng.choice(sorted(physics.VEHICLES))),
-        rate_hz=float(rng.choice([20.0, 50.0, 100.0, 200.0])),
-        speed_noise=float(np.exp(rng.uniform(np.log(0.002), np.log(0.02)))),
-        duration_s=duration,
-        effect=name,
-        magnitude=magnitude,
+        seed, kind, duration_s=duration, effect=name, magnitude=magnitude, **settings
     )
     truth = {
         "magnitude": magnitude,

@@ -36,7 +36,6 @@ from jadhesion.cli.diagnose_run import diagnose_file
 from jadhesion.config import enable_compilation_cache, enable_x64
 from validation import kinematic_generator
 from validation.diagnose_cases import run_case
-from validation.foreign import physics
 from validation.foreign_generator import generate, write
 
 RESULTS = Path(__file__).resolve().parent / "results"
@@ -85,12 +84,7 @@ def foreign_case(seed: int, directory, duration: float) -> dict:
 def kinematic_case(seed: int, directory, duration: float) -> dict:
     rng = np.random.default_rng(seed)
     kind = kinematic_generator.KINDS[seed % len(kinematic_generator.KINDS)]
-    settings = {
-        "params": tuple(physics.random_params(rng).values()),
-        "vehicle": str(rng.choice(sorted(physics.VEHICLES))),
-        "rate_hz": float(rng.choice([20.0, 50.0, 100.0, 200.0])),
-        "speed_noise": float(np.exp(rng.uniform(np.log(0.002), np.log(0.02)))),
-    }
+    settings = kinematic_generator.random_settings(rng)
     rec = kinematic_generator.generate(seed, kind, duration_s=duration, **settings)
     path = kinematic_generator.write(rec, Path(directory) / f"kinematic_{seed}.csv")
     phase = "braking" if kind == "braking" else "traction"

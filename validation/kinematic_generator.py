@@ -38,7 +38,7 @@ import numpy as np
 
 from validation.foreign import physics
 
-NAME, VERSION = "jadhesion-kinematic-generator", "1.0"
+NAME, VERSION = "jadhesion-kinematic-generator", "1.1"
 KINDS = ("mainline", "braking", "walk", "sweeps")
 EFFECTS = ("none", "rail_change", "wheel_radius_error", "torque_offset")
 #: Time of the rail change as a fraction of the run [-].
@@ -78,6 +78,18 @@ def motion(kind: str, t, duration_s: float) -> tuple:
     if kind == "sweeps":
         return np.full_like(u, 12.0), 0.0005 + 0.02 * np.abs(np.sin(3.0 * np.pi * u))
     raise ValueError(f"unknown kind {kind!r}; choose one of {', '.join(KINDS)}")
+
+
+def random_settings(rng: np.random.Generator) -> dict:
+    """Keyword arguments of :func:`generate` for a random clean run, drawn from ``rng`` in this
+    order: Polach parameters (``physics.random_params``), vehicle, logger rate (20, 50, 100 or
+    200 Hz) and white speed noise (0.002–0.02 m/s, log-uniform)."""
+    return {
+        "params": tuple(physics.random_params(rng).values()),
+        "vehicle": str(rng.choice(sorted(physics.VEHICLES))),
+        "rate_hz": float(rng.choice([20.0, 50.0, 100.0, 200.0])),
+        "speed_noise": float(np.exp(rng.uniform(np.log(0.002), np.log(0.02)))),
+    }
 
 
 def generate(
