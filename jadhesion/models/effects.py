@@ -75,7 +75,7 @@ EFFECTS = {
                 0.12,
                 0.12,
                 "14/14 named above, 0/9 below; 13/13 above the recording's min_detectable",
-                own_limit=(19, 19),
+                own_limit=(23, 24),
             ),
         ),
         EffectSpec(
@@ -113,7 +113,7 @@ EFFECTS = {
                 None,
                 None,
                 "not reached in 0.002–0.028: 7/14 named; 3/3 above the recording's min_detectable",
-                own_limit=(8, 8),
+                own_limit=(13, 13),
             ),
         ),
         EffectSpec(
@@ -201,7 +201,7 @@ EFFECTS = {
                 None,
                 None,
                 "not reached in 0.002–0.032: 0/21 named, none above its min_detectable",
-                own_limit=(1, 1),
+                own_limit=(1, 2),
             ),
         ),
         EffectSpec(
@@ -275,14 +275,18 @@ INDEX = {name: i for i, name in enumerate(EFFECT_NAMES)}
 #: (Before: 8d89b5a's thresholds, measured with one global gain threshold on clean sensors.)
 DETECTION_PROVENANCE = "benchmarks/diagnose_blind.py --n 140 --null 0 --seed 2027 at d2e6902"
 #: How :attr:`Detection.own_limit` was counted: single-effect blind cases whose |magnitude| (our
-#: units) reached their recording's ``sensitivity.min_detectable``, pooled over three runs — ours at
+#: units) reached their recording's ``sensitivity.min_detectable``, pooled over four runs — ours at
 #: d2e6902 (the run above), ours ``--n 80 --null 0 --seed 23`` at 802c73e
 #: (``diagnose_blind_n80_seed23_own_limit.json``) and the independent generator's ``diagnose_foreign
 #: --per-effect 4 --seed 3`` at 802c73e (``diagnose_foreign_n28_own_limit.json``; its speed
-#: dependence, thermal softening and load transfer follow other laws and are not counted).
+#: dependence, thermal softening and load transfer follow other laws and are not counted) — and the
+#: kinematic generator's ``diagnose_foreign --generator kinematic --per-effect 6 --seed 5`` at
+#: 9223087 (``diagnose_kinematic_n18.json``: rail change 4 of 5, radius error 5 of 5, torque offset
+#: 0 of 1).
 OWN_LIMIT_PROVENANCE = (
     "diagnose_blind --seed 2027 at d2e6902; diagnose_blind --n 80 --seed 23 and "
-    "diagnose_foreign --per-effect 4 --seed 3 at 802c73e"
+    "diagnose_foreign --per-effect 4 --seed 3 at 802c73e; diagnose_foreign --generator kinematic "
+    "--per-effect 6 --seed 5 at 9223087"
 )
 
 
