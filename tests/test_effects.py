@@ -18,7 +18,7 @@ from jadhesion.diagnose import features, fitting, select
 from jadhesion.diagnose.explain import effect_sentence
 from jadhesion.diagnose.signals import from_columns
 from jadhesion.models.effect_spec import IMPLAUSIBLE_BEYOND, Detection
-from jadhesion.models.effects import EFFECT_NAMES, EFFECTS
+from jadhesion.models.effects import EFFECT_NAMES, EFFECTS, on_clock
 from jadhesion.models.kinematics import creepage
 from jadhesion.models.polach import polach_adhesion
 from jadhesion.status import Status
@@ -243,3 +243,13 @@ def test_a_fold_that_sees_one_side_of_a_change_keeps_its_size():
     assert [int(s) for s in table.fold_status] == [Status.CONVERGED] * 2
     assert 0.85 < float(table.params[1, ext.U_CHANGE]) < 0.95
     assert float(table.heldout_mae[1]) < 0.7 * float(table.heldout_mae[0])
+
+
+def test_a_rail_change_is_explained_on_the_recordings_clock():
+    """A change on a clock that starts at 0 reads in seconds; on a logger's epoch clock (its first
+    sample 1.7·10⁹ s) as seconds after the first sample, the clock's own reading beside."""
+    params = {"drop": 0.2, "t_change_s": 1_700_000_018.04}
+    text = EFFECTS["rail_change"].explain({**params, "t_start_s": 1_700_000_000.0})
+    assert "t ≈ 18.0 s after the first sample (1700000018.0 s on the recording's clock)" in text
+    assert "t ≈ 18.0 s:" in EFFECTS["rail_change"].explain({**params, "t_change_s": 18.04})
+    assert on_clock((17.25, 18.75), 12.0) == "17.2–18.8 s"

@@ -487,6 +487,7 @@ def diagnose(
         "indistinguishable": [{"name": c, "experiment": select.experiment(effects[0], c)} for c in close],
         "verdict_set": effects[:1] + list(close),
         "second_round": second_round,
+        "time_start_s": float(sig.time[0]),
         "base": {
             "params": _row(p_base, none, sig, tau_th),
             "mae": float(t1["mae"][0]),

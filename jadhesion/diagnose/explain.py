@@ -4,17 +4,19 @@ sentence is the effect registry's template, :data:`jadhesion.models.effects.EFFE
 from __future__ import annotations
 
 from ..data.vehicle import GRAVITY, Vehicle
-from ..models.effects import EFFECTS
+from ..models.effects import EFFECTS, on_clock
 from .select import beyond_typical
 
 
-def effect_sentence(name: str, params: dict, vehicle: Vehicle) -> str:
+def effect_sentence(name: str, params: dict, vehicle: Vehicle, t_start_s: float = 0.0) -> str:
     """The registry's sentence for effect ``name`` (:meth:`.EffectSpec.explain`) rendered with the
-    fitted ``params`` and the vehicle's wheel radius and axle load."""
+    fitted ``params``, the vehicle's wheel radius and axle load and the recording clock's first
+    fitted sample ``t_start_s`` [s]."""
     context = {
         "wheel_radius_m": vehicle.wheel_radius_m,
         "axle_load_kg": vehicle.axle_load_kg,
         "gravity": GRAVITY,
+        "t_start_s": t_start_s,
     }
     return EFFECTS[name].explain({**params, **context})
 
@@ -121,11 +123,15 @@ def _change_time(result: dict) -> str:
     found = result["extended"].get("change_time")
     if not found:
         return ""
-    lo, hi = found["t_change_interval_s"]
+    start = result.get("time_start_s", 0.0)
     level = 100 * found["level"]
-    text = f" The change's time lies within {lo:.1f}–{hi:.1f} s ({level:.0f} % profile interval)"
+    text = (
+        f" The change's time lies within {on_clock(found['t_change_interval_s'], start)} ({level:.0f} % "
+        "profile interval)"
+    )
     if not found["fit_inside"]:
-        text += f"; the profile fits best at {found['best_t_change_s']:.1f} s, not at the time above"
+        best = on_clock((found["best_t_change_s"],), start)
+        text += f"; the profile fits best at {best}, not at the time above"
     return text + "."
 
 
@@ -172,7 +178,8 @@ def explain(result: dict, vehicle: Vehicle) -> str:
         if result["generic"]["used"]:
             text += _GENERIC.format(signal=result["strongest_signal"], gain=result["generic"]["gain"])
         return text + _smallest_visible(result["sensitivity"]) + _blind_spots(result["sensitivity"])
-    parts = [effect_sentence(n, result["extended"]["params"], vehicle) for n in result["effects"]]
+    start = result.get("time_start_s", 0.0)
+    parts = [effect_sentence(n, result["extended"]["params"], vehicle, start) for n in result["effects"]]
     text = "; and ".join(parts)
     text = text[0].upper() + text[1:] + _improvement(result) + _sizes(result) + _refit(result)
     text += _change_time(result)

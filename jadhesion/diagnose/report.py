@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..models.effects import EFFECTS
+from ..models.effects import EFFECTS, on_clock
 from .select import GAIN_THRESHOLD
 
 UNITS = {
@@ -106,13 +106,19 @@ def _stderr(extended: dict, name: str) -> str:
     return "—" if sd is None else f"{sd:.2g}"
 
 
-def _interval(extended: dict, name: str) -> str:
-    """A parameter's 90 % interval: the profile interval for a rail change's time, else the
-    standard-error one (``extended.uncertainty``); "—" where it has none."""
+def _value(name: str, value: float, start: float) -> str:
+    """A parameter's value for the table; a rail change's time on the recording's clock
+    (:func:`jadhesion.models.effects.on_clock`, ``start`` its first fitted sample [s])."""
+    return on_clock((value,), start) if name == "t_change_s" else f"{value:.4g}"
+
+
+def _interval(extended: dict, name: str, start: float = 0.0) -> str:
+    """A parameter's 90 % interval: the profile interval for a rail change's time (on the
+    recording's clock, as :func:`_value`), else the standard-error one (``extended.uncertainty``);
+    "—" where it has none."""
     found = extended["change_time"]
     if name == "t_change_s" and found:
-        lo, hi = found["t_change_interval_s"]
-        return f"{lo:.4g} – {hi:.4g} (profile)"
+        return f"{on_clock(found['t_change_interval_s'], start)} (profile)"
     ci = extended["uncertainty"]["ci90"].get(name)
     return "—" if ci is None else f"{ci[0]:.4g} – {ci[1]:.4g}"
 
@@ -128,8 +134,10 @@ def write_report(result: dict, series: dict, directory) -> Path:
         f"{c['evidence']['signal']} |"
         for c in result["candidates"]
     )
+    start = result.get("time_start_s", 0.0)
     params = "\n".join(
-        f"| {k} | {v:.4g} | {_stderr(result['extended'], k)} | {_interval(result['extended'], k)} |"
+        f"| {k} | {_value(k, v, start)} | {_stderr(result['extended'], k)} | "
+        f"{_interval(result['extended'], k, start)} |"
         for k, v in result["extended"]["params"].items()
     )
     seen = "\n".join(

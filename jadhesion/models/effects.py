@@ -24,6 +24,23 @@ _COAST_BIAS = "a coasting run (zero torque) reads the bias"
 _COAST_RADIUS = "a coasting run at two speeds (a radius error shows as creep ∝ speed without torque"
 _TORQUE_STEP = "compare its timing with the wheel acceleration"
 _PAUSE = "a repeat run after a pause: a thermal drop recovers as the rail cools"
+#: A recording clock whose first fitted sample is later than this [s] — seconds since the epoch, a
+#: time of day — is read in the explanation as seconds from that sample (:func:`on_clock`).
+CLOCK_OFFSET_S = 1000.0
+
+
+def on_clock(times, start: float = 0.0) -> str:
+    """Times [s] on the recording's clock in words: ``"17.2–18.8 s"``, or, on a clock that starts
+    later than :data:`CLOCK_OFFSET_S` (``start``, its first fitted sample), ``"17.2–18.8 s after
+    the first sample (1700000017.2–1700000018.8 s on the recording's clock)"``."""
+    span = "–".join
+    if not abs(start) > CLOCK_OFFSET_S:
+        return f"{span(f'{t:.1f}' for t in times)} s"
+    return (
+        f"{span(f'{t - start:.1f}' for t in times)} s after the first sample "
+        f"({span(f'{t:.1f}' for t in times)} s on the recording's clock)"
+    )
+
 
 #: Largest plausible |load_accel| [-] of load transfer: ``m_A = m (h_g/h_c − 1)`` with a centre of
 #: gravity 1.4–1.8 m and a coupler 0.85–1.06 m above rail gives ``|m_A| ≤ 1.12 |m|``, at most 1.7
@@ -68,9 +85,13 @@ EFFECTS = {
                 "load_transfer": "a run over each rail section at two levels of tractive effort (load "
                 "transfer follows the effort, a rail change the position)",
             },
-            sentence="the rail condition changed at t ≈ {t_change_s:.1f} s: the friction level μ0 {word} by "
+            sentence="the rail condition changed at t ≈ {when}: the friction level μ0 {word} by "
             "{size:.0%} (a contaminated or cleaned section); identify the two stretches separately",
-            terms=lambda v: {"word": "dropped" if v["drop"] > 0 else "rose", "size": abs(v["drop"])},
+            terms=lambda v: {
+                "word": "dropped" if v["drop"] > 0 else "rose",
+                "size": abs(v["drop"]),
+                "when": on_clock((v["t_change_s"],), v.get("t_start_s", 0.0)),
+            },
             detection=Detection(
                 0.12,
                 0.12,
