@@ -247,9 +247,9 @@ def test_a_fold_that_sees_one_side_of_a_change_keeps_its_size():
 
 def test_a_rail_change_is_explained_on_the_recordings_clock():
     """A change on a clock that starts at 0 reads in seconds; on a logger's epoch clock (its first
-    sample 1.7·10⁹ s) as seconds after the first sample, the clock's own reading beside."""
+    sample 1.7·10⁹ s) as seconds after the first fitted sample, the clock's own reading beside."""
     params = {"drop": 0.2, "t_change_s": 1_700_000_018.04}
     text = EFFECTS["rail_change"].explain({**params, "t_start_s": 1_700_000_000.0})
-    assert "t ≈ 18.0 s after the first sample (1700000018.0 s on the recording's clock)" in text
+    assert "t ≈ 18.0 s after the first fitted sample (1700000018.0 s on the recording's clock)" in text
     assert "t ≈ 18.0 s:" in EFFECTS["rail_change"].explain({**params, "t_change_s": 18.04})
     assert on_clock((17.25, 18.75), 12.0) == "17.2–18.8 s"

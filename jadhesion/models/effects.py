@@ -32,12 +32,12 @@ CLOCK_OFFSET_S = 1000.0
 def on_clock(times, start: float = 0.0) -> str:
     """Times [s] on the recording's clock in words: ``"17.2–18.8 s"``, or, on a clock that starts
     later than :data:`CLOCK_OFFSET_S` (``start``, its first fitted sample), ``"17.2–18.8 s after
-    the first sample (1700000017.2–1700000018.8 s on the recording's clock)"``."""
+    the first fitted sample (1700000017.2–1700000018.8 s on the recording's clock)"``."""
     span = "–".join
     if not abs(start) > CLOCK_OFFSET_S:
         return f"{span(f'{t:.1f}' for t in times)} s"
     return (
-        f"{span(f'{t - start:.1f}' for t in times)} s after the first sample "
+        f"{span(f'{t - start:.1f}' for t in times)} s after the first fitted sample "
         f"({span(f'{t:.1f}' for t in times)} s on the recording's clock)"
     )
 
