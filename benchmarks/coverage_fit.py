@@ -372,7 +372,7 @@ def main(argv=None):
             truths = [[t["params"][k] for k in PARAM_NAMES] for _, t in pairs]
             k_eps = [physics.VEHICLES[t["vehicle"]].k_eps() for _, t in pairs]
             noise_sd = float(np.median([t["speed_noise_m_s"] for _, t in pairs]))
-            phase = "braking" if kind == "braking" else PHASE
+            phase = kinematic_generator.phase(kind)
             record(f"kinematic/{kind}", [r for r, _ in pairs], truths, noise_sd, k_eps, phase)
     figure(doc["summary"], args.figure)
 

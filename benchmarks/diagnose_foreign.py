@@ -107,7 +107,7 @@ def kinematic_case(seed: int, name: str, directory, duration: float):
         "speed_noise_m_s": rec.truth["speed_noise_m_s"],
     }
     path = kinematic_generator.write(rec, Path(directory) / f"kinematic_{seed}.csv")
-    return path, "braking" if kind == "braking" else "traction", truth
+    return path, kinematic_generator.phase(kind), truth
 
 
 def limit_rates(cases) -> dict:

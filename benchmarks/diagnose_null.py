@@ -87,7 +87,7 @@ def kinematic_case(seed: int, directory, duration: float) -> dict:
     settings = kinematic_generator.random_settings(rng)
     rec = kinematic_generator.generate(seed, kind, duration_s=duration, **settings)
     path = kinematic_generator.write(rec, Path(directory) / f"kinematic_{seed}.csv")
-    phase = "braking" if kind == "braking" else "traction"
+    phase = kinematic_generator.phase(kind)
     start = time.perf_counter()
     result, _ = diagnose_file(path, phase=phase)
     result["seconds"] = time.perf_counter() - start

@@ -80,6 +80,11 @@ def motion(kind: str, t, duration_s: float) -> tuple:
     raise ValueError(f"unknown kind {kind!r}; choose one of {', '.join(KINDS)}")
 
 
+def phase(kind: str) -> str:
+    """The ``--phase`` profile ``kind`` is fitted and diagnosed with: its creep's sign."""
+    return "braking" if kind == "braking" else "traction"
+
+
 def random_settings(rng: np.random.Generator) -> dict:
     """Keyword arguments of :func:`generate` for a random clean run, drawn from ``rng`` in this
     order: Polach parameters (``physics.random_params``), vehicle, logger rate (20, 50, 100 or
