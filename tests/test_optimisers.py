@@ -200,10 +200,10 @@ def test_polach_matches_the_textbook_form():
     s, w = jnp.asarray(s[0]), jnp.asarray(w[0])
     for th in (theta[0, 0], np.array([0.4, 1.0, 1e-9, 0.36, 0.13])):  # the second clips eps
         th = jnp.asarray(th)
-        for argnum in (0, 1, 2):
-            ref = jax.jacfwd(textbook, argnums=argnum)(th, s, w)
+        for argnum in (0, 1, 2):  # jitted: one program each, not one per primitive
+            ref = jax.jit(jax.jacfwd(textbook, argnums=argnum))(th, s, w)
             for jac in (jax.jacfwd, jax.jacrev):
-                got = jac(lambda *a: polach_adhesion(a[0], a[1], a[2], 130.0), argnums=argnum)(th, s, w)
+                got = jax.jit(jac(lambda *a: polach_adhesion(a[0], a[1], a[2], 130.0), argnums=argnum))(th, s, w)
                 assert np.max(np.abs(got - ref)) <= 1e-14 * np.max(np.abs(ref))
 
 
