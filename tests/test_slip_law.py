@@ -75,6 +75,16 @@ def test_zero_sd_is_the_smoothed_slip_exactly():
     )
 
 
+#: Value and slip-gradient of the law's mean and of its nodes' sum, jitted once for every example.
+_VALUE_AND_GRAD = tuple(
+    jax.jit(jax.value_and_grad(f))
+    for f in (
+        lambda s, sd, mu: truncated_mean(s, sd, mu)[0],
+        lambda s, sd, mu: jnp.sum(slip_nodes(s, sd, mu)),
+    )
+)
+
+
 @settings(max_examples=60, deadline=None)
 @given(
     st.floats(-1e4, 1e4),  # slip in units of sd: far beyond the bound on either side
@@ -83,8 +93,8 @@ def test_zero_sd_is_the_smoothed_slip_exactly():
 )
 def test_finite_with_finite_gradients_anywhere(k, sd, mu):
     slip, sd, mu = jnp.array([k * sd]), jnp.array([sd]), jnp.array([mu])
-    for f in (lambda s: truncated_mean(s, sd, mu)[0], lambda s: jnp.sum(slip_nodes(s, sd, mu))):
-        value, grad = jax.value_and_grad(f)(slip)
+    for value_and_grad in _VALUE_AND_GRAD:
+        value, grad = value_and_grad(slip, sd, mu)
         assert np.isfinite(float(value)) and np.all(np.isfinite(np.asarray(grad)))
     if mu[0] != 0:  # the law's mean is on the force's side
         assert float(jnp.sign(mu[0]) * truncated_mean(slip, sd, mu)[0]) >= 0.0
@@ -197,7 +207,8 @@ def test_population_nodes_at_the_limits():
     slip = jnp.concatenate([SLIP, jnp.array([-1.0, 0.0])])
     sd = jnp.concatenate([SD, jnp.array([1e-3, 0.0])])
     mu = jnp.concatenate([MU, jnp.array([0.3, 0.3])])
-    nodes = np.asarray(posterior_nodes(slip, sd, mu))
+    nodes_of = jax.jit(posterior_nodes)  # one program per shape, not one per primitive
+    nodes = np.asarray(nodes_of(slip, sd, mu))
     assert np.all(np.isfinite(nodes))
     np.testing.assert_array_equal(nodes[-1], np.zeros(GH_NODES))
     normal = np.asarray(slip[-2] + sd[-2] * slip_nodes(slip[-2:-1], sd[-2:-1], mu[-2:-1])[:, 0])
@@ -205,7 +216,7 @@ def test_population_nodes_at_the_limits():
     np.testing.assert_allclose(nodes[-2], normal, rtol=1e-12, atol=4 * np.finfo(float).eps)
     signed = np.abs(np.asarray(mu)) >= SLIP_SIGN_MIN
     assert np.all(np.sign(np.asarray(mu))[signed, None] * nodes[signed] >= -1e-12)
-    padded = posterior_nodes(
+    padded = nodes_of(
         jnp.concatenate([slip, jnp.full(50, slip[-1])]),
         jnp.concatenate([sd, jnp.full(50, sd[-1])]),
         jnp.concatenate([mu, jnp.full(50, mu[-1])]),
