@@ -203,7 +203,8 @@ def test_polach_matches_the_textbook_form():
         for argnum in (0, 1, 2):  # jitted: one program each, not one per primitive
             ref = jax.jit(jax.jacfwd(textbook, argnums=argnum))(th, s, w)
             for jac in (jax.jacfwd, jax.jacrev):
-                got = jax.jit(jac(lambda *a: polach_adhesion(a[0], a[1], a[2], 130.0), argnums=argnum))(th, s, w)
+                ours = jac(lambda *a: polach_adhesion(a[0], a[1], a[2], 130.0), argnums=argnum)
+                got = jax.jit(ours)(th, s, w)
                 assert np.max(np.abs(got - ref)) <= 1e-14 * np.max(np.abs(ref))
 
 
