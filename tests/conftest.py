@@ -7,9 +7,11 @@ process that made it exits.
 XLA compilation is most of the suite's time (46 of 65 s of tests/test_uncertainty.py alone), and the
 workers and the CLI's subprocesses compile many of the same programs. So the whole session shares
 JAX's persistent compilation cache (``enable_compilation_cache``, as the CLI does for a user): a
-program one process compiled, the others load. Measured on a whole-suite run (2 workers, 2026-12-03):
-17:58 without it, 15:42 with it (test CPU seconds 2096 → 1831). A program loaded from the cache is
-the executable compiled, so bit-for-bit tests compare the same code either way.
+program one process compiled, the others load. Measured 2026-12-03 (2 workers): five of the slowest
+files run back to back without and with it, 423 → 382 s; whole-suite runs 20 minutes apart, 17:58 →
+15:42 — but fresh-clone CI runs two hours apart 17:35 → 17:37, within this machine's hourly spread.
+A program loaded from the cache is the executable compiled, so bit-for-bit tests compare the same
+code either way.
 
 Every program XLA:CPU compiles holds a few memory maps for as long as JAX's caches keep it, and a
 worker that runs half the suite compiles thousands: one reached 64 031 of Linux's default 65 530
