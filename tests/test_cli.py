@@ -262,7 +262,10 @@ def test_posterior_of_an_oversampled_recording_samples_every_dth_sample(tmp_path
     1/κ (``--likelihood gauss --temper``) within Monte Carlo noise: measured at 800 steps, medians
     within 0.07 of an interval's width, widths 1.00–1.10 of the full ones (sampling 3.2 s against
     8.5 s; the full 60 s run, 9 466 samples, d = 5: within 0.07 and 0.98–1.08). One slip law's
-    chains (``--single-law``): the posterior's own intervals, not joined to an LM fit's."""
+    chains (``--single-law``): the posterior's own intervals, not joined to an LM fit's. At 800
+    steps (τ ≈ 35 steps) a width is Monte Carlo noise too: over seeds 0–3 (2026-12-03) μ_max's width
+    ratio was 0.71, 0.93, 1.08 and 1.11, and a start moved by round-off moves it as much; the bound
+    [0.6, 1.6] still catches a weight that misses the thinning's d (widths off by √d = 1.73)."""
     steady = generate(0, effect="none", sensor="mild", rate_hz=200.0, duration_s=30.0)
     path = write(steady, tmp_path / "steady.csv")
     docs = {}
@@ -279,7 +282,7 @@ def test_posterior_of_an_oversampled_recording_samples_every_dth_sample(tmp_path
         a, b = ({**d["params"], **d["derived"]}[name] for d in (docs["thinned"], docs["all"]))
         width = b["q95"] - b["q05"]
         assert abs(a["median"] - b["median"]) <= 0.25 * width, (name, a, b)
-        assert 0.8 <= (a["q95"] - a["q05"]) / width <= 1.25, (name, a, b)
+        assert 0.6 <= (a["q95"] - a["q05"]) / width <= 1.6, (name, a, b)
 
 
 def test_fit_warns_few_samples_in_process(tmp_path, capsys):

@@ -14,18 +14,18 @@ import sys
 import warnings
 from pathlib import Path
 
-import jax
 import numpy as np
 
 from ..data.dataset import sd_scale_summary, thinned, valid_mask
 from ..data.selected import creep_sign_warning
+from ..identify.batch_fit import bucketed
 from ..identify.ensemble import ChainTooShortWarning
 from ..identify.laplace import colour_check, initial_spread, thinning
 from ..identify.likelihood import noise_names, other_slip_law, with_slip_law
 from ..identify.mcmc import sample_posterior
 from ..identify.observer_view import recording_observer_terms
 from ..identify.peak import extrapolation_warning
-from ..identify.polach_fit import fit_polach, require_samples
+from ..identify.polach_fit import require_samples
 from ..identify.polach_residuals import eiv_scale, standardised_residual
 from ..identify.trust import data_warnings as trust_data_warnings
 from ..identify.trust import join_posterior_intervals, normal_intervals
@@ -34,7 +34,8 @@ from ..models.polach import PARAM_NAMES, adhesion_peak
 from ..plots.posterior import corner_plot, predictive_plot
 from ..status import status_of
 from .common import Progress, UserError, emit_json, require_output_dir, require_seed, table
-from .fit_program import lm_start
+from .fit_program import fit_polach as kept_fit
+from .fit_program import lm_start, seed_key
 from .fit_program import to_dataset as kept_dataset
 from .fit_run import other_law_fits
 from .loading import load_dataset, load_from_args, say_sidecar_warning, slip_law_used
@@ -51,9 +52,10 @@ def tail_check(data, theta, kappa: float) -> dict:
     (LM's and the likelihoods' errors-in-variables standardisation,
     :func:`~jadhesion.identify.polach_residuals.standardised_residual`, σ = 1.4826 MAD of the
     residuals), their excess kurtosis and ``"kurtosis_threshold"`` = three standard errors of a
-    Gaussian sample's, ``3 √(24 κ / n)`` (n/κ effective samples). ``"heavy_tails"``: above it."""
+    Gaussian sample's, ``3 √(24 κ / n)`` (n/κ effective samples). ``"heavy_tails"``: above it.
+    A padded dataset (``weight``) gives its samples' numbers."""
     sigma = eiv_scale(theta, data)
-    z = np.asarray(standardised_residual(theta, data._replace(residual_scale=sigma)))
+    z = np.asarray(standardised_residual(theta, data._replace(residual_scale=sigma)))[valid_mask(data)]
     zc = z - z.mean()
     excess = float(np.mean(zc**4) / max(np.mean(zc**2) ** 2, 1e-300) - 3.0)
     threshold = 3.0 * float(np.sqrt(24.0 * kappa / z.shape[0]))
@@ -238,22 +240,26 @@ def run(args) -> int:
             f"{selection.summary()}; use --likelihood auto or --start/--end"
         )
     likelihood, obs, note = _choose_likelihood(recording, args.likelihood)
-    start = lm_start(data, obs=obs)
+    # the start and the checks on the dataset padded to its length bucket: one program per bucket,
+    # loaded, not compiled, for a recording of a new length (the sampler runs on the samples alone;
+    # the observer's view needs them unpadded)
+    padded = bucketed(data) if obs is None else data
+    start = lm_start(padded, obs=obs)
     theta0 = start.params
     # the checks it prints, at the least-squares optimum: the residuals' colour and tails; auto
     # tempers the Gaussian by 1/κ (the Student-t in its place was not better on both generators:
     # benchmarks/results/coverage_posterior_student.json); a requested likelihood runs as asked,
     # untempered unless --temper (ar1/observer model the colour themselves)
     auto = args.likelihood == "auto"
-    tempering = colour_check(data, theta0, likelihood, obs)
-    tempering.update(tail_check(data, theta0, tempering["kappa"]))
+    tempering = colour_check(padded, theta0, likelihood, obs)
+    tempering.update(tail_check(padded, theta0, tempering["kappa"]))
     tempering["weight"] = 1.0 / tempering["kappa"] if auto or args.temper else 1.0
     if auto:
         note = _auto_note(tempering)
     elif args.temper:
         note = f"requested, tempered by 1/κ, κ = {tempering['kappa']:.1f}"
     if likelihood == "student":  # starts at LM's robust (pseudo-Huber) optimum, near its mode
-        start = fit_polach(data, "lm", jax.random.key(args.seed))
+        start = kept_fit(padded, "lm", seed_key(args.seed))
         theta0 = start.params
     sampled = data
     if auto and (every := thinning(tempering["samples"], tempering["kappa"])) > 1:
@@ -263,7 +269,8 @@ def run(args) -> int:
         tempering["weight"] = every / tempering["kappa"]
         tempering["thinned"] = {"every": every, "samples": int(sampled.adhesion.shape[0])}
         note += f"; sampled every {every}th sample, each weighted {every}/κ"
-    spread = np.asarray(initial_spread(theta0, sampled, obs=obs)) * np.sqrt(1.0 / tempering["weight"])
+    spread = initial_spread(theta0, sampled if obs is not None else bucketed(sampled), obs=obs)
+    spread = np.asarray(spread) * np.sqrt(1.0 / tempering["weight"])
     theta0 = np.asarray(theta0)
     steps, max_steps = (DEFAULT_STEPS, AUTO_MAX_STEPS) if args.steps is None else (args.steps, None)
     progress = Progress(steps, "posterior", "steps", enabled=not args.json or sys.stderr.isatty())

@@ -11,6 +11,8 @@ parameter on a face (kS = 1 on dry rail) or one the data barely constrain (B, A 
 
 from __future__ import annotations
 
+import functools
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -65,7 +67,8 @@ def lm_optimum(data: PolachDataset, starts=STARTS, obs: ObserverTerms | None = N
 
 def laplace_covariance(theta_hat, data: PolachDataset, obs: ObserverTerms | None = None):
     """``sigma_hat² (JᵀJ)⁻¹`` (5, 5) at the optimum by :func:`.uncertainty.covariance` (i.i.d.);
-    ``inf`` rows/columns for parameters in a singular direction of ``JᵀJ``.
+    ``inf`` rows/columns for parameters in a singular direction of ``JᵀJ``; of a padded dataset's
+    samples alone (its ``weight``: one program per length bucket).
     With ``obs``, of the observer residual (i.i.d. errors assumed: a starting scale only)."""
     return _laplace_covariance(theta_hat, data, obs)
 
@@ -75,7 +78,7 @@ def _laplace_covariance(theta_hat, data, obs):
     residual, args = _residual(obs)
     r = residual(theta_hat, args(data))
     jac = jax.jacfwd(residual)(theta_hat, args(data))
-    return covariance(jac, r, hac=False)[0]
+    return covariance(jac, r, hac=False, weight=data.weight)[0]
 
 
 #: Samples above which the tempered posterior samples a thinned dataset (:func:`thinning`).
@@ -103,18 +106,27 @@ def initial_spread(
     return jnp.clip(jnp.where(jnp.isfinite(std), 0.5 * std, cap), floor, cap)
 
 
+@functools.partial(jax.jit, static_argnames="likelihood")
+def _colour(data, theta, likelihood, obs):
+    r = data.adhesion - prediction(theta, data, likelihood, obs)
+    r = r if data.weight is None else r * data.weight
+    kappa, lags = colour_factor(r, data.weight)
+    return kappa, lags, lag1_autocorrelation(r)
+
+
 def colour_check(data: PolachDataset, theta, likelihood: str = "gauss", obs: ObserverTerms | None = None):
     """The residuals' colour at ``theta`` (e.g. the LM optimum), rows in time order: ``{"kappa"``
     (:func:`.uncertainty.colour_factor`, ≥ 1), ``"effective_samples"`` (n/κ), ``"samples"`` (n),
     ``"residual_rho"`` (lag-1 autocorrelation), ``"lags"`` (bandwidth)``}``. A Gaussian
-    likelihood tempered by 1/κ counts n/κ independent samples instead of n correlated ones."""
-    r = jnp.asarray(data.adhesion) - prediction(jnp.asarray(theta), data, likelihood, obs)
-    kappa, lags = colour_factor(r)
-    n = r.shape[0]
+    likelihood tempered by 1/κ counts n/κ independent samples instead of n correlated ones. A
+    padded dataset (``weight``, trailing padding) gives its samples' numbers, one program per
+    length bucket."""
+    kappa, lags, rho = _colour(data, jnp.asarray(theta), likelihood, obs)
+    n = int(data.adhesion.shape[0] if data.weight is None else np.sum(np.asarray(data.weight) > 0))
     return {
         "kappa": float(kappa),
         "effective_samples": n / float(kappa),
         "samples": n,
-        "residual_rho": float(lag1_autocorrelation(r)),
+        "residual_rho": float(rho),
         "lags": int(lags),
     }

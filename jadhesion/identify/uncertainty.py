@@ -139,14 +139,19 @@ def covariance(jac, r, fixed=None, hac=True, weight=None):
 
 
 @jax.jit
-def colour_factor(r):
+def colour_factor(r, weight=None):
     """``(κ, L)``: the residuals' long-run variance over their variance, ``κ = max(1, 1 + 2 Σ_{l=1..L}
     (1 − l/(L+1)) ρ_l)`` (Bartlett weights, ``ρ_l`` the lag-l autocorrelation of ``r`` (n,) in time
     order, ``L`` = :func:`bandwidth`). ``n/κ`` is the effective number of independent samples: for
     AR(1) residuals κ → (1 + ρ)/(1 − ρ). Floored at 1 so that negatively correlated residuals never
-    narrow an interval."""
-    lags = bandwidth(r)
-    rc = r - jnp.mean(r)
+    narrow an interval. ``weight`` (n,): a padding mask (1 on the samples, 0 on trailing padding
+    rows, whose ``r`` must be 0), the samples' κ whatever the padded length."""
+    if weight is None:
+        n, rc = r.shape[0], r - jnp.mean(r)
+    else:
+        n = jnp.sum(weight > 0)
+        rc = jnp.where(weight > 0, r - jnp.sum(r) / n, 0.0)
+    lags = bandwidth(r, n)
     ratio = _long_run(rc[:, None], lags)[0, 0] / jnp.maximum(jnp.sum(rc * rc), jnp.finfo(r.dtype).tiny)
     return jnp.maximum(ratio, 1.0), lags
 
