@@ -10,11 +10,14 @@ import pytest
 
 from jadhesion.cli import main
 from jadhesion.cli.online import ALGORITHM_NAMES, FORGETTING
+from jadhesion.data.dataset import PolachDataset
 from jadhesion.data.recording import save_recording
 from jadhesion.data.simulator import simulate
 from jadhesion.experiments import online as ex
 from jadhesion.identify import online as ol
+from jadhesion.identify.kiencke_fit import fit_kiencke, informative
 from jadhesion.models.kiencke import kiencke_adhesion
+from jadhesion.status import Status
 from validation.foreign_generator import generate, write
 
 TRUE = (80.0, 100.0, 35.0)  # p1, p2, a_s
@@ -52,6 +55,33 @@ def test_shares_the_reproduce_code_path_exactly(capsys, sweep_csv):
     assert doc["track"]["used"] == used.tolist() and doc["n_used"] == 140
     # a skipped sample holds the estimate and reports η = 1
     assert doc["track"]["p2"][60] == doc["track"]["p2"][49] and doc["track"]["eta"][60] == 1.0
+
+
+def test_tracking_runs_padded_to_its_bucket_and_returns_its_own_samples(sweep_csv):
+    """``track_dataset`` runs the offline a_s fit and the tracker on the dataset padded to its
+    length bucket (200 → 256 rows: one program per bucket), with a mask of its own and times with a
+    gap: the trace is its 200 samples', bit for bit the unpadded tracker's, and a_s the unpadded
+    fit's to round-off."""
+    _, lam, mu, v = sweep_csv
+    weight = np.ones(200)
+    weight[160:170] = 0.0  # another phase's samples: held
+    time = np.r_[np.arange(100) * 0.02, 10.0 + np.arange(100) * 0.02]
+    data = PolachDataset(*map(jnp.asarray, (lam, lam * v, mu, v, 1.0)), weight=jnp.asarray(weight))
+    programs = ol.run._cache_size()
+    shorter = jax.tree.map(lambda a: a[:190] if jnp.ndim(a) else a, data)
+    ol.track_dataset(shorter, "1", None, jax.random.key(0), time[:190])
+    out = ol.track_dataset(data, "1", None, jax.random.key(0), time)
+    assert ol.run._cache_size() <= programs + 1  # 190 and 200 rows: one tracker program
+    fit = fit_kiencke(data, "lm", jax.random.key(0))
+    assert int(out.slope_fit.status) == int(fit.status) == Status.CONVERGED
+    assert float(out.a_s) == pytest.approx(float(fit.params[2]), rel=1e-9)
+    used = informative(data) > 0
+    ratio = jnp.asarray(ol.step_ratios(time))
+    state, trace = ol.run(ol.algorithm1_params(a_s=out.a_s), data.creep, data.adhesion, used, ratio)
+    assert out.used.shape == (200,) and out.used.tolist() == np.asarray(used).tolist()
+    for name, got, want in zip(trace._fields, out.trace, trace, strict=True):
+        assert got.shape[0] == 200 and np.array_equal(got, np.asarray(want)), name
+    assert int(out.status) == int(ol.final_status(state))
 
 
 @pytest.mark.parametrize("alg", ["1", "2", "rls"])

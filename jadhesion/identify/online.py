@@ -54,6 +54,7 @@ from ..data.dataset import PolachDataset
 from ..data.segments import gap_limit
 from ..models.kiencke import DEFAULT_SLOPE, kiencke_adhesion, kiencke_regressors
 from ..status import Status
+from .batch_fit import pad_dataset
 from .kiencke_fit import MIN_SAMPLES, fit_kiencke, informative
 from .peak import extrapolation_warning
 
@@ -448,8 +449,8 @@ NOISE_CALIBRATED = ("1-guarded",)
 
 
 class Tracked(NamedTuple):
-    """Online identification of one dataset: ``a_s`` used [-], the trace (K, …), ``used`` (K,)
-    informative-sample flags, the final :class:`Status` code, the offline fit that gave ``a_s``
+    """Online identification of one dataset: ``a_s`` used [-], the trace (K, …, NumPy), ``used``
+    (K,) informative-sample flags (NumPy), the final :class:`Status` code, the offline fit that gave ``a_s``
     (``None`` when ``a_s`` was given), the coefficients used, and what the forgetting's memory
     was counted in (:data:`FORGETTING`)."""
 
@@ -477,6 +478,8 @@ def track_dataset(data: PolachDataset, algorithm: str = "1", a_s=None, key=None,
     """
     if algorithm not in ALGORITHMS:
         raise ValueError(f"unknown algorithm {algorithm!r}; choose one of {', '.join(ALGORITHMS)}")
+    n = data.adhesion.shape[0]
+    data = _padded(data)
     used = informative(data) > 0
     slope_fit = None
     if a_s is None:
@@ -484,8 +487,27 @@ def track_dataset(data: PolachDataset, algorithm: str = "1", a_s=None, key=None,
         a_s = slope_fit.params[2]
     extra = {"noise_sd": noise_sd(data.adhesion, used)} if algorithm in NOISE_CALIBRATED else {}
     params = ALGORITHMS[algorithm](a_s=a_s, **extra)
-    ratio = None if time is None else jnp.asarray(step_ratios(time), data.creep.dtype)
+    ratio = None
+    if time is not None:
+        ratio = np.pad(step_ratios(time), (0, data.adhesion.shape[0] - n), mode="edge")
+        ratio = jnp.asarray(ratio, data.creep.dtype)
     state, trace = run(params, data.creep, data.adhesion, used, ratio)
     status = jnp.where(jnp.sum(used) < MIN_SAMPLES, Status.NOT_RUN, final_status(state))
     forgetting = FORGETTING[time is None]
+    trace = OnlineInfo(*(np.asarray(a)[:n] for a in trace))
+    used = np.asarray(used)[:n]
     return Tracked(params.a_s, trace, used, status.astype(jnp.int32), slope_fit, params, forgetting)
+
+
+def _padded(data: PolachDataset) -> PolachDataset:
+    """``data`` padded to its length bucket (:func:`.batch_fit.pad_dataset`), its own ``weight``
+    (if any) kept on its rows: the tracker skips the padding (its state is unchanged on a sample
+    it does not use) and the offline fit ignores it, so every length of a bucket runs the
+    bucket's compiled programs."""
+    n = data.adhesion.shape[0]
+    padded = pad_dataset(data._replace(weight=None))
+    if data.weight is None:
+        return padded
+    weight = np.zeros(padded.adhesion.shape[0], np.asarray(data.weight).dtype)
+    weight[:n] = np.asarray(data.weight)
+    return padded._replace(weight=jnp.asarray(weight))
