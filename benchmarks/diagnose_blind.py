@@ -19,6 +19,11 @@ the coverage of the rail change's time interval (``extended.change_time``,
 :mod:`jadhesion.diagnose.change_time`) where a true change was named.
 
     python -m benchmarks.diagnose_blind [--n 220] [--null 80] [--seed 0] [--coast S] [--json]
+    python -m benchmarks.diagnose_blind --upper 0.5:1.5 --n 56 --null 0   # the top of each range
+
+``--upper F:G`` asks whether a threshold lies at the top of an effect's range: single effects,
+each in turn, |magnitude| log-uniform on [F, G] × the top of its typical range (the diagnosis
+ranks sizes up to 1.5 × that top, :meth:`jadhesion.models.effect_spec.EffectSpec.plausible`).
     python -m benchmarks.diagnose_blind --from-cases benchmarks/results/diagnose_blind_cases.json
 """
 
@@ -297,6 +302,12 @@ def main(argv=None) -> int:
         metavar="S",
         help="a coasting gap of S seconds in every recording (default 0: none)",
     )
+    parser.add_argument(
+        "--upper",
+        default=None,
+        metavar="F:G",
+        help="single effects in turn, |magnitude| in [F, G] x the top of the typical range",
+    )
     parser.add_argument("--json", action="store_true", help="one JSON document on stdout")
     parser.add_argument(
         "--out",
@@ -333,14 +344,21 @@ def main(argv=None) -> int:
     head = commit()
     rng = np.random.default_rng(args.seed)
     total = args.n + args.null
+    upper = None if args.upper is None else tuple(float(x) for x in args.upper.split(":"))
     progress = Progress(total, "diagnoses", enabled=not args.json or sys.stderr.isatty())
     cases = []
     Path(args.cases).parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
         for i in range(total):  # null cases spread evenly, so a cut-short run has both kinds
             is_main = (i + 1) * args.null // total == i * args.null // total
+            if not is_main:
+                effects = []
+            elif upper is None:
+                effects = draw(rng)
+            else:
+                effects = random_effects(rng, [NAMES[len(cases) % len(NAMES)]], upper)
             case = run_case(
-                draw(rng) if is_main else [],
+                effects,
                 rng,
                 tmp,
                 args.samples,
@@ -361,6 +379,7 @@ def main(argv=None) -> int:
         "seed": args.seed,
         "samples": args.samples,
         "coast_s": args.coast,
+        "upper": upper,
         "gain_threshold": GAIN_THRESHOLD,
         "replicas": 19,
         "phase": "traction",

@@ -75,11 +75,14 @@ def random_profile(rng, name: str, p_varied: float = 0.0):
     return scenario, int(rng.choice(VARIED_SAMPLES)), True
 
 
-def random_effects(rng, names) -> list:
-    """``[(name, magnitude)]`` with log-uniform magnitudes from :data:`MAGNITUDE_RANGE`."""
+def random_effects(rng, names, upper=None) -> list:
+    """``[(name, magnitude)]`` with log-uniform magnitudes from :data:`MAGNITUDE_RANGE`, or with
+    ``upper = (f, g)`` from ``[f, g]`` × the top of that range."""
     out = []
     for name in names:
         lo, hi = MAGNITUDE_RANGE[name]
+        if upper is not None:
+            lo, hi = upper[0] * hi, upper[1] * hi
         m = float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
         out.append((name, m * (rng.choice([-1.0, 1.0]) if name in SIGNED else 1.0)))
     return out

@@ -95,8 +95,9 @@ EFFECTS = {
             detection=Detection(
                 0.12,
                 0.12,
-                "14/14 named above, 0/9 below; 13/13 above the recording's min_detectable",
-                own_limit=(23, 24),
+                "14/14 named above, 0/9 below; 13/13 above the recording's min_detectable; at 0.27–0.67 "
+                "(--upper 0.5:1.5) 7/8",
+                own_limit=(30, 31),
             ),
         ),
         EffectSpec(
@@ -133,8 +134,9 @@ EFFECTS = {
             detection=Detection(
                 None,
                 None,
-                "not reached in 0.002–0.028: 7/14 named; 3/3 above the recording's min_detectable",
-                own_limit=(13, 13),
+                "not reached in 0.002–0.028: 7/14 named; 3/3 above the recording's min_detectable; at "
+                "0.029–0.056 (--upper 0.5:1.5) 7/8",
+                own_limit=(18, 19),
             ),
         ),
         EffectSpec(
@@ -164,8 +166,9 @@ EFFECTS = {
             detection=Detection(
                 None,
                 None,
-                "not reached in 0.012–0.28 s: 0/13 named; 0/2 above min_detectable",
-                own_limit=(2, 4),
+                "not reached in 0.012–0.28 s: 0/13 named; 0/2 above min_detectable; at 0.15–0.34 s "
+                "(--upper 0.5:1.5) 0/8",
+                own_limit=(2, 9),
             ),
         ),
         EffectSpec(
@@ -191,7 +194,11 @@ EFFECTS = {
             sentence="the friction level falls by {slope:.0%} per 100 % speed increase about the mean speed "
             "(Curtius–Kniffler-like); identify per speed band or add a speed term",
             detection=Detection(
-                None, None, "not reached in 0.05–0.84: 5/18 named; 3/3 above min_detectable", own_limit=(4, 4)
+                None,
+                None,
+                "not reached in 0.05–0.84: 5/18 named; 3/3 above min_detectable; at 0.58–1.2 "
+                "(--upper 0.5:1.5) 5/8",
+                own_limit=(7, 7),
             ),
         ),
         EffectSpec(
@@ -221,7 +228,8 @@ EFFECTS = {
             detection=Detection(
                 None,
                 None,
-                "not reached in 0.002–0.032: 0/21 named, none above its min_detectable",
+                "not reached in 0.002–0.032: 0/21 named, none above its min_detectable; at 0.026–0.059 "
+                "(--upper 0.5:1.5) 0/8, none above it",
                 own_limit=(1, 2),
             ),
         ),
@@ -247,7 +255,11 @@ EFFECTS = {
             "thermal lag of about {tau_th_s:.1f} s",
             terms=lambda v: {"tau_th_s": v.get("tau_th_s", math.nan)},
             detection=Detection(
-                None, None, "not reached in 0.05–2.6: 3/22 named; 1/3 above min_detectable", own_limit=(1, 5)
+                None,
+                None,
+                "not reached in 0.05–2.6: 3/22 named; 1/3 above min_detectable; at 1.9–3.9 "
+                "(--upper 0.5:1.5) 1/8",
+                own_limit=(2, 9),
             ),
         ),
         EffectSpec(
@@ -278,7 +290,10 @@ EFFECTS = {
             "for load transfer",
             terms=lambda v: {"load_accel": v.get("load_accel", 0.0)},
             detection=Detection(
-                None, None, "not reached in 0.13–1.5: 0/7 named, none above its min_detectable"
+                None,
+                None,
+                "not reached in 0.13–1.5: 0/7 named, none above its min_detectable; at 0.77–1.4 "
+                "(--upper 0.5:1.5) 0/8, none above it",
             ),
         ),
     )
@@ -296,18 +311,21 @@ INDEX = {name: i for i, name in enumerate(EFFECT_NAMES)}
 #: (Before: 8d89b5a's thresholds, measured with one global gain threshold on clean sensors.)
 DETECTION_PROVENANCE = "benchmarks/diagnose_blind.py --n 140 --null 0 --seed 2027 at d2e6902"
 #: How :attr:`Detection.own_limit` was counted: single-effect blind cases whose |magnitude| (our
-#: units) reached their recording's ``sensitivity.min_detectable``, pooled over four runs — ours at
+#: units) reached their recording's ``sensitivity.min_detectable``, pooled over five runs — ours at
 #: d2e6902 (the run above), ours ``--n 80 --null 0 --seed 23`` at 802c73e
 #: (``diagnose_blind_n80_seed23_own_limit.json``) and the independent generator's ``diagnose_foreign
 #: --per-effect 4 --seed 3`` at 802c73e (``diagnose_foreign_n28_own_limit.json``; its speed
 #: dependence, thermal softening and load transfer follow other laws and are not counted) — and the
 #: kinematic generator's ``diagnose_foreign --generator kinematic --per-effect 6 --seed 5`` at
 #: 9223087 (``diagnose_kinematic_n18.json``: rail change 4 of 5, radius error 5 of 5, torque offset
-#: 0 of 1).
+#: 0 of 1) — and ours at the top of each typical range, ``diagnose_blind --upper 0.5:1.5 --n 56
+#: --null 0 --seed 31`` at 4a54136 (``diagnose_blind_upper.json``: 8 cases per effect, |magnitude|
+#: 0.5–1.5 × the range's top; above their own limit rail change 7 of 7, radius error 5 of 6, speed
+#: dependence 3 of 3, signal delay 0 of 5, thermal softening 1 of 4).
 OWN_LIMIT_PROVENANCE = (
     "diagnose_blind --seed 2027 at d2e6902; diagnose_blind --n 80 --seed 23 and "
     "diagnose_foreign --per-effect 4 --seed 3 at 802c73e; diagnose_foreign --generator kinematic "
-    "--per-effect 6 --seed 5 at 9223087"
+    "--per-effect 6 --seed 5 at 9223087; diagnose_blind --upper 0.5:1.5 --n 56 --seed 31 at 4a54136"
 )
 
 
