@@ -19,12 +19,12 @@ the coverage of the rail change's time interval (``extended.change_time``,
 :mod:`jadhesion.diagnose.change_time`) where a true change was named.
 
     python -m benchmarks.diagnose_blind [--n 220] [--null 80] [--seed 0] [--coast S] [--json]
+    python -m benchmarks.diagnose_blind --from-cases benchmarks/results/diagnose_blind_cases.json
     python -m benchmarks.diagnose_blind --upper 0.5:1.5 --n 56 --null 0   # the top of each range
 
 ``--upper F:G`` asks whether a threshold lies at the top of an effect's range: single effects,
 each in turn, |magnitude| log-uniform on [F, G] × the top of its typical range (the diagnosis
 ranks sizes up to 1.5 × that top, :meth:`jadhesion.models.effect_spec.EffectSpec.plausible`).
-    python -m benchmarks.diagnose_blind --from-cases benchmarks/results/diagnose_blind_cases.json
 """
 
 from __future__ import annotations
@@ -344,7 +344,7 @@ def main(argv=None) -> int:
     head = commit()
     rng = np.random.default_rng(args.seed)
     total = args.n + args.null
-    upper = None if args.upper is None else tuple(float(x) for x in args.upper.split(":"))
+    upper = None if args.upper is None else _span(parser, args.upper)
     progress = Progress(total, "diagnoses", enabled=not args.json or sys.stderr.isatty())
     cases = []
     Path(args.cases).parent.mkdir(parents=True, exist_ok=True)
@@ -387,6 +387,17 @@ def main(argv=None) -> int:
         "documented_thresholds": DETECTION_PROVENANCE,
     }
     return report(summary, args.json, args.out)
+
+
+def _span(parser, text: str) -> tuple:
+    """``--upper F:G`` as ``(F, G)``, 0 < F < G (else the parser's error: exit 2)."""
+    try:
+        lo, hi = (float(x) for x in text.split(":"))
+    except ValueError:
+        parser.error(f"--upper: F:G expected, got {text!r}")
+    if not 0.0 < lo < hi:
+        parser.error(f"--upper: 0 < F < G required, got {text!r}")
+    return lo, hi
 
 
 def report(summary, as_json: bool, out) -> int:
