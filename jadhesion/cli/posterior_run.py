@@ -269,7 +269,7 @@ def run(args) -> int:
         tempering["weight"] = every / tempering["kappa"]
         tempering["thinned"] = {"every": every, "samples": int(sampled.adhesion.shape[0])}
         note += f"; sampled every {every}th sample, each weighted {every}/κ"
-    spread = initial_spread(theta0, sampled if obs is not None else bucketed(sampled), obs=obs)
+    spread = initial_spread(theta0, padded if sampled is data else bucketed(sampled), obs=obs)
     spread = np.asarray(spread) * np.sqrt(1.0 / tempering["weight"])
     theta0 = np.asarray(theta0)
     steps, max_steps = (DEFAULT_STEPS, AUTO_MAX_STEPS) if args.steps is None else (args.steps, None)

@@ -19,6 +19,7 @@ import numpy as np
 
 from ..data.dataset import PolachDataset
 from ..models.polach import BOUNDS
+from .batch_fit import valid_samples
 from .box_lm import box_lm
 from .likelihood import prediction
 from .lm_result import LMResult, best_of
@@ -122,7 +123,7 @@ def colour_check(data: PolachDataset, theta, likelihood: str = "gauss", obs: Obs
     padded dataset (``weight``, trailing padding) gives its samples' numbers, one program per
     length bucket."""
     kappa, lags, rho = _colour(data, jnp.asarray(theta), likelihood, obs)
-    n = int(data.adhesion.shape[0] if data.weight is None else np.sum(np.asarray(data.weight) > 0))
+    n = valid_samples(data)
     return {
         "kappa": float(kappa),
         "effective_samples": n / float(kappa),
