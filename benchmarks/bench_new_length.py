@@ -24,14 +24,13 @@ import argparse
 import json
 import os
 import platform
-import resource
 import statistics
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
+from benchmarks.bench_startup import timed_process
 from benchmarks.provenance import commit
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -46,16 +45,9 @@ ARGS = {
 RATE_HZ, FIRST, STEP = 50.0, 2000, 40
 
 
-def _children_cpu() -> float:
-    r = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return r.ru_utime + r.ru_stime
-
-
 def _timed(argv, env) -> dict:
-    """Wall and CPU seconds of one process."""
-    cpu, start = _children_cpu(), time.perf_counter()
-    subprocess.run(argv, env=env, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, timeout=900)
-    return {"wall": time.perf_counter() - start, "cpu": _children_cpu() - cpu}
+    """Wall and CPU seconds of one process (:func:`.bench_startup.timed_process`)."""
+    return dict(zip(("wall", "cpu"), timed_process(argv, env), strict=True))
 
 
 def _recording(folder: Path, samples: int, seed: int, env) -> Path:

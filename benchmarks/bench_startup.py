@@ -52,7 +52,7 @@ def _children_cpu() -> float:
     return r.ru_utime + r.ru_stime
 
 
-def _timed(argv, env) -> tuple[float, float]:
+def timed_process(argv, env) -> tuple[float, float]:
     """Wall and CPU seconds of one process."""
     cpu, start = _children_cpu(), time.perf_counter()
     subprocess.run(argv, env=env, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, timeout=900)
@@ -138,8 +138,8 @@ def main(argv=None) -> int:
     warm_cache = work / "warm"
     warm = {**env, "JADHESION_CACHE": str(warm_cache)}
     traced = {**warm, "JADHESION_PROGRAMS": "0"}
-    _timed(fit, warm)  # fill: compiled executables + kept programs
-    _timed(fit, traced)  # fill: the library path's compiled executables
+    timed_process(fit, warm)  # fill: compiled executables + kept programs
+    timed_process(fit, traced)  # fill: the library path's compiled executables
 
     kinds = ("import_jax", "cold", "warm_traced", "warm_exported")
     times = {k: [] for k in kinds}
@@ -155,7 +155,7 @@ def main(argv=None) -> int:
             "warm_exported": (fit, warm),
         }
         for k, (argv, e) in runs.items():
-            wall, seconds = _timed(argv, e)
+            wall, seconds = timed_process(argv, e)
             times[k].append(wall)
             cpu[k].append(seconds)
         phases, scipy_imported = _breakdown(rec, args.method, warm)
