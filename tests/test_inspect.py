@@ -94,6 +94,16 @@ def test_implausible_adhesion_is_named_at_the_95th_percentile():
     assert "implausible_adhesion" in codes
 
 
+def test_inspect_text_of_a_selection_without_samples(logger_file, capsys):
+    """Braking asked of the first 5 s (standstill and traction): the text says so instead of failing (the JSON
+    gives ``null`` ranges)."""
+    assert main(["inspect", str(logger_file), "--phase", "braking", "--end", "4.9"]) == 0
+    out = capsys.readouterr().out
+    assert "selected: 0 of" in out and "creep: no selected samples" in out
+    assert main(["inspect", str(logger_file), "--phase", "braking", "--end", "4.9", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["ranges"]["creep"] is None
+
+
 def test_inspect_says_when_the_speed_columns_look_swapped(tmp_path, capsys):
     """Wheel and vehicle speed exchanged on both traction stretches: 700 of the 1100 moving samples
     have the wheel slower than the vehicle under traction; inspect names the likely cause first."""

@@ -75,6 +75,9 @@ def _text(doc) -> str:
             + ")"
         )
     for name, unit in (("vehicle_speed", "m/s"), ("creep", ""), ("slip_velocity", "m/s"), ("adhesion", "")):
+        if r[name] is None:  # no sample selected: the selection line above says why
+            lines.append(f"{name:>14}: no selected samples")
+            continue
         lo, hi = r[name]
         lines.append(f"{name:>14}: {lo:.4g} … {hi:.4g} {unit}".rstrip())
     lines += [f"identifiability [{n['code']}]: {n['message']}" for n in doc["identifiability"]]
