@@ -1,6 +1,7 @@
 """Recordings as loggers write them: mapped column names and units (``--column``, sidecar
 ``columns``) give the SI twin's values and fit; bad options give one line and exit code 2."""
 
+import dataclasses
 import json
 import math
 import os
@@ -206,6 +207,12 @@ def test_start_end_window_and_its_errors(tmp_path):
     ]:
         with pytest.raises(RecordingError, match=expected):
             trim(rec, start, end)
+    # epoch time stamps: the window's ends in full, so that 1.7e9 and its end 0.99 s later differ
+    epoch = dataclasses.replace(rec, columns={**rec.columns, "time": rec.columns["time"] + 1.7e9})
+    with pytest.raises(
+        RecordingError, match=r"runs from 1700000000 s to 1700000000\.99 s \(the bounds are times"
+    ):
+        trim(epoch, 10, 40)
 
 
 @pytest.mark.parametrize("unit", ["kN·m", "kN.m", "kN m", "kN⋅m"])

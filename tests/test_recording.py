@@ -204,6 +204,33 @@ CASES = {
             "--column wheel_speed=wheel_speed[km/h]",
         ],
     ),
+    "wheel rad/s": (  # the 22E's wheel radius 0.625 m: a ratio 1.6
+        _raw_text(30, lambda rows: [r.__setitem__(2, repr(float(r[1]) / 0.625)) for r in rows]),
+        [
+            "column 'wheel_speed', row 1",
+            "ratio is 1.6 ",
+            "wheel_speed looks like rad/s",
+            "wheel_speed[rad/s]",
+        ],
+    ),
+    "wheel rpm": (
+        _raw_text(
+            30, lambda rows: [r.__setitem__(2, repr(float(r[1]) / 0.625 * 60 / 6.283185)) for r in rows]
+        ),
+        ["wheel_speed looks like rpm while the other speed is m/s", "wheel_speed[rpm]"],
+    ),
+    "speed ratio": (  # no unit makes 2.8
+        _raw_text(30, lambda rows: [r.__setitem__(2, repr(float(r[1]) * 2.8)) for r in rows]),
+        [
+            "column 'wheel_speed', row 1",
+            "ratio is 2.8 (creepage 1.8)",
+            "implausible for an adhesion recording",
+        ],
+    ),
+    "logger names": (
+        "t_ms,v_kmh,n_rpm,M_kNm\n0,3.6,60,5\n",
+        ["missing columns 'time', 'vehicle_speed', 'wheel_speed', 'traction_torque'", "--column CANONICAL"],
+    ),
     "kNm": (
         _raw_text(30, lambda rows: [r.__setitem__(3, repr(float(r[3]) / 1000)) for r in rows]),
         [

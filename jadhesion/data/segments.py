@@ -85,7 +85,8 @@ def trim(recording, start=None, end=None):
     if keep.sum() < 2:
         raise RecordingError(
             f"{name}: --start/--end select {int(keep.sum())} sample(s); the "
-            f"recording runs from {t[0]:g} s to {t[-1]:g} s"
+            f"recording runs from {t[0]:.15g} s to {t[-1]:.15g} s (the bounds are times as "
+            "recorded, not seconds from its start)"
         )
     return slice_recording(recording, keep)
 

@@ -25,6 +25,13 @@ MAX_SPEED = 70.0
 MAX_ADHESION = 1.5
 #: Times [s] spanning more than this, in whole steps of 1 s or more, are likely ms (a note).
 MS_DURATION = 10_000.0
+#: Largest median wheel/vehicle speed ratio over the moving samples (and smallest, its inverse) of
+#: a recording with both speeds in one unit: a median creepage of 50 %. Our simulator's, the
+#: independent and the kinematic generators' recordings: medians 1.00–1.05 (99th percentiles up to
+#: 1.67); a speed in another unit gives 1/r (rad/s), 60/(2πr) (rpm), 2.24 (mph) or 3.6 (km/h).
+MAX_SPEED_RATIO = 1.5
+#: Relative tolerance of :func:`speed_units`' match (km/h: ratios 3.2–4.0).
+UNIT_RATIO_TOLERANCE = 0.11
 #: Torque implying |mu| below this everywhere (but not all zero) is taken to be in kN·m.
 MIN_TORQUE_MU = 1e-3
 #: Torque implying |mu| above this somewhere is implausible (even with the wheelset's inertia).
@@ -59,13 +66,16 @@ def _check_layout(header, name):
     miss_ds = [c for c in DATASET_COLUMNS if c not in present]
     if not any(c in present for c in CREEP_COLUMNS):
         miss_ds.append("creepage' or 'slip_velocity")
-    missing = miss_ds if ("adhesion" in present or len(miss_ds) < len(miss_raw)) else miss_raw
+    # a file that names no column of a fitting dataset is taken for a recording of raw signals
+    dataset_like = any(c in present for c in ("adhesion", "creepage", "slip_velocity"))
+    missing = miss_ds if dataset_like else miss_raw
     listed = ", ".join(f"'{c}'" for c in missing)
     raise _fail(
         name,
         f"missing column{'s' if len(missing) > 1 else ''} {listed}: a recording needs "
         f"{', '.join(RAW_COLUMNS)} (raw signals) or vehicle_speed, adhesion and creepage "
-        f"or slip_velocity (fitting dataset); present: {', '.join(header)}",
+        f"or slip_velocity (fitting dataset); present: {', '.join(header)}; map the file's "
+        'columns with --column CANONICAL=SOURCE[UNIT] (or the sidecar\'s "columns")',
     )
 
 
@@ -187,6 +197,17 @@ def _ms_note(t, name: str, source: str) -> tuple:
     )
 
 
+def speed_units(ratio: float, column: str, wheel_radius_m: float) -> list:
+    """The units of ``column`` (``wheel_speed``: km/h, mph, rad/s, rpm through the wheel radius
+    [m]; ``vehicle_speed``: km/h, mph) that would make it ``ratio`` (> 1) times the other speed in
+    m/s, to within :data:`UNIT_RATIO_TOLERANCE`; closest first."""
+    factors = {"km/h": 3.6, "mph": 1 / 0.44704}
+    if column == "wheel_speed":
+        factors |= {"rad/s": 1 / wheel_radius_m, "rpm": 60 / (2 * np.pi * wheel_radius_m)}
+    off = {unit: abs(ratio / f - 1) for unit, f in factors.items()}
+    return sorted((u for u in off if off[u] <= UNIT_RATIO_TOLERANCE), key=off.get)
+
+
 def _check_values(cols, vehicle: Vehicle, lines, name: str, max_speed: float, shown: dict) -> tuple:
     """Raise at the first implausible value of ``cols`` (SI; ``shown``: the user's column names);
     return notes of likely unit slips that may be right (:func:`_ms_note`)."""
@@ -226,16 +247,26 @@ def _check_values(cols, vehicle: Vehicle, lines, name: str, max_speed: float, sh
         moving = np.abs(v) > 0.5
         if np.count_nonzero(moving) >= 10:
             ratio = float(np.median(vw[moving] / v[moving]))
-            if 3.2 <= ratio <= 4.0 or 1 / 4.0 <= ratio <= 1 / 3.2:
-                slow = "vehicle_speed" if ratio > 1 else "wheel_speed"
+            if ratio > MAX_SPEED_RATIO or 0 < ratio < 1 / MAX_SPEED_RATIO:
                 fast = "wheel_speed" if ratio > 1 else "vehicle_speed"
                 i = int(np.flatnonzero(moving)[0])
+                where = (
+                    f"{_where(fast, i, lines)}: median wheel/vehicle speed ratio is {ratio:.4g} "
+                    f"(creepage {ratio - 1:.3g})"
+                )
+                units = speed_units(max(ratio, 1 / ratio), fast, vehicle.wheel_radius_m)
+                if units:
+                    source = shown.get(fast, fast)
+                    raise _fail(
+                        name,
+                        f"{where}; {fast} looks like {' or '.join(units)} while the other speed is "
+                        f"m/s? map it with --column {fast}={source}[{units[0]}]",
+                    )
                 raise _fail(
                     name,
-                    f"{_where(fast, i, lines)}: median wheel/vehicle speed ratio is "
-                    f"{ratio:.3g} (creepage {ratio - 1:.3g}); {fast} looks like km/h "
-                    f"while {slow} is m/s? map it with --column "
-                    f"{fast}={shown.get(fast, fast)}[km/h]",
+                    f"{where} over the moving samples: implausible for an adhesion recording (at "
+                    f"most {MAX_SPEED_RATIO:g}, at least 1/{MAX_SPEED_RATIO:g}); are both speeds in "
+                    "m/s? map them with --column CANONICAL=SOURCE[UNIT]",
                 )
     if "traction_torque" in cols:
         torque = np.abs(cols["traction_torque"])
