@@ -15,6 +15,7 @@ from logger_data import LOGGER_MAP, logger_columns, stretches_si, write_logger_f
 from jadhesion.cli import main
 from jadhesion.cli.fit_run import expand_files
 from jadhesion.data.dataset import to_dataset
+from jadhesion.data.formats import read_columns
 from jadhesion.data.recording import load_recording
 from jadhesion.errors import RecordingError
 
@@ -268,6 +269,47 @@ def test_parquet_time_as_timestamp_or_duration_reads_as_seconds(tmp_path, kind):
     np.testing.assert_allclose(time - epoch / 1e6, cols["time"], atol=1e-6)
 
 
+@pytest.mark.parametrize("tz", [None, "UTC"])
+def test_parquet_ns_timestamps_read_as_epoch_seconds_as_an_iso_csv(tmp_path, capsys, tz):
+    """pandas writes ``datetime64[ns]`` (naive or zone-aware): beyond 2**53 ticks, read as float64
+    seconds since the epoch like a CSV's ISO date-times, steps exact to float64's resolution; a
+    null is a missing value named by its row."""
+    cols = stretches_si()
+    epoch = 1_777_593_600  # 2026-05-01 UTC [s]
+    ticks = np.round(cols["time"] * 1e9).astype(np.int64) + epoch * 10**9
+    path = tmp_path / "ns.parquet"
+    pq.write_table(pa.table({**cols, "time": pa.array(ticks, pa.timestamp("ns", tz=tz))}), path)
+    time = load_recording(path).columns["time"]
+    assert time.dtype == np.float64 and time[0] == epoch
+    ulp = np.spacing(float(epoch))  # ~2.4e-7 s
+    np.testing.assert_allclose(np.diff(time), np.diff(cols["time"]), rtol=0, atol=ulp)
+    csv = tmp_path / "iso.csv"
+    stamps = np.datetime_as_string(ticks.astype("datetime64[ns]"), unit="us")
+    csv.write_text(
+        "time,vehicle_speed,wheel_speed,traction_torque\n"
+        + "".join(
+            f"{t},{v},{w},{m}\n"
+            for t, v, w, m in zip(stamps, *(cols[k] for k in list(cols)[1:]), strict=True)
+        )
+    )
+    np.testing.assert_array_equal(time, load_recording(csv).columns["time"])
+    assert main(["fit", str(path), "--method", "lm", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)
+    nulls = pa.array(ticks, pa.timestamp("ns", tz=tz), mask=np.arange(ticks.size) == 16)
+    pq.write_table(pa.table({**cols, "time": nulls}), path)
+    with pytest.raises(RecordingError, match=r"ns.parquet: column 'time', row 17: nan is not a finite"):
+        load_recording(path)
+
+
+def test_parquet_int64_beyond_2_53_reads(tmp_path):
+    """An int64 column past float64's exact integers (a ns epoch counter) reads, rounded to float64."""
+    cols = stretches_si()
+    t_ns = np.round(cols["time"] * 1e9).astype(np.int64) + 1_777_593_600 * 10**9
+    path = tmp_path / "int.parquet"
+    pq.write_table(pa.table({**cols, "t_ns": t_ns}), path)
+    np.testing.assert_array_equal(load_recording(path).columns["t_ns"], t_ns.astype(np.float64))
+
+
 def test_directory_lists_every_text_suffix(csv, tmp_path):
     """A directory stands for every file a recording can be: text (.csv, .tsv, .txt), Parquet, .mat."""
     text = csv.read_text()
@@ -301,8 +343,43 @@ def test_complex_mat_variable_is_named_not_dropped(tmp_path, fmt):
     path = writer(cols, tmp_path / f"complex_{fmt}.mat")
     with pytest.raises(RecordingError) as info:
         load_recording(path, columns=LOGGER_MAP)
-    assert str(info.value) == f"{path}: column 'v_Lok_kmh': not numeric"
+    assert str(info.value).startswith(f"{path}: column 'v_Lok_kmh': not numeric")
     cols["v_Lok_kmh"], cols["phase"] = v, cols["v_Lok_kmh"]
     rec = load_recording(writer(cols, tmp_path / f"unused_{fmt}.mat"), columns=LOGGER_MAP)
     assert "phase" not in rec.columns
     assert any("variable 'phase' complex, not read (a signal must be real)" in n for n in rec.notes)
+
+
+def _short_and_complex_mat(tmp_path, case):
+    """A raw-signal .mat of 1200 samples whose ``wheel_speed`` has 10 fewer or whose
+    ``traction_torque`` is complex."""
+    cols = {k: v.reshape(-1, 1) for k, v in stretches_si().items()}
+    if case == "short":
+        cols["wheel_speed"] = cols["wheel_speed"][:-10]
+    else:
+        cols["traction_torque"] = cols["traction_torque"] * (1 + 1j)
+    path = tmp_path / f"{case}.mat"
+    scipy.io.savemat(path, cols)
+    return path
+
+
+def test_mat_vector_of_another_length_is_noted_with_both_lengths(tmp_path):
+    path = _short_and_complex_mat(tmp_path, "short")
+    header, _, notes = read_columns(path, str(path))
+    assert header == ["time", "vehicle_speed", "traction_torque"]
+    assert notes == (f"{path}: variable 'wheel_speed' has 1190 values, the others 1200: ignored",)
+
+
+@pytest.mark.parametrize(
+    "case,expected",
+    [
+        ("short", "variable 'wheel_speed' has 1190 values, the others 1200"),
+        ("complex", "variable 'traction_torque' complex"),
+    ],
+)
+def test_mat_error_names_the_real_cause(tmp_path, capsys, case, expected):
+    """``fit`` on a .mat whose signal is of another length or complex says so, in one line."""
+    path = _short_and_complex_mat(tmp_path, case)
+    assert main(["fit", str(path), "--method", "lm"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and str(path) in err and expected in err

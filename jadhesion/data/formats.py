@@ -4,14 +4,15 @@ names in file order and float64 arrays (``None`` for a column that is not numeri
 :func:`jadhesion.data.recording.load_recording` maps, converts and validates like a CSV's.
 
 * **Parquet**: one column a signal; integer, float and boolean columns are numeric (a null is
-  NaN, reported as not finite by the validation), timestamp and duration columns are seconds
-  (a timestamp's since the epoch, float64), others are ignored.
+  NaN, reported as not finite by the validation; an integer beyond 2**53 rounded to float64),
+  timestamp and duration columns are seconds (a timestamp's since the epoch, float64, as a CSV's
+  ISO 8601 date-times; any unit, ns included, rounded once), others are ignored.
 * **.mat**: one variable a signal, a numeric vector (``n×1`` or ``1×n``); the row count is the
   length most variables share; scalars, matrices and vectors of another length are ignored (listed
-  in the notes); a complex vector is a column that is not numeric (named as complex in the notes);
-  ``__header__``-style entries and v7.3's ``#refs#`` are skipped. A struct (v7.3: a group) stands
-  for its fields, at any depth: each is named by its field name, or ``struct.field`` where two
-  share a name.
+  in the notes, a vector with its length); a complex vector is a column that is not numeric (named
+  as complex in the notes); ``__header__``-style entries and v7.3's ``#refs#`` are skipped. A
+  struct (v7.3: a group) stands for its fields, at any depth: each is named by its field name, or
+  ``struct.field`` where two share a name.
 
 The optional packages are imported only here, only when such a file is read; a missing one is a
 one-line error naming the extra to install.
@@ -34,11 +35,22 @@ TEXT_SUFFIXES = (".csv", ".tsv", ".txt")
 #: Every recording's suffix: the files a directory stands for. A file named alone is read as text
 #: whatever its suffix, unless it is one of this module's.
 RECORDING_SUFFIXES = TEXT_SUFFIXES + PARQUET_SUFFIXES + MAT_SUFFIXES
-_TICKS_PER_SECOND = {"s": 1.0, "ms": 1e3, "us": 1e6, "ns": 1e9}
+_TICKS_PER_SECOND = {"s": 1, "ms": 10**3, "us": 10**6, "ns": 10**9}
 
 
 def _missing(name: str, package: str, extra: str):
     return _fail(name, f"reading this format needs {package}: install jadhesion[{extra}]")
+
+
+def _seconds(ticks, unit: str) -> np.ndarray:
+    """Seconds [s], float64, of int64 ``ticks`` (a pyarrow array) in ``unit``; a null is NaN. Whole
+    seconds and the remainder are converted apart, so a ns epoch (~1.8e18 ticks, beyond float64's
+    2**53) is rounded once, to float64 seconds (steps of ~2.4e-7 s today), not first to 256 ns."""
+    per = _TICKS_PER_SECOND[unit]
+    whole, rest = np.divmod(np.asarray(ticks.fill_null(0).to_numpy(), dtype=np.int64), per)
+    seconds = whole.astype(np.float64) + rest / per
+    seconds[ticks.is_null().to_numpy(zero_copy_only=False)] = np.nan
+    return seconds
 
 
 def _parquet(path: Path, name: str):
@@ -56,11 +68,10 @@ def _parquet(path: Path, name: str):
         header.append(field.name)
         t = field.type
         if pa.types.is_integer(t) or pa.types.is_floating(t) or pa.types.is_boolean(t):
-            values = column.cast(pa.float64()).to_numpy(zero_copy_only=False)
+            values = column.cast(pa.float64(), safe=False).to_numpy(zero_copy_only=False)
             columns.append(np.asarray(values, dtype=np.float64))
         elif pa.types.is_timestamp(t) or pa.types.is_duration(t):
-            ticks = column.cast(pa.int64()).cast(pa.float64()).to_numpy(zero_copy_only=False)
-            columns.append(np.asarray(ticks, dtype=np.float64) / _TICKS_PER_SECOND[t.unit])
+            columns.append(_seconds(column.cast(pa.int64()), t.unit))
         else:
             columns.append(None)
     return header, columns, ()
@@ -143,10 +154,13 @@ def _mat(path: Path, name: str):
     if not vectors:
         raise _fail(name, "no numeric vector variables in the .mat file (one variable a signal, n×1 or 1×n)")
     n = Counter(v.size for v in vectors.values()).most_common(1)[0][0]
-    skipped += [k for k, v in vectors.items() if v.size != n]
     header = [k for k in vectors if vectors[k].size == n]
     complex_ = [k for k in header if vectors[k].dtype.kind == "c"]
-    notes = (f"{name}: {_listed(skipped)} ignored (not a numeric vector of {n} values)",) if skipped else ()
+    notes = (f"{name}: {_listed(skipped)} ignored (not a numeric vector)",) if skipped else ()
+    for size in sorted({v.size for v in vectors.values()} - {n}):
+        keys = [k for k, v in vectors.items() if v.size == size]
+        has = "has" if len(keys) == 1 else "have"
+        notes += (f"{name}: {_listed(keys)} {has} {size} values, the others {n}: ignored",)
     if complex_:
         notes += (f"{name}: {_listed(complex_)} complex, not read (a signal must be real)",)
     columns = [None if k in complex_ else vectors[k].astype(np.float64) for k in header]

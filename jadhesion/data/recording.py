@@ -107,9 +107,19 @@ def _find_column(spec: ColumnSpec, header, name: str) -> tuple[str, ColumnSpec]:
     """The file's column for ``spec`` and the spec with its unit: the header ``SOURCE``, else the
     one header ``SOURCE[UNIT]`` or ``SOURCE [UNIT]`` in the spec's unit (or the header's, when the
     spec gives none; the spec's, when the header's is not a unit of the column)."""
-    if spec.source in header:
-        return spec.source, spec
     table = UNITS[spec.canonical]
+    if spec.source in header:
+        stated = split_unit(spec.source)[1] if spec.unit is None else None
+        if stated is None:
+            return spec.source, spec
+        if stated in table:  # 'Speed (km/h)' named in full: its header's unit, not SI
+            return spec.source, spec._replace(unit=stated)
+        raise _fail(
+            name,
+            f"--column {spec.canonical}={spec.text()}: the header states {stated!r}, not a unit of "
+            f"{spec.canonical} ({', '.join(table)}); give its unit, --column "
+            f"{spec.canonical}={spec.source}[UNIT]",
+        )
     found, hints = [], []
     for column in header:
         source, unit = split_unit(column)
@@ -288,6 +298,8 @@ def load_recording(
     if is_binary(path):  # Parquet or .mat: numeric columns (None: not numeric), no line numbers
         header, parsed, read_notes = read_columns(path, name)
         fast, lines = True, None
+        # why a variable was not read (another length, complex): said with the error it causes
+        unread = [n.removeprefix(f"{name}: ") for n in read_notes]
     else:
         text, delimiter_notes = normalise_delimiter(_read_text(path, name))
         fast, read_notes = _fast_parse(text), tuple(f"{name}: {n}" for n in delimiter_notes)
@@ -297,6 +309,7 @@ def load_recording(
             cells = np.array(rows, dtype=str)
         else:
             header, parsed, lines = fast
+        unread = []
     sidecar_path, sidecar, vehicle, notes = _load_sidecar(path)
     notes += read_notes
     specs, shown, hints = _column_map(columns, sidecar, str(sidecar_path), header, name, axle)
@@ -311,7 +324,7 @@ def load_recording(
     try:
         _check_layout([c for c in renamed if c is not None], name)
     except RecordingError as exc:
-        raise RecordingError("; ".join([str(exc), *hints])) from None
+        raise RecordingError("; ".join([str(exc), *hints, *unread])) from None
     notes += tuple(f"{name}: {h}" for h in hints)
     required = [c for c in renamed if c in KNOWN_COLUMNS]
     if missing == "skip":
@@ -345,7 +358,9 @@ def load_recording(
         else:
             values = _convert_column(cells[:, j], shown.get(col, col), lines, name, strict=col in required)
         if values is None and lines is None and col in required:
-            raise _fail(name, f"column {shown.get(col, col)!r}: not numeric")
+            source = shown.get(col, col)
+            why = [n for n in unread if repr(source) in n]
+            raise _fail(name, "; ".join([f"column {source!r}: not numeric", *why]))
         if values is None:
             ignored.append(col)
         else:
