@@ -255,6 +255,32 @@ def _message(path, columns=()):
     return str(info.value)
 
 
+def test_units_in_parentheses(tmp_path):
+    """``SOURCE (UNIT)`` headers with a listed unit, named in full or by SOURCE, are read in their
+    unit (``Vehicle speed (km/h)`` named in full was read as m/s: μ0 0.384 against 0.415); a unit of
+    another column is refused; ``Speed (front)`` stays a name."""
+    cols = _si_columns(30)
+    rpm = 60 / (2 * math.pi * R)
+    logged = {
+        "Time (ms)": cols["time"] * 1e3,
+        "Vehicle speed (km/h)": cols["vehicle_speed"] * 3.6,
+        "Wheel speed (rpm)": cols["wheel_speed"] * rpm,
+        "Torque (kN·m)": cols["traction_torque"] / 1e3,
+        "Odd (km/h)": cols["traction_torque"],
+        "Speed (front)": cols["traction_torque"],
+    }
+    path = save_recording(logged, LOCO_22E, tmp_path / "paren.csv")
+    full = ["time=Time (ms)", "vehicle_speed=Vehicle speed (km/h)", "wheel_speed=Wheel speed (rpm)"]
+    _assert_si(load_recording(path, columns=[*full, "traction_torque=Torque (kN·m)"]), cols)
+    short = ["time=Time", "vehicle_speed=Vehicle speed", "wheel_speed=Wheel speed", "traction_torque=Torque"]
+    _assert_si(load_recording(path, columns=short), cols)
+    assert "the header states 'km/h', not a unit of traction_torque" in _message(
+        path, [*full, "traction_torque=Odd (km/h)"]
+    )
+    named = load_recording(path, columns=[*full, "traction_torque=Speed (front)"])
+    np.testing.assert_allclose(named.columns["traction_torque"], cols["traction_torque"], rtol=1e-14)
+
+
 def test_units_in_headers(tmp_path):
     """``SOURCE[UNIT]`` or ``SOURCE [UNIT]`` headers: ``--column`` names SOURCE (with the unit, or
     leaves it to the header's); a canonical header with its unit is read in that unit unmapped."""
@@ -495,3 +521,16 @@ def test_repeated_time_stamps_are_named_or_dropped_on_request(tmp_path, capsys):
     assert main(["inspect", str(path), *mapped, "--repeated-time", "drop", "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["samples"] == 59 and any("2 of 61 rows dropped" in n for n in doc["notes"])
+
+
+def test_fit_says_the_readers_notes(tmp_path, capsys):
+    """Time stamps in ms written without a unit (12 000 s in 10 s steps): ``fit`` says inspect's
+    "looks like ms?" note on stderr and in its JSON's ``notes`` (it fitted on in silence)."""
+    cols = _si_columns(1200)
+    cols["time"] = cols["time"] * 1e3
+    path = save_recording(cols, LOCO_22E, tmp_path / "ms.csv")
+    assert main(["fit", str(path), "--method", "lm", "--single-law", "--json"]) == 0
+    captured = capsys.readouterr()
+    notes = json.loads(captured.out)["notes"]
+    assert len(notes) == 1 and "looks like ms? map it with --column time=time[ms]" in notes[0]
+    assert f"jadhesion: note: {notes[0]}\n" in captured.err

@@ -21,7 +21,7 @@ from ..diagnose import diagnose
 from ..diagnose.null import N_REPLICAS
 from .common import UserError, emit_json, require_in_range, require_output_dir, require_seed, table
 from .diagnose import MAX_REPLICAS
-from .loading import load_from_args
+from .loading import load_from_args, say_notes
 
 
 def diagnose_file(
@@ -44,6 +44,7 @@ def diagnose_file(
         column=list(columns), axle=axle, start=start, end=end, missing=missing, repeated_time=repeated_time
     )
     recording = load_from_args(args, path)
+    say_notes(recording)
     if not recording.has_raw_signals:
         raise UserError(
             f"{path}: diagnosis needs the raw columns time, vehicle_speed, wheel_speed, traction_torque"
@@ -58,6 +59,7 @@ def diagnose_file(
     if (message := zero_creep_message(recording, mask)) is not None:
         raise UserError(message)
     result = diagnose(recording.columns, recording.vehicle, str(path), replicas, seed, mask)
+    result["notes"] = list(recording.notes)
     result["selection"] = {
         **selection.document(),
         "used": int(mask.sum()),

@@ -49,7 +49,7 @@ from .common import (
     table,
 )
 from .fit_program import fit_polach, seed_key, slip_nodes, to_dataset, trust_numbers
-from .loading import load_dataset, load_from_args, say_sidecar_warning, slip_law_used
+from .loading import load_dataset, load_from_args, say_notes, say_sidecar_warning, slip_law_used
 
 
 def _given_budget(args) -> dict:
@@ -147,6 +147,7 @@ def _load(args, path):
     document says of the recording itself (:func:`_recording_report`). Unknown sidecar keys are
     said on stderr at once, before anything they may explain goes wrong."""
     recording = load_from_args(args, path)
+    say_notes(recording)
     say_sidecar_warning(recording)
     rows = recording.n_samples
     if rows < MIN_SAMPLES:
@@ -168,14 +169,16 @@ VEHICLE_KEYS = ("name", "axle_load_kg", "wheel_radius_m", "wheelset_inertia_kgm2
 
 
 def _recording_report(recording, selection) -> dict:
-    """``vehicle`` {:data:`VEHICLE_KEYS`} (the sidecar's, else 22E's defaults) and ``warnings``
+    """``vehicle`` {:data:`VEHICLE_KEYS`} (the sidecar's, else 22E's defaults), ``warnings``
     ``{code, params, message}`` about the recording rather than the fit: unknown sidecar keys
     (:func:`jadhesion.data.sidecar.sidecar_warning`), most moving samples with the creep against
-    the drive (:func:`jadhesion.data.selected.creep_sign_warning`)."""
+    the drive (:func:`jadhesion.data.selected.creep_sign_warning`); and the reader's ``notes``
+    (:func:`.loading.say_notes`)."""
     found = (sidecar_warning(recording), creep_sign_warning(recording, selection))
     return {
         "vehicle": {k: getattr(recording.vehicle, k) for k in VEHICLE_KEYS},
         "warnings": [w for w in found if w is not None],
+        "notes": list(recording.notes),
     }
 
 
@@ -461,6 +464,7 @@ def run(args) -> int:
         doc["selection"] = selection.document()
         doc["vehicle"] = report["vehicle"]
         doc["warnings"] = report["warnings"] + doc.get("warnings", [])  # the recording's first
+        doc["notes"] = report["notes"]
     if args.plot is not None and args.model == "polach":
         for path, dataset, doc in zip(paths, datasets, docs, strict=True):
             _plot(args, path, dataset, doc, many)

@@ -32,6 +32,15 @@ def load_from_args(args, path) -> Recording:
     return trim(recording, args.start, args.end)
 
 
+def say_notes(recording: Recording) -> list:
+    """The reader's notes on ``recording`` (time stamps that look like ms, decimal commas, rows
+    skipped or dropped, a column ignored), said on stderr as soon as it is loaded, each as
+    ``jadhesion: note: …``; returned for the JSON's ``notes``."""
+    for note in recording.notes:
+        sys.stderr.write(f"jadhesion: note: {note}\n")
+    return list(recording.notes)
+
+
 def say_sidecar_warning(recording: Recording) -> dict | None:
     """The recording's ``sidecar_unknown_key`` warning
     (:func:`jadhesion.data.sidecar.sidecar_warning`), said on stderr as soon as it is loaded,

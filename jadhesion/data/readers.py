@@ -15,11 +15,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .units import UNITS, same_unit, split_unit, unit_key
+from .units import UNIT_KEYS, UNITS, same_unit, split_unit, unit_key
 from .validate import RAW_COLUMNS, _fail, _is_number
 
 _BLANK_LINE = re.compile(r"\n[ \t\r]*\n")
-_UNIT_KEYS = frozenset().union(*UNITS.values())
 #: A number with one decimal comma and no point (``0,489``, ``-1,5e-3``, ``,5``).
 _DECIMAL_COMMA = re.compile(r"^\s*[+-]?(\d*),(\d+)(?:[eE][+-]?\d+)?\s*$")
 
@@ -100,7 +99,7 @@ def _is_units_row(fields) -> bool:
     """Whether every cell is a unit of :data:`~.units.UNITS` or empty, and one is a unit other
     than ``-`` (a row of ``-`` is a row of missing values)."""
     units = [unit_key(f) for f in fields if f.strip()]
-    return any(u != "-" for u in units) and all(u in _UNIT_KEYS for u in units)
+    return any(u != "-" for u in units) and all(u in UNIT_KEYS for u in units)
 
 
 def _decimal_commas(rows, lines, name: str) -> tuple[list, tuple]:

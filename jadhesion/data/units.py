@@ -12,7 +12,8 @@ A map entry is ``CANONICAL=SOURCE[UNIT]`` (``--column`` on the command line) or,
 
 A unit is read without its whitespace, and a middle dot or a point as ``*`` (``kN·m``, ``kN.m``).
 
-A header may state its column's unit, ``SOURCE[UNIT]`` or ``SOURCE [UNIT]`` (:func:`split_unit`):
+A header may state its column's unit, ``SOURCE[UNIT]``, ``SOURCE [UNIT]`` or, with a unit listed
+here, ``SOURCE (UNIT)`` (:func:`split_unit`):
 the map's ``SOURCE`` then names it (its unit the header's, or the one given when the header's is
 not listed above), and a canonical column named so (``vehicle_speed [km/h]``) is read in that unit
 without a map. Canonical names are matched ignoring case when no header is spelled exactly so.
@@ -41,8 +42,11 @@ UNITS = {
     "creepage": {"-": 1.0},
     "adhesion": {"-": 1.0},
 }
+#: Every unit key of every column.
+UNIT_KEYS = frozenset().union(*UNITS.values())
 _DOTS = str.maketrans({"·": "*", "⋅": "*", ".": "*"})
 _HEADER_UNIT = re.compile(r"^(.*?)\s*\[([^\[\]]*)\]$")
+_HEADER_PAREN_UNIT = re.compile(r"^(.*?)\s*\(([^()]*)\)$")
 _SPEC = re.compile(r"^\s*([^=\s]+)\s*=\s*([^\[\]]*?)\s*(?:\[([^\[\]]*)\])?\s*$")
 
 
@@ -63,12 +67,16 @@ def same_unit(canonical: str, a: str, b: str) -> bool:
 
 
 def split_unit(column: str) -> tuple[str, str | None]:
-    """``(name, unit key)`` of a header that states its unit, ``v_Lok[km/h]`` or ``v_Lok [km/h]``;
-    ``(column, None)`` of one that does not."""
+    """``(name, unit key)`` of a header that states its unit, ``v_Lok[km/h]`` or ``v_Lok [km/h]``,
+    or in parentheses a unit listed in :data:`UNITS`, ``Speed (km/h)`` (``Speed (front)`` is a
+    name); ``(column, None)`` of one that does not."""
     match = _HEADER_UNIT.match(column.strip())
-    if not match or not match.group(1):
-        return column, None
-    return match.group(1), unit_key(match.group(2))
+    if match and match.group(1):
+        return match.group(1), unit_key(match.group(2))
+    match = _HEADER_PAREN_UNIT.match(column.strip())
+    if match and match.group(1) and unit_key(match.group(2)) in UNIT_KEYS:
+        return match.group(1), unit_key(match.group(2))
+    return column, None
 
 
 class ColumnSpec(NamedTuple):
