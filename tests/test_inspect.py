@@ -100,6 +100,7 @@ def test_inspect_text_of_a_selection_without_samples(logger_file, capsys):
     assert main(["inspect", str(logger_file), "--phase", "braking", "--end", "4.9"]) == 0
     out = capsys.readouterr().out
     assert "selected: 0 of" in out and "creep: no selected samples" in out
+    assert "identifiability [few_samples]: no sample selected: nothing to identify" in out
     assert main(["inspect", str(logger_file), "--phase", "braking", "--end", "4.9", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["ranges"]["creep"] is None
 

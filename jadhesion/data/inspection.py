@@ -116,6 +116,12 @@ def identifiability(creep, slip, adhesion, vehicle_speed=None) -> list:
                 "message": f"only {creep.size} samples selected (fewer "
                 f"than {FEW_SAMPLES}): standard errors will be rough",
             }
+            if creep.size
+            else {
+                "code": "few_samples",
+                "message": "no sample selected: nothing to identify (the selection says what was "
+                "excluded; another --phase, --start or --end?)",
+            }
         )
     if creep.size == 0:
         return notes
