@@ -16,6 +16,7 @@ from jadhesion.cli import main
 from jadhesion.cli.fit_run import expand_files
 from jadhesion.data.dataset import to_dataset
 from jadhesion.data.formats import read_columns
+from jadhesion.data.readers import normalise_delimiter
 from jadhesion.data.recording import load_recording
 from jadhesion.errors import RecordingError
 
@@ -215,6 +216,26 @@ def test_european_and_tab_separated_text_reads_as_its_comma_twin(csv, tmp_path, 
     path.write_text("\n".join(lines) + "\n")
     with pytest.raises(RecordingError, match="line 41"):
         load_recording(path)
+
+
+def test_semicolon_text_with_thousands_points_reads_as_its_comma_twin(tmp_path):
+    """A German spreadsheet writes 25472.08 as ``25.472,08``: its points between digit groups are
+    thousands separators (``1.500`` there is 1500), not a cell '25.472.08' that is not a number."""
+    cols = {"time": [0.0, 0.01, 0.02], "vehicle_speed": [1.5, 1.51, 1.52], "wheel_speed": [1.52, 1.53, 1.54]}
+    torque = [25472.08, 1500.0, 31234.5]
+    de = {25472.08: "25.472,08", 1500.0: "1.500", 31234.5: "31.234,5"}
+    rows = ["time;vehicle_speed;wheel_speed;traction_torque"] + [
+        ";".join([*(f"{cols[k][i]:g}".replace(".", ",") for k in cols), de[torque[i]]]) for i in range(3)
+    ]
+    path = tmp_path / "de.csv"
+    path.write_text("\n".join(rows) + "\n")
+    text, notes = normalise_delimiter(path.read_text())
+    assert text.splitlines()[1:] == ["0,1.5,1.52,25472.08", "0.01,1.51,1.53,1500", "0.02,1.52,1.54,31234.5"]
+    assert notes == (
+        "read as semicolon-separated, commas as decimal points, points between digit groups as "
+        "thousands separators",
+    )
+    np.testing.assert_array_equal(load_recording(path).columns["traction_torque"], torque)
 
 
 @pytest.mark.parametrize("case", ["empty", "text", "truncated_v73"])

@@ -20,6 +20,10 @@ from .validate import RAW_COLUMNS, _fail, _is_number
 
 _BLANK_LINE = re.compile(r"\n[ \t\r]*\n")
 #: A number with one decimal comma and no point (``0,489``, ``-1,5e-3``, ``,5``).
+#: A point that groups thousands before a decimal comma (``25.472,08``, ``1.234.567,5``).
+_THOUSANDS_POINT = re.compile(r"(?<=\d)\.(?=\d{3}(?:\.\d{3})*,\d)")
+#: Any point between digits followed by groups of three (a thousands point, in such a file).
+_GROUP_POINT = re.compile(r"(?<=\d)\.(?=\d{3}(?:\.\d{3})*(?![\d.]))")
 _DECIMAL_COMMA = re.compile(r"^\s*[+-]?(\d*),(\d+)(?:[eE][+-]?\d+)?\s*$")
 
 
@@ -86,6 +90,9 @@ def normalise_delimiter(text: str) -> tuple[str, tuple]:
     commas = header.count(",")
     if header.count(";") > commas:
         note = "read as semicolon-separated, commas as decimal points"
+        if _THOUSANDS_POINT.search(text):  # '25.472,08' as a German spreadsheet writes 25472.08
+            text = _GROUP_POINT.sub("", text)  # and so '1.500' is 1500 there
+            note += ", points between digit groups as thousands separators"
         return text.replace(",", ".").replace(";", ","), (note,)
     if header.count("\t") > commas:
         if "," in text:
