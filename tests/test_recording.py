@@ -423,6 +423,11 @@ SIDECAR_CASES = {
     "bool value": ('{"axle_load_kg": true}', ["key 'axle_load_kg'", "expected a number"]),
     "negative": ('{"wheel_radius_m": -0.6}', ["key 'wheel_radius_m'", "must be positive"]),
     "zero inertia": ('{"wheelset_inertia_kgm2": 0}', ["key 'wheelset_inertia_kgm2'", "positive"]),
+    "radius in mm": (
+        '{"wheel_radius_m": 500}',
+        ["key 'wheel_radius_m'", "outside the plausible 0.1–2; in mm?"],
+    ),
+    "load in t": ('{"axle_load_kg": 22.5}', ["key 'axle_load_kg'", "22.5 is outside the plausible", "in t?"]),
     "nan": ('{"axle_load_kg": NaN}', ["key 'axle_load_kg'", "not a finite number"]),
     "poisson": ('{"poisson_ratio": 0.7}', ["key 'poisson_ratio'", "outside [0, 0.5)"]),
     "name": ('{"name": 22}', ["key 'name'", "expected a string"]),

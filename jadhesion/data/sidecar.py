@@ -57,7 +57,17 @@ def _check_sidecar_value(key, value, name):
             raise _fail(name, f"{where}: {value} is outside [0, 0.5)")
     elif value <= 0:
         raise _fail(name, f"{where}: {value} must be positive")
+    if key in PLAUSIBLE:
+        lo, hi, unit = PLAUSIBLE[key]
+        if not lo <= value <= hi:
+            raise _fail(name, f"{where}: {value} is outside the plausible {lo:g}–{hi:g}; in {unit}?")
     return float(value)
+
+
+#: Plausible ranges of the vehicle keys a unit slip lands far outside (a radius in mm, a load in
+#: tonnes), and the unit such a value likely is in: rail vehicles' wheels 0.3–0.65 m, axle loads
+#: 5–35 t.
+PLAUSIBLE = {"wheel_radius_m": (0.1, 2.0, "mm"), "axle_load_kg": (500.0, 100_000.0, "t")}
 
 
 #: A known key at least this similar (:class:`difflib.SequenceMatcher` ratio) to an unknown one is
