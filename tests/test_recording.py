@@ -219,6 +219,19 @@ CASES = {
         ),
         ["wheel_speed looks like rpm while the other speed is m/s", "wheel_speed[rpm]"],
     ),
+    "wheel rpm beyond 70": (  # 12 m/s: 183 rpm, read as m/s beyond the plausible speed
+        _raw_text(
+            30,
+            lambda rows: [
+                (
+                    r.__setitem__(1, repr(float(r[1]) * 20)),
+                    r.__setitem__(2, repr(float(r[1]) / 0.625 * 9.549)),
+                )
+                for r in rows
+            ],
+        ),
+        ["wheel_speed looks like rpm", "wheel_speed[rpm]"],
+    ),
     "speed ratio": (  # no unit makes 2.8
         _raw_text(30, lambda rows: [r.__setitem__(2, repr(float(r[1]) * 2.8)) for r in rows]),
         [

@@ -230,18 +230,7 @@ def _check_values(cols, vehicle: Vehicle, lines, name: str, max_speed: float, sh
                 f"{_REPEAT_HINT if t[i] == t[i - 1] else ''})",
             )
         notes = _ms_note(cols["time"], name, shown.get("time", "time"))
-    for col in ("vehicle_speed", "wheel_speed"):
-        if col not in cols:
-            continue
-        bad = np.flatnonzero(np.abs(cols[col]) > max_speed)
-        if bad.size:
-            i = int(bad[0])
-            raise _fail(
-                name,
-                f"{_where(col, i, lines)}: {cols[col][i]:.6g} m/s exceeds the plausible "
-                f"{max_speed:g} m/s; looks like km/h? map it with --column "
-                f'{col}={shown.get(col, col)}[km/h] (or the sidecar\'s "columns")',
-            )
+    # first the pair's ratio: it tells which unit (rpm, rad/s) a speed beyond max_speed is in
     if "vehicle_speed" in cols and "wheel_speed" in cols:
         v, vw = cols["vehicle_speed"], cols["wheel_speed"]
         moving = np.abs(v) > 0.5
@@ -262,12 +251,26 @@ def _check_values(cols, vehicle: Vehicle, lines, name: str, max_speed: float, sh
                         f"{where}; {fast} looks like {' or '.join(units)} while the other speed is "
                         f"m/s? map it with --column {fast}={source}[{units[0]}]",
                     )
-                raise _fail(
-                    name,
-                    f"{where} over the moving samples: implausible for an adhesion recording (at "
-                    f"most {MAX_SPEED_RATIO:g}, at least 1/{MAX_SPEED_RATIO:g}); are both speeds in "
-                    "m/s? map them with --column CANONICAL=SOURCE[UNIT]",
-                )
+                # a speed beyond max_speed: the check below names that column instead
+                if max(np.max(np.abs(v)), np.max(np.abs(vw))) <= max_speed:
+                    raise _fail(
+                        name,
+                        f"{where} over the moving samples: implausible for an adhesion recording (at "
+                        f"most {MAX_SPEED_RATIO:g}, at least 1/{MAX_SPEED_RATIO:g}); are both speeds in "
+                        "m/s? map them with --column CANONICAL=SOURCE[UNIT]",
+                    )
+    for col in ("vehicle_speed", "wheel_speed"):
+        if col not in cols:
+            continue
+        bad = np.flatnonzero(np.abs(cols[col]) > max_speed)
+        if bad.size:
+            i = int(bad[0])
+            raise _fail(
+                name,
+                f"{_where(col, i, lines)}: {cols[col][i]:.6g} m/s exceeds the plausible "
+                f"{max_speed:g} m/s; looks like km/h? map it with --column "
+                f'{col}={shown.get(col, col)}[km/h] (or the sidecar\'s "columns")',
+            )
     if "traction_torque" in cols:
         torque = np.abs(cols["traction_torque"])
         scale = vehicle.axle_weight_n * vehicle.wheel_radius_m  # N·m for mu = 1
