@@ -329,6 +329,10 @@ def test_parquet_int64_beyond_2_53_reads(tmp_path):
     path = tmp_path / "int.parquet"
     pq.write_table(pa.table({**cols, "t_ns": t_ns}), path)
     np.testing.assert_array_equal(load_recording(path).columns["t_ns"], t_ns.astype(np.float64))
+    # mapped as the time in ns: epoch seconds, each to float64's rounding of the ns (0.26 µs)
+    pq.write_table(pa.table({k: v for k, v in cols.items() if k != "time"} | {"t_ns": t_ns}), path)
+    time = load_recording(path, columns=["time=t_ns[ns]"]).columns["time"]
+    np.testing.assert_allclose(time, cols["time"] + 1_777_593_600, rtol=0, atol=5e-7)
 
 
 def test_directory_lists_every_text_suffix(csv, tmp_path):

@@ -3,7 +3,8 @@
 A map entry is ``CANONICAL=SOURCE[UNIT]`` (``--column`` on the command line) or, in the sidecar,
 ``"columns": {"CANONICAL": "SOURCE[UNIT]"}``; ``[UNIT]`` may be left out (SI assumed). Units:
 
-* ``time``: ``s``, ``ms``, ``us`` (``µs``, ``μs``), ``min``, ``h``;
+* ``time``: ``s``, ``ms``, ``us`` (``µs``, ``μs``), ``ns`` (an epoch in ns, ~1.8e18, rounded to
+  float64 first: ~0.3 µs), ``min``, ``h``;
 * ``vehicle_speed``, ``slip_velocity``: ``m/s``, ``km/h``, ``mph``;
 * ``wheel_speed``: also ``rpm`` (German loggers' ``1/min``, ``U/min``, ``min^-1``) and ``rad/s``
   (times the vehicle's nominal wheel radius [m]);
@@ -34,7 +35,7 @@ _RPM = 2.0 * math.pi / 60.0
 _ANGULAR = {"rpm": _RPM, "1/min": _RPM, "U/min": _RPM, "min^-1": _RPM, "rad/s": 1.0}
 #: Units accepted per canonical column, as factors to SI; ``None`` marks units through the radius.
 UNITS = {
-    "time": {"s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "μs": 1e-6, "min": 60.0, "h": 3600.0},
+    "time": {"s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "μs": 1e-6, "ns": 1e-9, "min": 60.0, "h": 3600.0},
     "vehicle_speed": _SPEED,
     "slip_velocity": _SPEED,
     "wheel_speed": {**_SPEED, **dict.fromkeys(_ANGULAR)},
