@@ -301,6 +301,7 @@ def run(args) -> int:
         predictive_plot(result, data).savefig(out / "posterior_predictive.png", dpi=110)
     doc = _document(result, theta0, note, "smoothed" if data.slip_sd is not None else "raw")
     doc["status"] = "converged" if chain is None else chain["code"]
+    doc["converged"] = chain is None  # as fit's and online's: the status as a bool
     doc["lm_start_status"] = status_of(start.status).label
     doc["tempering"] = tempering
     doc["slip_law"] = slip_law_used(args, data)
