@@ -441,6 +441,8 @@ SIDECAR_CASES = {
         ["key 'wheel_radius_m'", "outside the plausible 0.1–2; in mm?"],
     ),
     "load in t": ('{"axle_load_kg": 22.5}', ["key 'axle_load_kg'", "22.5 is outside the plausible", "in t?"]),
+    "load in N": ('{"axle_load_kg": 220725}', ["key 'axle_load_kg'", "500–100000; in N?"]),
+    "tiny radius": ('{"wheel_radius_m": 0.01}', ["key 'wheel_radius_m'", "outside the plausible 0.1–2"]),
     "nan": ('{"axle_load_kg": NaN}', ["key 'axle_load_kg'", "not a finite number"]),
     "poisson": ('{"poisson_ratio": 0.7}', ["key 'poisson_ratio'", "outside [0, 0.5)"]),
     "name": ('{"name": 22}', ["key 'name'", "expected a string"]),

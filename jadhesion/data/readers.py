@@ -19,11 +19,11 @@ from .units import UNIT_KEYS, UNITS, same_unit, split_unit, unit_key
 from .validate import RAW_COLUMNS, _fail, _is_number
 
 _BLANK_LINE = re.compile(r"\n[ \t\r]*\n")
-#: A number with one decimal comma and no point (``0,489``, ``-1,5e-3``, ``,5``).
 #: A point that groups thousands before a decimal comma (``25.472,08``, ``1.234.567,5``).
 _THOUSANDS_POINT = re.compile(r"(?<=\d)\.(?=\d{3}(?:\.\d{3})*,\d)")
 #: Any point between digits followed by groups of three (a thousands point, in such a file).
 _GROUP_POINT = re.compile(r"(?<=\d)\.(?=\d{3}(?:\.\d{3})*(?![\d.]))")
+#: A number with one decimal comma and no point (``0,489``, ``-1,5e-3``, ``,5``).
 _DECIMAL_COMMA = re.compile(r"^\s*[+-]?(\d*),(\d+)(?:[eE][+-]?\d+)?\s*$")
 
 

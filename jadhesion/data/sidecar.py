@@ -58,16 +58,21 @@ def _check_sidecar_value(key, value, name):
     elif value <= 0:
         raise _fail(name, f"{where}: {value} must be positive")
     if key in PLAUSIBLE:
-        lo, hi, unit = PLAUSIBLE[key]
+        lo, hi, low_unit, high_unit = PLAUSIBLE[key]
         if not lo <= value <= hi:
-            raise _fail(name, f"{where}: {value} is outside the plausible {lo:g}–{hi:g}; in {unit}?")
+            unit = low_unit if value < lo else high_unit
+            raise _fail(
+                name,
+                f"{where}: {value} is outside the plausible {lo:g}–{hi:g}"
+                + (f"; in {unit}?" if unit else ""),
+            )
     return float(value)
 
 
-#: Plausible ranges of the vehicle keys a unit slip lands far outside (a radius in mm, a load in
-#: tonnes), and the unit such a value likely is in: rail vehicles' wheels 0.3–0.65 m, axle loads
-#: 5–35 t.
-PLAUSIBLE = {"wheel_radius_m": (0.1, 2.0, "mm"), "axle_load_kg": (500.0, 100_000.0, "t")}
+#: Plausible ranges of the vehicle keys a unit slip lands far outside, with the unit a value below
+#: and above likely is in (a radius in mm, a load in tonnes or as a weight in N): rail vehicles'
+#: wheels 0.3–0.65 m, axle loads 5–35 t.
+PLAUSIBLE = {"wheel_radius_m": (0.1, 2.0, None, "mm"), "axle_load_kg": (500.0, 100_000.0, "t", "N")}
 
 
 #: A known key at least this similar (:class:`difflib.SequenceMatcher` ratio) to an unknown one is
