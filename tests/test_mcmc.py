@@ -347,7 +347,16 @@ def test_inference_data_and_plots(posterior, data, tmp_path):
     from jadhesion.plots.posterior import corner_plot, predictive_plot
 
     corner_plot(posterior, truths=list(THETA) + [0.013]).savefig(tmp_path / "corner.png", dpi=40)
-    predictive_plot(posterior, data, n_draws=200, truth=THETA).savefig(tmp_path / "pred.png", dpi=40)
+    traction = predictive_plot(posterior, data, n_draws=200, truth=THETA)
+    traction.savefig(tmp_path / "pred.png", dpi=40)
+    # a braking run (negative creep and μ) as magnitudes: it failed on an empty creep > 0 selection
+    braking = predictive_plot(
+        posterior, data._replace(creep=-data.creep, adhesion=-data.adhesion), n_draws=200
+    )
+    assert braking.axes[0].get_xlabel() == "creepage |s| [-] (braking)"
+    np.testing.assert_array_equal(
+        braking.axes[0].collections[0].get_offsets(), traction.axes[0].collections[0].get_offsets()
+    )
     az = pytest.importorskip("arviz")
     idata = posterior.to_inference_data()
     assert isinstance(idata, az.InferenceData)

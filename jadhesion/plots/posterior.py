@@ -68,8 +68,11 @@ def predictive_plot(
     rng = np.random.default_rng(seed)
     idx = rng.choice(result.samples.shape[0], size=min(n_draws, result.samples.shape[0]), replace=False)
     draws = result.samples[idx]
-    s_min = max(float(np.min(np.asarray(data.creep)[np.asarray(data.creep) > 0])), 1e-5)
-    creep = np.geomspace(s_min, float(np.max(np.asarray(data.creep))), 300)
+    # a braking run (negative creep and μ) as magnitudes: the curve is odd in the creep
+    sign = -1.0 if float(np.median(np.asarray(data.creep))) < 0 else 1.0
+    creep_data, mu_data = sign * np.asarray(data.creep), sign * np.asarray(data.adhesion)
+    s_min = max(float(np.min(creep_data[creep_data > 0])), 1e-5)
+    creep = np.geomspace(s_min, float(np.max(creep_data)), 300)
     k_eps = jnp.asarray(data.k_eps, float)
     curves = np.asarray(
         posterior_curves(jnp.asarray(draws[:, :5]), jnp.asarray(creep), result.vehicle_speed, k_eps)
@@ -89,13 +92,13 @@ def predictive_plot(
     fig = Figure(figsize=(7.5, 4.8), layout="constrained")
     ax = fig.add_subplot()
     points = ax.scatter(
-        np.asarray(data.creep),
-        np.asarray(data.adhesion),
+        creep_data,
+        mu_data,
         s=7,
         c=np.asarray(data.vehicle_speed),
         cmap="copper",
         alpha=0.7,
-        label=f"data (n = {np.asarray(data.creep).shape[0]})",
+        label=f"data (n = {creep_data.shape[0]})",
         zorder=1,
     )
     fig.colorbar(points, ax=ax, label="vehicle speed of the sample [m/s]")
@@ -118,8 +121,8 @@ def predictive_plot(
         label=rf"$\mu_{{max}}$ = {mu_max['median']:.3f} [{mu_max['q05']:.3f}, {mu_max['q95']:.3f}]",
     )
     ax.set_xscale("log")
-    ax.set_xlabel("creepage s [-]")
-    ax.set_ylabel(r"adhesion coefficient $\mu$ [-]")
+    ax.set_xlabel("creepage s [-]" if sign > 0 else "creepage |s| [-] (braking)")
+    ax.set_ylabel(r"adhesion coefficient $\mu$ [-]" if sign > 0 else r"adhesion coefficient $|\mu|$ [-]")
     ax.set_title(f"Posterior predictive at v = {result.vehicle_speed:.2f} m/s (median speed)")
     ax.legend(loc="lower right", fontsize=8)
     ax.grid(alpha=0.3, which="both", lw=0.5)
