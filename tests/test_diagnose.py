@@ -390,6 +390,13 @@ def test_a_size_the_effect_does_not_have_is_not_named():
     # without a null (``--replicas 0``) there is no p-value to quote: said without one, no TypeError
     no_null = explain({**result, "candidates": [{**rail, "p_value": None}]}, LOCO_22E)
     assert no_null.startswith("No catalogue effect is found: rail change (+2.5%) passed every test")
+    # with 1-18 replicas no p-value can reach 0.05: 'none' is said to be no finding
+    small = explain({**result, "null": {**result["null"], "replicas": 9}}, LOCO_22E)
+    assert small.startswith(
+        "No effect can be named with 9 replicas: the smallest p-value, 1/10 = 0.10, is above 0.05 "
+        "(--replicas 19 at least), so the verdict 'none' is not a finding (best converged candidate "
+        "rail_change, +2.5%, p = 0.05)."
+    )
 
 
 def test_warnings_say_what_was_not_tested():
