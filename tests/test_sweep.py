@@ -227,6 +227,23 @@ def test_table_columns_and_csv_round_trip(reference):
     assert np.array_equal(read_table(out)["seconds"], table["seconds"])
 
 
+def test_a_creep_range_with_too_few_samples_is_not_run(tmp_path):
+    """A --creep-max that keeps fewer samples than a fit needs (10) gives status not_run: its fit
+    ran on copies of 2 samples and reported 'converged'."""
+    grid = Grid(
+        scenarios=("dry",),
+        seeds=(0, 1),
+        methods=("pso",),
+        noise_scale=(1.0,),
+        creep_max=(0.0022, math.inf),
+        fit_options=toy_grid().fit_options,
+    )
+    table, _ = run_sweep(grid, tmp_path / "few.csv", chunk_size=CHUNK, simulate=toy_simulate)
+    few = table["samples"] < 10
+    assert few[0::2].all() and not few[1::2].any()
+    assert set(table["status"][few]) == {"not_run"} and "not_run" not in set(table["status"][~few])
+
+
 def test_resume_recomputes_only_missing_chunk(reference, tmp_path):
     out, table, _ = reference
     parts = parts_dir(out, toy_grid(), CHUNK, toy_simulate)
