@@ -171,3 +171,9 @@ def test_help_names_and_defaults_are_the_catalogues_and_the_simulators():
     assert simulate.EFFECT_NAMES == EFFECT_NAMES
     assert simulate.DEFAULT_RATE_HZ == 1.0 / SAMPLE_PERIOD
     assert simulate.DEFAULT_DURATION_S == pytest.approx((DEFAULT_SAMPLES - 1) * SAMPLE_PERIOD, rel=1e-12)
+
+
+def test_summary_duration_is_rounded(capsys, tmp_path):
+    """The default run's 1 999 steps of 0.02 s: 39.98 s in the summary, not 39.980000000000004."""
+    code, summary, _ = _simulate(capsys, tmp_path / "r.csv")
+    assert code == 0 and json.dumps(summary["duration_s"]) == "39.98"

@@ -329,10 +329,13 @@ def test_cli_bad_arguments_exit_2(tmp_path, capsys):
         ["--max-iter", "0"],
         ["--scenarios", "dry,,wet"],  # an empty item was dropped
         ["--noise", "1,x"],
+        ["--samples", "10"],  # the flag's range said [10, ...], the grid then refused it
     ):
         assert cli_main(["sweep", *argv, "--out", str(out), "--json"]) == 2
         err = capsys.readouterr().err
         assert err.startswith("jadhesion: error:") and err.count("\n") == 1
+        expected = "jadhesion: error: sweep: --samples must be in [100, 200000], got 10\n"
+        assert argv[0] != "--samples" or err == expected
     assert list(tmp_path.iterdir()) == []
 
 

@@ -269,7 +269,7 @@ def run(args) -> int:
         sampled = thinned(data, every)
         tempering["weight"] = every / tempering["kappa"]
         tempering["thinned"] = {"every": every, "samples": int(sampled.adhesion.shape[0])}
-        note += f"; sampled every {every}th sample, each weighted {every}/κ"
+        note += f"; sampled one sample in {every}, each weighted {every}/κ"
     spread = initial_spread(theta0, padded if sampled is data else bucketed(sampled), obs=obs)
     spread = np.asarray(spread) * np.sqrt(1.0 / tempering["weight"])
     theta0 = np.asarray(theta0)

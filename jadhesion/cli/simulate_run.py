@@ -160,7 +160,7 @@ def run(args) -> int:
         "seed": args.seed,
         "params": result.truth["params"],
         "test": args.test,
-        "duration_s": result.truth["duration_s"],
+        "duration_s": float(f"{result.truth['duration_s']:.12g}"),  # 39.98, not 39.980000000000004
         "rate_hz": args.rate,
         "effects": result.truth["effects"],
         "coasting": result.truth["coasting"],

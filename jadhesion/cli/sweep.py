@@ -56,7 +56,7 @@ def register(sub) -> None:
         help=f"population methods: iterations (default 300, at most {MAX_ITER:,})",
     )
     p.add_argument(
-        "--samples", type=int, default=None, help="samples per simulated test (default 2000, at most 200,000)"
+        "--samples", type=int, default=None, help="samples per simulated test (default 2000, 100 to 200,000)"
     )
     p.add_argument(
         "--chunk-size",

@@ -7,9 +7,8 @@ import jax
 
 from ..data.simulator import DEFAULT_SAMPLES
 from ..identify.methods import METHODS, POPULATION
-from ..identify.polach_fit import MIN_SAMPLES
 from ..sweeps import Grid, run_sweep
-from ..sweeps.grid import MAX_NOISE_SCALE
+from ..sweeps.grid import MAX_NOISE_SCALE, MIN_GRID_SAMPLES
 from .common import (
     MAX_ITER,
     MAX_POPULATION_BYTES,
@@ -83,7 +82,7 @@ def run(args) -> int:
     require_at_least("sweep", 1, chunk_size=args.chunk_size)
     require_in_range("sweep", 1, MAX_ITER, max_iter=args.max_iter)
     require_at_least("sweep", 2, pop_size=args.pop_size)
-    require_in_range("sweep", MIN_SAMPLES, MAX_SAMPLES, samples=args.samples)  # simulate's range
+    require_in_range("sweep", MIN_GRID_SAMPLES, MAX_SAMPLES, samples=args.samples)  # the grid's least
     methods = _list(str, "--methods", args.methods)
     noise = _list(float, "--noise", args.noise)
     for scale in noise:  # the grid's own check, said with the flag's name

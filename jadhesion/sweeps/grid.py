@@ -34,6 +34,8 @@ def _tuple(name, values, kind):
         raise InputError(f"sweep grid: '{name}' must hold {kind.__name__} values: {exc}") from None
 
 
+#: Fewest samples of a grid's simulated tests (``--samples``).
+MIN_GRID_SAMPLES = 100
 #: Largest noise scale of a grid point: 10× the simulator's μ̂ noise (0.1–0.2) is already the
 #: size of the curve; ``1e300`` had run and reported "converged" fits.
 MAX_NOISE_SCALE = 10.0
@@ -69,8 +71,8 @@ class Grid:
     fit_options: tuple = ()
 
     def __post_init__(self):
-        if self.n_samples is not None and int(self.n_samples) < 100:
-            raise InputError(f"sweep grid: n_samples must be >= 100, got {self.n_samples}")
+        if self.n_samples is not None and int(self.n_samples) < MIN_GRID_SAMPLES:
+            raise InputError(f"sweep grid: n_samples must be >= {MIN_GRID_SAMPLES}, got {self.n_samples}")
         options = dict(self.fit_options)
         try:
             hash(tuple(options.values()))
