@@ -32,13 +32,12 @@ def load_from_args(args, path) -> Recording:
     return trim(recording, args.start, args.end)
 
 
-def say_notes(recording: Recording) -> list:
+def say_notes(recording: Recording) -> None:
     """The reader's notes on ``recording`` (time stamps that look like ms, decimal commas, rows
     skipped or dropped, a column ignored), said on stderr as soon as it is loaded, each as
-    ``jadhesion: note: …``; returned for the JSON's ``notes``."""
+    ``jadhesion: note: …`` (``fit``'s and ``diagnose``'s JSON carry them as ``notes``)."""
     for note in recording.notes:
         sys.stderr.write(f"jadhesion: note: {note}\n")
-    return list(recording.notes)
 
 
 def say_sidecar_warning(recording: Recording) -> dict | None:
