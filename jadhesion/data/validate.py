@@ -9,6 +9,7 @@ import numpy as np
 
 from ..errors import RecordingError
 from ..models.kinematics import SPEED_FLOOR
+from .units import UNITS, ColumnSpec, to_si
 from .vehicle import Vehicle
 
 #: Columns of a raw-signal recording.
@@ -198,14 +199,15 @@ def _ms_note(t, name: str, source: str) -> tuple:
 
 
 def speed_units(ratio: float, column: str, wheel_radius_m: float) -> list:
-    """The units of ``column`` (``wheel_speed``: km/h, mph, rad/s, rpm through the wheel radius
-    [m]; ``vehicle_speed``: km/h, mph) that would make it ``ratio`` (> 1) times the other speed in
-    m/s, to within :data:`UNIT_RATIO_TOLERANCE`; closest first."""
-    factors = {"km/h": 3.6, "mph": 1 / 0.44704}
-    if column == "wheel_speed":
-        factors |= {"rad/s": 1 / wheel_radius_m, "rpm": 60 / (2 * np.pi * wheel_radius_m)}
-    off = {unit: abs(ratio / f - 1) for unit, f in factors.items()}
-    return sorted((u for u in off if off[u] <= UNIT_RATIO_TOLERANCE), key=off.get)
+    """The units of ``column`` (:data:`.units.UNITS`: km/h and mph, and for ``wheel_speed`` rpm and
+    rad/s through the wheel radius [m]; one spelling each) that would make it ``ratio`` (> 1) times
+    the other speed in m/s, to within :data:`UNIT_RATIO_TOLERANCE`; closest first."""
+    by_factor = {}  # values per m/s -> (first spelling, relative mismatch)
+    for unit in UNITS[column]:
+        factor = 1.0 / to_si(ColumnSpec(column, column, unit), wheel_radius_m)
+        if factor != 1.0:
+            by_factor.setdefault(factor, (unit, abs(ratio / factor - 1)))
+    return [u for e, u in sorted((e, u) for u, e in by_factor.values()) if e <= UNIT_RATIO_TOLERANCE]
 
 
 def _check_values(cols, vehicle: Vehicle, lines, name: str, max_speed: float, shown: dict) -> tuple:
