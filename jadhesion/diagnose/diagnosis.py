@@ -254,13 +254,13 @@ def _warnings(result: dict) -> list:
                 "against clean versions of this recording",
             }
         )
-    elif replicas < round(1.0 / null.ALPHA) - 1:
+    elif replicas < select.MIN_REPLICAS:
         out.append(
             {
                 "code": "null_too_small",
                 "message": f"with {replicas} replicas the smallest p-value is 1/{replicas + 1} = "
                 f"{1.0 / (replicas + 1):.2f} > {null.ALPHA:g}: no candidate can be named "
-                f"(at least {round(1.0 / null.ALPHA) - 1} replicas are needed)",
+                f"(at least {select.MIN_REPLICAS} replicas are needed)",
             }
         )
     truth = result["null"]["truth"]

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from ..data.vehicle import GRAVITY, Vehicle
 from ..models.effects import EFFECTS, on_clock
-from .select import ALPHA, beyond_typical
+from .select import ALPHA, MIN_REPLICAS, beyond_typical
 
 
 def effect_sentence(name: str, params: dict, vehicle: Vehicle, t_start_s: float = 0.0) -> str:
@@ -143,11 +143,11 @@ def explain(result: dict, vehicle: Vehicle) -> str:
         best = (ranked or result["candidates"])[0]
         p = best.get("p_value")
         replicas = result.get("null", {}).get("replicas", 0)
-        if 0 < replicas < round(1.0 / ALPHA) - 1:  # no p-value can reach ALPHA: 'none' is no finding
+        if 0 < replicas < MIN_REPLICAS:  # no p-value can reach ALPHA: 'none' is no finding
             return (
                 f"No effect can be named with {replicas} replicas: the smallest p-value, "
                 f"1/{replicas + 1} = {1.0 / (replicas + 1):.2f}, is above {ALPHA:g} (--replicas "
-                f"{round(1.0 / ALPHA) - 1} at least), so the verdict 'none' is not a finding (best "
+                f"{MIN_REPLICAS} at least), so the verdict 'none' is not a finding (best "
                 f"{'converged ' if ranked else ''}candidate {best['name']}, {best['gain']:+.1%}"
                 + ("" if p is None else f", p = {p:.2f}")
                 + ")."

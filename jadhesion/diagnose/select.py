@@ -55,6 +55,8 @@ ROUND2_MIN = 0.01
 #: Family-wise level of the per-recording null (:mod:`.null`): a round-1 candidate is ranked only
 #: with a max-T p-value ≤ ALPHA (when the null was run).
 ALPHA = 0.05
+#: Fewest replicas whose max-T p-value, at least 1/(R + 1), can reach :data:`ALPHA`.
+MIN_REPLICAS = round(1.0 / ALPHA) - 1
 #: Candidates within this fraction of the best gain are reported as indistinguishable.
 AMBIGUITY = 0.8
 #: ... and so are those whose ΔBIC is within this of the best's (Kass & Raftery 1995: a BIC
