@@ -110,19 +110,13 @@ def identifiability(creep, slip, adhesion, vehicle_speed=None) -> list:
     creep, slip, mu = (np.abs(np.asarray(a, dtype=np.float64)) for a in (creep, slip, adhesion))
     notes = []
     if creep.size < FEW_SAMPLES:
-        notes.append(
-            {
-                "code": "few_samples",
-                "message": f"only {creep.size} samples selected (fewer "
-                f"than {FEW_SAMPLES}): standard errors will be rough",
-            }
+        message = (
+            f"only {creep.size} samples selected (fewer than {FEW_SAMPLES}): standard errors will be rough"
             if creep.size
-            else {
-                "code": "few_samples",
-                "message": "no sample selected: nothing to identify (the selection says what was "
-                "excluded; another --phase, --start or --end?)",
-            }
+            else "no sample selected: nothing to identify (the selection says what was excluded; "
+            "another --phase, --start or --end?)"
         )
+        notes.append({"code": "few_samples", "message": message})
     if creep.size == 0:
         return notes
     if (note := implausible_adhesion(mu)) is not None:
