@@ -181,6 +181,9 @@ def test_posterior_runs_on_the_selected_samples_and_refuses_the_observer_likelih
     bad = _cli(tmp_path, "posterior", path, "--steps", "60", "--likelihood", "observer")
     assert bad.returncode == 2 and bad.stdout == "" and bad.stderr.count("\n") == 1
     assert "--likelihood observer needs one contiguous series" in bad.stderr
+    # where the excluded samples lie, so that --start/--end can keep them out
+    first = doc["selection"]["excluded"][0]
+    assert f"{first['reason']} at t = {first['start']:.6g}" in bad.stderr
 
 
 def _swapped(cols, which):

@@ -238,7 +238,8 @@ def run(args) -> int:
     if args.likelihood == "observer" and not selection.complete:
         raise UserError(
             f"{recording.path}: --likelihood observer needs one contiguous series, but "
-            f"{selection.summary()}; use --likelihood auto or --start/--end"
+            f"{selection.summary()} ({selection.where_broken()}); "
+            "use --likelihood auto or --start/--end"
         )
     likelihood, obs, note = _choose_likelihood(recording, args.likelihood)
     # the start and the checks on the dataset padded to its length bucket: one program per bucket,

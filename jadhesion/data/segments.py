@@ -144,6 +144,19 @@ class Selection:
                     )
         return runs
 
+    def where_broken(self, most: int = 3) -> str:
+        """Where the series breaks: its first ``most`` excluded runs (``reason at t = t0–t1 s (k
+        samples)``) and gaps (``gap at t = t0–t1 s``), with how many more there are; ``""`` for a
+        contiguous series."""
+        runs = self.excluded()
+        out = [
+            f"{r['reason']} at t = {r['start']:.6g}"
+            + (f"–{r['end']:.6g} s ({r['samples']} samples)" if r["samples"] > 1 else " s")
+            for r in runs[:most]
+        ] + [f"gap at t = {a:.6g}–{b:.6g} s" for a, b in self.gaps[:most]]
+        more = max(len(runs) - most, 0) + max(len(self.gaps) - most, 0)
+        return ", ".join(out) + (f" and {more} more" if more else "")
+
     def counts(self) -> dict:
         """Samples per label (used phases and exclusion reasons)."""
         names, counts = np.unique(self.labels, return_counts=True)
