@@ -278,7 +278,9 @@ def test_a_peak_below_the_data_is_named(capsys, tmp_path):
     """The independent generator's steady run (seed 3, 25 Hz, mild sensors) ends with Algorithm 1's
     mu_max at 0.07 against a true peak of 0.31, below most of the adhesion the run itself shows:
     ``peak_below_data``. Its start (seed 3, 50 Hz), tracked to within 1 % of the true 0.316, is
-    not warned."""
+    not warned. Its sweep (seed 2, realistic sensors) shows μ̂ up to 0.43 and then ends 30 s low on
+    the curve (median |μ̂| 0.04) with mu_max 0.077: below the adhesion the run showed, which the
+    median |μ̂| as the level did not see; the warning says when the run last showed it."""
     steady = write(generate(3, effect="none", sensor="mild", rate_hz=25.0), tmp_path / "steady.csv")
     start = generate(3, effect="none", sensor="mild", rate_hz=50.0, profile="start", duration_s=30.0)
     start = write(start, tmp_path / "start.csv")
@@ -287,6 +289,14 @@ def test_a_peak_below_the_data_is_named(capsys, tmp_path):
     _, doc, _ = _run(capsys, "online", start, "--algorithm", "1")
     assert doc["final"]["mu_max"] == pytest.approx(0.316, rel=0.02)
     assert "peak_below_data" not in {w["code"] for w in doc["warnings"]}
+    sweep = write(
+        generate(2, effect="none", sensor="realistic", rate_hz=50.0, profile="sweep"), tmp_path / "sw.csv"
+    )
+    _, doc, _ = _run(capsys, "online", sweep, "--algorithm", "1")
+    (below,) = [w for w in doc["warnings"] if w["code"] == "peak_below_data"]
+    assert doc["final"]["mu_max"] < 0.5 * 0.417 and below["level"] > 0.35
+    assert below["last_at_s"] < doc["track"]["time"][-1] - 20.0  # before the low end
+    assert f"last at t = {below['last_at_s']:.4g} s" in below["message"]
 
 
 def test_a_run_without_excitation_says_so_and_an_extrapolated_peak_is_named(capsys, sweep_csv, tmp_path):

@@ -79,7 +79,7 @@ def run(args) -> int:
                 singular_warning(out),
                 hold_warning(out, time),
                 optimum_warning(out),
-                below_data_warning(out, data.adhesion),
+                below_data_warning(out, data.adhesion, time if "time" in cols else None),
                 extrapolated_warning(out, data.creep),
             )
             if w is not None
