@@ -588,7 +588,7 @@ def test_the_explanation_says_when_the_folds_disagree():
     result["extended"]["heldout_mae"] = 0.008
     text = explain(result, LOCO_22E)
     assert "lowers the cross-validated error (weighted mean |residual| of μ on held-out stretches) " in text
-    assert "from 0.0100 to 0.0080." in text and "squared error" not in text
+    assert "from 0.0100 to 0.00800." in text and "squared error" not in text
     # round 2 found the change's better optimum: the table's numbers are round 1's, the model's not
     refit = {"from_pair_with": "wheel_radius_error", "sse_reduction": 0.623, "params": {}}
     result["second_round"] = {"first": "rail_change", "first_refit": refit, "candidates": []}

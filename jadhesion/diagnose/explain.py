@@ -76,14 +76,14 @@ def _improvement(result: dict) -> str:
     if extended["heldout_mae"] < base["heldout_mae"]:
         return (
             f". Modelling it lowers the cross-validated error (weighted mean |residual| of μ on "
-            f"held-out stretches) from {base['heldout_mae']:.4f} to {extended['heldout_mae']:.4f}."
+            f"held-out stretches) from {base['heldout_mae']:#.3g} to {extended['heldout_mae']:#.3g}."
         )
     first = next(c for c in result["candidates"] if c["name"] == result["effects"][0])
     return (  # round 1's numbers are the first effect's alone: it is named
         f". Modelling {first['name'].replace('_', ' ')} lowers the squared error by "
         f"{first['sse_reduction']:.0%} (ΔBIC {first['delta_bic']:.1f}); the cross-validated error does "
-        f"not fall ({base['heldout_mae']:.4f} → {extended['heldout_mae']:.4f}): a held-out stretch asks the "
-        "fit to extrapolate to creep, speed or heat the other stretches did not see."
+        f"not fall ({base['heldout_mae']:#.3g} → {extended['heldout_mae']:#.3g}): a held-out stretch asks "
+        "the fit to extrapolate to creep, speed or heat the other stretches did not see."
     )
 
 

@@ -86,10 +86,10 @@ EFFECTS = {
                 "transfer follows the effort, a rail change the position)",
             },
             sentence="the rail condition changed at t ≈ {when}: the friction level μ0 {word} by "
-            "{size:.0%} (a contaminated or cleaned section); identify the two stretches separately",
+            "{size:.3g} % (a contaminated or cleaned section); identify the two stretches separately",
             terms=lambda v: {
                 "word": "dropped" if v["drop"] > 0 else "rose",
-                "size": abs(v["drop"]),
+                "size": 100.0 * abs(v["drop"]),
                 "when": on_clock((v["t_change_s"],), v.get("t_start_s", 0.0)),
             },
             detection=Detection(
@@ -122,12 +122,12 @@ EFFECTS = {
                 "thermal_softening": f"{_COAST_RADIUS}; softening needs frictional power)",
                 "load_transfer": f"{_COAST_RADIUS}; load transfer needs torque)",
             },
-            sentence="the wheel's rolling radius is {size:.1%} {side} than the nominal {wheel_radius_m:.3f}"
+            sentence="the wheel's rolling radius is {size:.3g} % {side} than the nominal {wheel_radius_m:.3f}"
             " m (≈ {radius_m:.3f} m): the recorded wheel speed and the torque-to-force conversion use the "
             "nominal radius, which shifts the creep in proportion to speed; measure the wheel diameter or "
             "calibrate it on a coasting run",
             terms=lambda v: {
-                "size": abs(v["delta_r"]),
+                "size": 100.0 * abs(v["delta_r"]),
                 "side": "larger" if v["delta_r"] > 0 else "smaller",
                 "radius_m": v["wheel_radius_m"] * (1 + v["delta_r"]),
             },
@@ -160,7 +160,7 @@ EFFECTS = {
                 "thermal_softening": f"a torque step after a pause (cool rail): {_TORQUE_STEP}",
                 "load_transfer": f"a torque step: {_TORQUE_STEP}",
             },
-            sentence="the torque signal lags the speed signals by {delay_ms:.0f} ms: the observer mixes "
+            sentence="the torque signal lags the speed signals by {delay_ms:.3g} ms: the observer mixes "
             "torque and wheel acceleration from different instants; align the signals before identifying",
             terms=lambda v: {"delay_ms": 1e3 * v["delay_s"]},
             detection=Detection(
@@ -191,8 +191,9 @@ EFFECTS = {
                 "load_transfer": "a speed sweep at constant creep and tractive effort (speed dependence "
                 "follows the speed, load transfer the effort)",
             },
-            sentence="the friction level falls by {slope:.0%} per 100 % speed increase about the mean speed "
-            "(Curtius–Kniffler-like); identify per speed band or add a speed term",
+            sentence="the friction level falls by {slope_pct:.3g} % per 100 % speed increase about the mean "
+            "speed (Curtius–Kniffler-like); identify per speed band or add a speed term",
+            terms=lambda v: {"slope_pct": 100.0 * v["slope"]},
             detection=Detection(
                 None,
                 None,
@@ -220,7 +221,7 @@ EFFECTS = {
                 "load_transfer": f"{_COAST_BIAS}; a run with a trailing load separates tractive effort "
                 "from acceleration",
             },
-            sentence="the torque signal carries a bias of {bias_knm:+.1f} kN·m ({offset:+.3f} in adhesion "
+            sentence="the torque signal carries a bias of {bias_knm:+.3g} kN·m ({offset:+.3g} in adhesion "
             "units); re-zero it on a coasting run",
             terms=lambda v: {
                 "bias_knm": v["offset"] * v["axle_load_kg"] * v["gravity"] * v["wheel_radius_m"] / 1e3
@@ -251,8 +252,8 @@ EFFECTS = {
             separating={
                 "load_transfer": f"{_PAUSE}, load transfer returns with the same tractive effort",
             },
-            sentence="friction softens with recent frictional power: μ0/(1 + {softening:.2f}·P/10 kW) with a "
-            "thermal lag of about {tau_th_s:.1f} s",
+            sentence="friction softens with recent frictional power: μ0/(1 + {softening:.3g}·P/10 kW) with a "
+            "thermal lag of about {tau_th_s:.3g} s",
             terms=lambda v: {"tau_th_s": v.get("tau_th_s", math.nan)},
             detection=Detection(
                 None,
@@ -285,8 +286,8 @@ EFFECTS = {
             exposing_run="a run with the other axles' torque changed independently (one bogie coasting), "
             "so that tractive effort no longer follows this axle's adhesion",
             separating={},
-            sentence="the measured axle's load changes with the locomotive's pitch: N(1 − {load_m:.2f}·"
-            "F_t/(M g) − {load_accel:.2f}·a/g) (tractive effort and acceleration); correct the axle load "
+            sentence="the measured axle's load changes with the locomotive's pitch: N(1 − {load_m:.3g}·"
+            "F_t/(M g) − {load_accel:.3g}·a/g) (tractive effort and acceleration); correct the axle load "
             "for load transfer",
             terms=lambda v: {"load_accel": v.get("load_accel", 0.0)},
             detection=Detection(
