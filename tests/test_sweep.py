@@ -229,7 +229,8 @@ def test_table_columns_and_csv_round_trip(reference):
 
 def test_a_creep_range_with_too_few_samples_is_not_run(tmp_path):
     """A --creep-max that keeps fewer samples than a fit needs (10) gives status not_run: its fit
-    ran on copies of 2 samples and reported 'converged'."""
+    ran on copies of 2 samples and reported 'converged'. Its numbers are NaN (empty), so that no
+    aggregate over the table takes them for a fit; the other rows' are finite."""
     grid = Grid(
         scenarios=("dry",),
         seeds=(0, 1),
@@ -242,6 +243,9 @@ def test_a_creep_range_with_too_few_samples_is_not_run(tmp_path):
     few = table["samples"] < 10
     assert few[0::2].all() and not few[1::2].any()
     assert set(table["status"][few]) == {"not_run"} and "not_run" not in set(table["status"][~few])
+    for column in (*PARAM_NAMES, "mae", "mu_max", "creep_opt"):
+        assert np.isnan(table[column][few]).all() and np.isfinite(table[column][~few]).all(), column
+    assert np.isfinite(table["true_mu_max"]).all()
 
 
 def test_resume_recomputes_only_missing_chunk(reference, tmp_path):

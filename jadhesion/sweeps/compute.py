@@ -86,8 +86,13 @@ def _local_chunk(method, options, data, theta_true, index, seed, noise_scale, cr
         creep_opt=creep_opt,
     )
     # jadhesion.status.Status codes; a creep range with fewer samples than a fit needs was fitted
-    # to copies of its few samples and 'converged' (5 samples: μ0 0.81 for 0.36): not run
-    out["status"] = jnp.where(covered < MIN_SAMPLES, int(Status.NOT_RUN), fit.status)
+    # to copies of its few samples and 'converged' (5 samples: μ0 0.81 for 0.36): not run, and
+    # its numbers NaN (empty in the table), so that no aggregate takes them for a fit
+    few = covered < MIN_SAMPLES
+    out["status"] = jnp.where(few, int(Status.NOT_RUN), fit.status)
+    for name in ("params", "mae", "mu_max", "creep_opt"):
+        value = out[name]
+        out[name] = jnp.where(few.reshape(few.shape + (1,) * (value.ndim - 1)), jnp.nan, value)
     return out
 
 
