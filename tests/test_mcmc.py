@@ -7,6 +7,7 @@ import sys
 import warnings
 from pathlib import Path
 
+import emcee
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -18,7 +19,13 @@ from jadhesion.cli import main
 from jadhesion.cli.posterior import MOVES as OFFERED_MOVES
 from jadhesion.data.recording import save_recording
 from jadhesion.experiments.mcmc_row import table2_row
-from jadhesion.identify.ensemble import MOVES, ChainTooShortWarning, Diagnostics, run_ensemble
+from jadhesion.identify.ensemble import (
+    MOVES,
+    ChainTooShortWarning,
+    Diagnostics,
+    integrated_time,
+    run_ensemble,
+)
 from jadhesion.identify.laplace import POSTERIOR_SAMPLES, laplace_covariance, lm_optimum, thinning
 from jadhesion.identify.likelihood import (
     LOG_SCALE_BOUNDS,
@@ -270,6 +277,24 @@ def test_a_chain_whose_walkers_never_move_is_not_mixed():
             chain, diag = run_ensemble(log_prob, p0, 60, 0, max_steps=600)
     assert np.all(np.isnan(diag.tau)) and diag.steps == 60 and "did not mix" in diag.warnings[0]
     np.testing.assert_array_equal(chain[-1], p0)
+
+
+def test_one_walker_that_never_moved_leaves_tau_undefined():
+    """AR(1) chains of τ = 19 (φ = 0.9), 16 walkers, 4 000 steps: τ within 20 % of 19. One walker
+    held where it started at a value whose mean over the steps rounds (0.1 + 0.2): emcee alone
+    would return a finite τ (its window never closes: τ(0) = 1, every step independent); it is
+    NaN, as for a walker that never moved at an exactly representable value."""
+    rng = np.random.default_rng(0)
+    x = np.empty((4000, 16, 1))
+    x[0] = rng.standard_normal((16, 1))
+    for t in range(1, 4000):
+        x[t] = 0.9 * x[t - 1] + np.sqrt(1 - 0.81) * rng.standard_normal((16, 1))
+    assert integrated_time(x)[0] == pytest.approx(19.0, rel=0.2)
+    short = x[:45].copy()
+    short[:, 3] = 0.1 + 0.2
+    with np.errstate(invalid="ignore", divide="ignore"):
+        assert np.isfinite(emcee.autocorr.integrated_time(short, tol=0)[0])
+    assert np.isnan(integrated_time(short)[0])
 
 
 def test_seed_reproducible_and_short_chain_warns(data):

@@ -327,10 +327,15 @@ def run(args) -> int:
     print(f"likelihood: {likelihood} ({note}); creep: {doc['creep']}")
     print(table(rows, ["quantity", "median", "q05", "q95"]))
     d = doc["diagnostics"]
+    unknown = [k for k, v in d["tau"].items() if not np.isfinite(v)]
+    mixing = (
+        f"tau max {max(d['tau'].values()):.0f} steps, ESS min {min(d['ess'].values()):.0f}"
+        if not unknown
+        else f"tau undefined for {', '.join(unknown)} (a walker never moved)"
+    )
     print(
-        f"{d['steps']} steps (burn-in {d['burn']}), acceptance {d['acceptance']:.2f}, "
-        f"tau max {max(d['tau'].values()):.0f} steps, "
-        f"ESS min {min(d['ess'].values()):.0f}, {d['n_samples']} samples, {d['seconds']:.1f} s"
+        f"{d['steps']} steps (burn-in {d['burn']}), acceptance {d['acceptance']:.2f}, {mixing}, "
+        f"{d['n_samples']} samples, {d['seconds']:.1f} s"
     )
     for w in doc["warnings"]:
         print(f"warning [{w['code']}]: {w['message']}")

@@ -58,10 +58,16 @@ class Diagnostics(NamedTuple):
 def integrated_time(chain: np.ndarray) -> np.ndarray:
     """emcee's integrated autocorrelation time per coordinate of ``chain`` (steps, walkers, d),
     computed whatever the chain length (``tol=0``; judge it against the length yourself). NaN for a
-    coordinate in which some walker never moved (its autocorrelation is 0/0), without NumPy's
-    warning: :func:`run_ensemble` reports it as a chain that did not mix."""
+    coordinate in which some walker never moved, without NumPy's warning: :func:`run_ensemble`
+    reports it as a chain that did not mix. emcee gives NaN there only when the walker's series
+    minus its mean is exactly 0; where the mean rounds, the series is a constant offset whose
+    autocorrelation never decays, emcee's window never closes and it returns τ(0) = 1, as if every
+    step were independent (a 45-step posterior chain at acceptance 0.1 reported τ = 1 and an ESS
+    of every sample in four of six coordinates)."""
     with np.errstate(invalid="ignore", divide="ignore"):
-        return emcee.autocorr.integrated_time(chain, tol=0)
+        tau = emcee.autocorr.integrated_time(chain, tol=0)
+    stuck = np.any(np.ptp(chain, axis=0) == 0.0, axis=0)
+    return np.where(stuck, np.nan, tau)
 
 
 def unmixed(tau: np.ndarray, kept: int) -> np.ndarray:
