@@ -381,6 +381,23 @@ def test_missing_values_are_skipped_as_gaps_on_request(tmp_path):
         load_recording(holes, missing="skip")
 
 
+def test_a_spreadsheet_error_value_is_a_missing_value_not_a_comment(tmp_path):
+    """Excel writes '#N/A' (or '#DIV/0!', '#VALUE!') where a formula found nothing. In the first
+    column such a row was taken for a '#' comment and dropped without a word (its samples lost, a
+    gap in time); it is a missing value wherever it stands: an error naming it by default, a
+    skipped row counted in the note with ``missing="skip"``. A real comment line still is one."""
+    path = tmp_path / "xl.csv"
+    path.write_text(
+        _raw_text(30, lambda rows: (rows[6].__setitem__(0, "#N/A"), rows[12].__setitem__(0, "#DIV/0!")))
+    )
+    assert "column 'time', row 7 (line 8): '#N/A' is not a number (a missing value" in _error(path)
+    rec = load_recording(path, missing="skip")
+    assert rec.n_samples == 28 and any("2 of 30 rows skipped" in n for n in rec.notes)
+    commented = tmp_path / "comment.csv"
+    commented.write_text(_raw_text(30).replace(HEADER + "\n", HEADER + "\n# logger v2\n", 1))
+    assert load_recording(commented).n_samples == 30
+
+
 def test_missing_file_and_directory(tmp_path):
     assert "not found" in _error(tmp_path / "nope.csv") and "nope.csv" in _error(tmp_path / "nope.csv")
     assert "directory" in _error(tmp_path)

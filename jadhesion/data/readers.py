@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from .units import UNIT_KEYS, UNITS, same_unit, split_unit, unit_key
-from .validate import RAW_COLUMNS, _fail, _is_number
+from .validate import EXCEL_ERRORS, RAW_COLUMNS, _fail, _is_number
 
 _BLANK_LINE = re.compile(r"\n[ \t\r]*\n")
 #: A point that groups thousands before a decimal comma (``25.472,08``, ``1.234.567,5``).
@@ -147,7 +147,8 @@ def _with_unit(column: str, cell: str, name: str, line: int) -> str:
 
 
 def _parse_rows(text: str, name: str):
-    """Header, data rows, their 1-based line numbers and notes; skips blank and ``#`` lines, an
+    """Header, data rows, their 1-based line numbers and notes; skips blank and ``#`` lines (not a
+    row whose first cell is a spreadsheet error such as ``#N/A``: a missing value), an
     unnamed last column without a value in any row (a delimiter ending every line) and a units row
     (:func:`_is_units_row`) after the header, its units joined to the header's names; reads quoted
     decimal commas (:func:`_decimal_commas`)."""
@@ -157,7 +158,8 @@ def _parse_rows(text: str, name: str):
         for fields in reader:
             if not fields or (len(fields) == 1 and not fields[0].strip()):
                 continue
-            if fields[0].lstrip().startswith("#"):
+            first = fields[0].strip()
+            if first.startswith("#") and first.lower() not in EXCEL_ERRORS:  # '#N/A' is a value
                 continue
             if header is None:
                 header = [f.strip() for f in fields]

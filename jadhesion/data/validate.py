@@ -82,7 +82,9 @@ def _check_layout(header, name):
 
 #: What reads as a missing value in a CSV cell (case and spaces ignored; ``-`` as a row of ``-``
 #: under the header is read, :func:`.readers._parse_rows`); in Parquet and MATLAB, NaN or null.
-MISSING_CELLS = frozenset({"", "nan", "na", "n/a", "null", "-"})
+#: Spreadsheet error values (``#N/A``, ``#DIV/0!``…: a cell a formula could not fill) count too.
+EXCEL_ERRORS = frozenset({"#n/a", "#value!", "#div/0!", "#ref!", "#name?", "#num!", "#null!"})
+MISSING_CELLS = frozenset({"", "nan", "na", "n/a", "null", "-"}) | EXCEL_ERRORS
 #: The end of an error about a missing value: the way to read past it.
 _SKIP_HINT = "; --missing skip leaves such rows out (gaps in time)"
 _REPEAT_HINT = "; --repeated-time drop keeps the first row of each repeated stamp"
