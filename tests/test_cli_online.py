@@ -296,7 +296,17 @@ def test_a_peak_below_the_data_is_named(capsys, tmp_path):
     (below,) = [w for w in doc["warnings"] if w["code"] == "peak_below_data"]
     assert doc["final"]["mu_max"] < 0.5 * 0.417 and below["level"] > 0.35
     assert below["last_at_s"] < doc["track"]["time"][-1] - 20.0  # before the low end
-    assert f"last at t = {below['last_at_s']:.4g} s" in below["message"]
+    assert f"last at {below['last_at_s']:.1f} s" in below["message"]
+    # on a clock of seconds since the epoch, the time is said from the first sample, as diagnose does
+    text = sweep.read_text().splitlines()
+    rows = [line.split(",") for line in text[1:]]
+    shifted = "\n".join([text[0], *(",".join([repr(float(r[0]) + 1.7e9), *r[1:]]) for r in rows)])
+    epoch = tmp_path / "sw_epoch.csv"
+    epoch.write_text(shifted + "\n")
+    epoch.with_suffix(".json").write_text(sweep.with_suffix(".json").read_text())
+    _, doc, _ = _run(capsys, "online", epoch, "--algorithm", "1")
+    (late,) = [w for w in doc["warnings"] if w["code"] == "peak_below_data"]
+    assert f"last at {below['last_at_s']:.1f} s after the first fitted sample" in late["message"]
 
 
 def test_a_run_without_excitation_says_so_and_an_extrapolated_peak_is_named(capsys, sweep_csv, tmp_path):

@@ -77,7 +77,7 @@ def run(args) -> int:
             for w in (
                 sidecar,
                 singular_warning(out),
-                hold_warning(out, time),
+                hold_warning(out, time if "time" in cols else None),
                 optimum_warning(out),
                 below_data_warning(out, data.adhesion, time if "time" in cols else None),
                 extrapolated_warning(out, data.creep),

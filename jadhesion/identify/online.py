@@ -52,6 +52,7 @@ from jax import lax
 from ..data.creep_state import difference_sd
 from ..data.dataset import PolachDataset
 from ..data.segments import gap_limit
+from ..models.effects import on_clock
 from ..models.kiencke import DEFAULT_SLOPE, kiencke_adhesion, kiencke_regressors
 from ..status import Status
 from .batch_fit import pad_dataset
@@ -317,7 +318,8 @@ def longest_hold(hit, used) -> tuple[int, int, int]:
 
 def hold_warning(tracked, time) -> dict | None:
     """The ``snr_hold`` warning of a :class:`Tracked` run when the SNR step (eqs 10–17) held
-    ``η = η_max`` for :data:`HOLD_WARNING_S` or longer of ``time`` [s], else ``None`` (also for a
+    ``η = η_max`` for :data:`HOLD_WARNING_S` or longer of ``time`` [s] (``None``: samples at
+    :data:`REFERENCE_STEP_S`), else ``None`` (also for a
     guarded step, finite ``hold_error``: its holds end when the data disagree). With
     ``η_max = 1`` such a hold can be absorbing: without forgetting ``H`` stops changing, so the
     SNR matrix stays inside the interval ``[a, b]`` (fixed in units of ``H``, not calibrated on
@@ -325,16 +327,20 @@ def hold_warning(tracked, time) -> dict | None:
     untracked."""
     used = np.asarray(tracked.used, bool)
     first, last, count = longest_hold(tracked.trace.snr_hit, used)
-    time = np.asarray(time, float)
-    if np.isfinite(tracked.params.hold_error) or count == 0 or time[last] - time[first] < HOLD_WARNING_S:
+    if time is None:  # no clock: the samples at the reference step
+        held, where = (last - first) * REFERENCE_STEP_S, f"samples {first}–{last}"
+    else:
+        time = np.asarray(time, float)
+        held, where = time[last] - time[first], on_clock((time[first], time[last]), time[0])
+    if np.isfinite(tracked.params.hold_error) or count == 0 or held < HOLD_WARNING_S:
         return None
     to_end = not np.any(used[last + 1 :])
-    span = "to the end" if to_end else f"to t = {time[last]:.4g} s"
     return {
         "code": "snr_hold",
         "params": ["p1", "p2"],
-        "message": f"the SNR step held the forgetting factor at eta_max from t = {time[first]:.4g} s "
-        f"{span} ({count} samples): the estimate stopped following the data there, and a change "
+        "message": f"the SNR step held the forgetting factor at eta_max over "
+        f"{where}{' (to the end)' if to_end else ''} "
+        f"({count} samples): the estimate stopped following the data there, and a change "
         "of rail in that stretch would not be tracked; algorithm 1-guarded ends such a hold, "
         "2 and rls have no SNR step",
         "from_s": float(time[first]),
@@ -403,7 +409,7 @@ def below_data_warning(tracked, adhesion, time) -> dict | None:
     if mu_max > BELOW_DATA_SHARE * level:
         return None
     k = int(np.flatnonzero(used & (mu >= level))[-1])
-    last = f"t = {float(time[k]):.4g} s" if time is not None else f"sample {k}"
+    last = f"sample {k}" if time is None else on_clock((float(time[k]),), float(time[0]))
     return {
         "code": "peak_below_data",
         "params": ["mu_max"],
