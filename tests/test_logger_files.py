@@ -24,6 +24,7 @@ from jadhesion.data.vehicle import LOCO_22E
 from jadhesion.errors import RecordingError
 from jadhesion.identify.polach_fit import fit_polach
 from jadhesion.models.polach import polach_adhesion
+from validation.foreign_generator import generate, write
 
 DRY = np.array([0.4288, 1.0, 0.3555, 0.3575, 0.1316])
 R = LOCO_22E.wheel_radius_m
@@ -464,6 +465,33 @@ def test_time_in_ms_labelled_seconds_is_noted_not_refused(tmp_path):
     assert (
         notes(np.arange(1100) * 3.0) == notes(ms + 0.5 * (np.arange(1100) % 2)) == notes(cols["time"]) == ()
     )
+
+
+def test_a_time_column_in_minutes_or_hours_labelled_seconds_is_refused(tmp_path):
+    """A start in minutes read as seconds accelerates at 60× its rate (a 30 s start to 3 m/s:
+    6 m/s², beyond any train's 5): refused naming the unit, where it fitted a "converged" mu_max
+    0.135 for 0.348 before. Hours, and times multiplied by 1e60 (a traceback in the trust block
+    before), have median steps beyond an hour: refused. Mapped with its unit, the file reads."""
+    start = generate(0, effect="none", sensor="realistic", rate_hz=50.0, profile="start", duration_s=30.0)
+    path = write(start, tmp_path / "s.csv")
+    lines = path.read_text().splitlines()
+
+    def rescaled(name, factor):
+        out = path.with_name(name)
+        rows = [line.split(",") for line in lines[1:]]
+        out.write_text("\n".join([lines[0], *(",".join([repr(float(r[0]) * factor), *r[1:]]) for r in rows)]))
+        out.with_suffix(".json").write_text(path.with_suffix(".json").read_text())
+        return out
+
+    minutes = rescaled("min.csv", 1 / 60)
+    with pytest.raises(RecordingError, match=r"m/s², beyond any train's 5\): is the time in another unit\? "
+                       r"map it with --column time=time\[min\]"):  # fmt: skip
+        load_recording(minutes)
+    read = load_recording(minutes, columns=("time=time[min]",))
+    np.testing.assert_allclose(read.columns["time"], load_recording(path).columns["time"], rtol=1e-12)
+    for name, factor in (("h.csv", 1 / 3600), ("big.csv", 1e60)):
+        with pytest.raises(RecordingError, match="is the time in another unit|more than an hour"):
+            load_recording(rescaled(name, factor))
 
 
 @pytest.mark.skipif(not os.path.exists("/dev/zero") or not hasattr(os, "mkfifo"), reason="POSIX devices")

@@ -26,6 +26,33 @@ MAX_SPEED = 70.0
 MAX_ADHESION = 1.5
 #: Times [s] spanning more than this, in whole steps of 1 s or more, are likely ms (a note).
 MS_DURATION = 10_000.0
+#: A median time step [s] beyond this is no logger's rate (a time column in another unit).
+MAX_TIME_STEP_S = 3600.0
+#: Largest plausible vehicle acceleration [m/s²] (trains reach about 1.5; half of g is none's).
+MAX_ACCELERATION = 5.0
+#: The vehicle speed's change is judged on the medians of this many equal stretches of time, and
+#: only over a change of at least MIN_SPEED_CHANGE [m/s] (beyond a sensor's noise and quantum).
+ACCELERATION_BINS = 20
+MIN_SPEED_CHANGE = 1.0
+#: ... on recordings of at least this many samples (five per stretch).
+MIN_ACCELERATION_SAMPLES = 5 * ACCELERATION_BINS
+
+
+def largest_acceleration(t, v) -> tuple:
+    """``(a, dv, dt)``: the largest |change| of the vehicle speed ``v`` [m/s] per time ``t`` [s]
+    between the medians of :data:`ACCELERATION_BINS` equal stretches of the recording, over pairs
+    whose speeds differ by at least :data:`MIN_SPEED_CHANGE` (robust to noise, quantisation and a
+    spike); ``(0, 0, 0)`` when none do."""
+    edges = np.linspace(t[0], t[-1], ACCELERATION_BINS + 1)
+    which = np.clip(np.searchsorted(edges, t, side="right") - 1, 0, ACCELERATION_BINS - 1)
+    full = [k for k in range(ACCELERATION_BINS) if np.any(which == k)]
+    mid = np.array([np.median(t[which == k]) for k in full])
+    speed = np.array([np.median(v[which == k]) for k in full])
+    dv = np.abs(speed[:, None] - speed[None, :])
+    dt = np.abs(mid[:, None] - mid[None, :])
+    rate = np.where((dv >= MIN_SPEED_CHANGE) & (dt > 0), dv / np.where(dt > 0, dt, 1.0), 0.0)
+    i, j = np.unravel_index(np.argmax(rate), rate.shape)
+    return float(rate[i, j]), float(dv[i, j]), float(dt[i, j])
 #: Largest median wheel/vehicle speed ratio over the moving samples (and smallest, its inverse) of
 #: a recording with both speeds in one unit: a median creepage of 50 %. Our simulator's, the
 #: independent and the kinematic generators' recordings: medians 1.00–1.05 (99th percentiles up to
@@ -233,7 +260,15 @@ def _check_values(cols, vehicle: Vehicle, lines, name: str, max_speed: float, sh
                 f"previous row's {t[i - 1]:.10g} s (time must strictly increase"
                 f"{_REPEAT_HINT if t[i] == t[i - 1] else ''})",
             )
-        notes = _ms_note(cols["time"], name, shown.get("time", "time"))
+        source = shown.get("time", "time")
+        step = float(np.median(dt))
+        if step > MAX_TIME_STEP_S:
+            raise _fail(
+                name,
+                f"column {source!r}: median time step {step:.4g} s, more than an hour: no logger's "
+                f"rate; is it in another unit? map it with --column time={source}[ms] (or us, ns)",
+            )
+        notes = _ms_note(cols["time"], name, source)
     # first the pair's ratio: it tells which unit (rpm, rad/s) a speed beyond max_speed is in
     if "vehicle_speed" in cols and "wheel_speed" in cols:
         v, vw = cols["vehicle_speed"], cols["wheel_speed"]
@@ -319,5 +354,17 @@ def _check_values(cols, vehicle: Vehicle, lines, name: str, max_speed: float, sh
                 name,
                 f"{_where(col, i, lines)}: {cols[col][i]:.4g}{unit} is implausible (|{col}| <= "
                 f"{limit:g}{unit} with both speeds within {max_speed:g} m/s)",
+            )
+    # last: a value beyond its range says more than the acceleration it makes
+    if "time" in cols and "vehicle_speed" in cols and len(cols["time"]) >= MIN_ACCELERATION_SAMPLES:
+        acc, dv, span = largest_acceleration(cols["time"], cols["vehicle_speed"])
+        if acc > MAX_ACCELERATION:
+            source = shown.get("time", "time")
+            raise _fail(
+                name,
+                f"column {source!r}: the vehicle speed changes by {dv:.3g} m/s in {span:.3g} s "
+                f"({acc:.3g} m/s², beyond any train's {MAX_ACCELERATION:g}): is the time in "
+                f"another unit? map it with --column time={source}[min] (or h), or check the "
+                "speed's unit",
             )
     return notes
