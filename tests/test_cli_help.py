@@ -85,3 +85,27 @@ def test_negative_numbers_in_exponent_form_are_option_values():
     ]
     kept = ["fit", "--start", "-1.5", "--end", "-2", "--start=-1e3", "-h", "--column", "-x=y"]
     assert attach_negative_numbers(kept) == kept
+
+
+@pytest.mark.parametrize(
+    ("argv", "line"),
+    [
+        (
+            ["fit", "run.csv", "--bogus"],
+            "jadhesion: error: unrecognized arguments: --bogus (see jadhesion --help)",
+        ),
+        (["fitt"], "jadhesion: error: argument command: invalid choice: 'fitt'"),
+        (
+            ["fit", "--method", "zz", "run.csv"],
+            "jadhesion: error: fit: argument --method: invalid choice: 'zz'",
+        ),
+        (["posterior"], "jadhesion: error: posterior: the following arguments are required: file"),
+    ],
+)
+def test_a_bad_flag_is_one_line_and_exit_2(capsys, argv, line):
+    """argparse's own errors (unknown flag, bad choice, missing argument) are one line naming the
+    command and its --help, exit code 2, as every other bad input; argparse printed its usage first."""
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and err.count("\n") == 1 and err.startswith(line)

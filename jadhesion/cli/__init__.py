@@ -42,10 +42,25 @@ COMMANDS = {
 }
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse's parser whose errors are one line, as every other bad input's (argparse prints
+    the usage first): ``jadhesion: error: COMMAND: MESSAGE (see jadhesion COMMAND --help)``, exit
+    code 2."""
+
+    def error(self, message):
+        command = self.prog.removeprefix("jadhesion").strip()
+        sys.stderr.write(
+            f"jadhesion: error: {command + ': ' if command else ''}{message} (see {self.prog} --help)\n"
+        )
+        sys.exit(2)
+
+
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     """The parser; with ``command``, only that subcommand's arguments are defined (its module
     imported), else every subcommand is listed with its one-line help and no module is imported."""
-    parser = argparse.ArgumentParser(prog="jadhesion", description=__doc__.splitlines()[0])
+    parser = _Parser(
+        prog="jadhesion", description="identify wheel–rail adhesion models from traction recordings"
+    )
     sub = parser.add_subparsers(dest="command", required=True)
     for name, help_ in COMMANDS.items():
         if name == command:

@@ -22,7 +22,7 @@ MAX_SEEDS = 1_000_000
 
 def register(sub) -> None:
     """Add the ``sweep`` subcommand to ``sub`` (argparse subparsers)."""
-    p = sub.add_parser("sweep", help=COMMANDS["sweep"], description=__doc__.splitlines()[0])
+    p = sub.add_parser("sweep", help=COMMANDS["sweep"], description=COMMANDS["sweep"])
     p.add_argument(
         "--scenarios", default="dry,wet,sand", help="comma-separated scenarios (default dry,wet,sand)"
     )
