@@ -327,3 +327,24 @@ def test_a_run_without_excitation_says_so_and_an_extrapolated_peak_is_named(caps
     assert doc["final"]["creep_opt"] is None or "peak_extrapolated" in codes  # no peak inside 0.003 ± 3e-5
     code, doc, _ = _run(capsys, "online", sweep_csv[0], "--algorithm", "2")
     assert code == 0 and not {"not_converged", "peak_extrapolated"} & {w["code"] for w in doc["warnings"]}
+
+
+def test_a_short_stretch_and_an_inverted_torque_are_warned_as_fit_warns_them(capsys, tmp_path):
+    """A start (30 s, 50 Hz) tracked over its last 0.5 s only: ``few_samples`` (fit says the same;
+    11 samples once ended at mu_max 1.93, 'converged', with no such warning), which the whole run
+    does not get. The same run with the torque's sign inverted, tracked with --phase both:
+    ``creep_sign``, as fit and posterior say it."""
+    rec = generate(0, effect="none", sensor="realistic", rate_hz=50.0, profile="start", duration_s=30.0)
+    path = write(rec, tmp_path / "start.csv")
+    _, whole, _ = _run(capsys, "online", path)
+    _, short, _ = _run(capsys, "online", path, "--start", "29.5")
+    codes = lambda doc: {w["code"] for w in doc["warnings"]}  # noqa: E731
+    assert "few_samples" not in codes(whole) and "few_samples" in codes(short)
+    assert short["n_used"] < 100 <= whole["n_used"]
+    lines = path.read_text().splitlines()
+    rows = [line.split(",") for line in lines[1:]]
+    flipped = tmp_path / "flipped.csv"
+    flipped.write_text("\n".join([lines[0], *(",".join([*r[:3], repr(-float(r[3]))]) for r in rows)]) + "\n")
+    flipped.with_suffix(".json").write_text(path.with_suffix(".json").read_text())
+    _, doc, _ = _run(capsys, "online", flipped, "--phase", "both")
+    assert "creep_sign" in codes(doc) and "creep_sign" not in codes(whole)

@@ -12,8 +12,9 @@ estimated from the data (the initial slope of Kiencke's curve fitted offline by 
 ``--a-s`` is given. Samples outside ``--phase`` (standstill,
 coasting, direction changes…) and those the tracker finds uninformative are skipped (the estimate
 is held): ``n_used`` counts the samples tracked, ``selection.used`` those of ``--phase``, which
-include the uninformative. ``warnings`` reports a ``no_optimum`` (the run ends with ``p2 ≤ 0``: no
-peak, :func:`jadhesion.identify.online.optimum_warning`), a ``peak_below_data`` (the final
+include the uninformative. ``warnings`` reports ``few_samples`` and ``creep_sign`` as ``fit``
+does, a ``no_optimum`` (the run ends with ``p2 ≤ 0``: no peak,
+:func:`jadhesion.identify.online.optimum_warning`), a ``peak_below_data`` (the final
 ``mu_max`` well below the adhesion the run showed, with when it last did:
 :func:`jadhesion.identify.online.below_data_warning`) and an ``snr_hold``: the SNR step held η at
 η_max long enough that the estimate stopped following the data

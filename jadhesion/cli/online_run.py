@@ -11,12 +11,13 @@ from pathlib import Path
 import jax
 import numpy as np
 
-from ..data.selected import tracking_dataset
+from ..data.selected import creep_sign_warning, tracking_dataset
 from ..identify.kiencke_fit import A_S_LOG10_BOUNDS, MIN_SAMPLES
 from ..identify.online import (
     REFERENCE_STEP_S,
     below_data_warning,
     extrapolated_warning,
+    few_samples_warning,
     hold_warning,
     optimum_warning,
     singular_warning,
@@ -76,6 +77,8 @@ def run(args) -> int:
             w
             for w in (
                 sidecar,
+                creep_sign_warning(recording, selection),
+                few_samples_warning(out),
                 singular_warning(out),
                 hold_warning(out, time if "time" in cols else None),
                 optimum_warning(out),

@@ -58,6 +58,7 @@ from ..status import Status
 from .batch_fit import pad_dataset
 from .kiencke_fit import MIN_SAMPLES, fit_kiencke, informative
 from .peak import extrapolation_warning
+from .polach_fit import RECOMMENDED_SAMPLES
 
 
 class OnlineParams(NamedTuple):
@@ -419,6 +420,21 @@ def below_data_warning(tracked, adhesion, time) -> dict | None:
         "to hold the peak (the forgetting dropped it); compare --algorithm 2 or fit --model kiencke",
         "level": level,
         "last_at_s": float(time[k]) if time is not None else None,
+    }
+
+
+def few_samples_warning(tracked) -> dict | None:
+    """``few_samples`` when the run used fewer than :data:`.polach_fit.RECOMMENDED_SAMPLES`
+    samples (``fit`` says the same of its own): a curve tracked on a handful of samples is rough,
+    whatever its status (11 samples ended at mu_max 1.93, 'converged'). ``None`` otherwise."""
+    n = int(np.sum(np.asarray(tracked.used, bool)))
+    if n >= RECOMMENDED_SAMPLES:
+        return None
+    return {
+        "code": "few_samples",
+        "params": ["p1", "p2", "mu_max", "creep_opt"],
+        "message": f"{n} samples tracked (< {RECOMMENDED_SAMPLES} recommended): the final curve and "
+        "its peak are rough",
     }
 
 
