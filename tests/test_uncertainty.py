@@ -15,6 +15,7 @@ from jadhesion.data.simulator import simulate_many
 from jadhesion.identify.batch_fit import pad_dataset
 from jadhesion.identify.likelihood import as_slip_law
 from jadhesion.identify.polach_fit import LM_RESIDUAL, fit_polach, scaled
+from jadhesion.identify.polach_residuals import polach_mae
 from jadhesion.identify.trust import (
     crowded_slips,
     data_warnings,
@@ -146,6 +147,19 @@ def test_a_mis_scaled_recording_is_said_to_be_one():
     assert "implausible_adhesion" in codes, codes
 
 
+def test_a_fit_further_from_the_data_than_zero_is_said_to_be_no_fit():
+    """The trust block of a good fit has no ``worse_than_zero``; the same curve held against the
+    data with μ̂'s sign flipped (its residuals about twice |μ̂|; a 23-sample start once ended on
+    every bound with MAE 0.985 against a mean |μ̂| of 0.19, status converged) has it."""
+    data = to_dataset(simulate_many("dry", [3], n_samples=1000)[0])
+    fit = fit_polach(data, "lm", jax.random.key(0))
+    assert "worse_than_zero" not in [w["code"] for w in fit_report(data, fit)["warnings"]]
+    flipped = data._replace(adhesion=-data.adhesion)
+    bad = fit._replace(mae=polach_mae(fit.params, flipped))
+    (warning,) = [w for w in fit_report(flipped, bad)["warnings"] if w["code"] == "worse_than_zero"]
+    assert float(bad.mae) > float(jnp.mean(jnp.abs(data.adhesion))) and "not a fit" in warning["message"]
+
+
 @pytest.mark.parametrize("rho", [0.0, 0.5, 0.9])
 def test_colour_factor_is_the_ar1_long_run_variance_ratio(rho):
     """AR(1) residuals: κ → (1 + ρ)/(1 − ρ). The Bartlett-weighted estimate at Andrews' bandwidth
@@ -211,8 +225,8 @@ def test_joined_intervals_hold_both_laws_and_name_what_moved():
     stays as ``ci95_hac``."""
     own = (0.6, 0.9, 0.37, 0.5, 1.0)
     other = (0.45, 0.905, 0.36, 0.5, 0.9)
-    report = _report(own, (0.1, 0.02, 0.005, 0.4, None))
-    theirs = _report(other, (None, 0.02, 0.006, 0.4, 0.05))
+    report = _report(own, (0.1, 0.02, 0.005, 0.2, None))
+    theirs = _report(other, (None, 0.02, 0.006, 0.2, 0.05))
     params = dict(zip(PARAM_NAMES, own, strict=True))
     joined = join_slip_laws(report, params, {"params": dict(zip(PARAM_NAMES, other, strict=True)), **theirs})
     u = joined["uncertainty"]
@@ -230,6 +244,27 @@ def test_joined_intervals_hold_both_laws_and_name_what_moved():
     same = join_slip_laws(report, params, {"params": params, **report})
     assert same["warnings"] == []
     assert same["uncertainty"]["mu0"]["ci95"] == report["uncertainty"]["mu0"]["ci95"]
+
+
+def test_a_joined_interval_wider_than_half_the_box_is_weakly_identified():
+    """``weakly_identified`` follows the interval reported: kA's own 95 % interval [0.15, 0.45]
+    is narrow, but joined to the other law's estimate 0.95 it spans 0.8 of the box, so the
+    warning that named A alone names kA too; where nothing widens, nothing is added."""
+    own = (0.3, 0.9, 0.37, 0.5, 1.0)
+    report = _report(own, (0.15, 0.02, 0.005, 0.4, None))
+    report["warnings"] = [{"code": "weakly_identified", "params": ["A"], "message": "A: wide"}]
+    theirs = _report((0.95, 0.9, 0.37, 0.5, 1.0), (None, 0.02, 0.005, 0.4, None))
+    params = dict(zip(PARAM_NAMES, own, strict=True))
+    joined = join_slip_laws(
+        report, params, {"params": dict(zip(PARAM_NAMES, (0.95, *own[1:]), strict=True)), **theirs}
+    )
+    (weak,) = [w for w in joined["warnings"] if w["code"] == "weakly_identified"]
+    assert joined["uncertainty"]["kA"]["ci95"] == pytest.approx([0.15, 0.95])
+    assert weak["params"] == ["A", "kA"] and weak["message"].startswith(
+        "A: wide; kA: the 95 % interval joining"
+    )
+    same = join_slip_laws(report, params, {"params": params, **report})
+    assert [w for w in same["warnings"] if w["code"] == "weakly_identified"] == report["warnings"]
 
 
 def test_joined_intervals_cover_where_one_slip_law_is_biased():
