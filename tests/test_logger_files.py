@@ -562,3 +562,8 @@ def test_fit_says_the_readers_notes(tmp_path, capsys):
     notes = json.loads(captured.out)["notes"]
     assert len(notes) == 1 and "looks like ms? map it with --column time=time[ms]" in notes[0]
     assert f"jadhesion: note: {notes[0]}\n" in captured.err
+    # online's and posterior's JSON hold them too (they said them on stderr alone)
+    assert main(["online", str(path), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["notes"] == notes
+    assert main(["posterior", str(path), "--steps", "60", "--walkers", "12", "--single-law", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["notes"] == notes

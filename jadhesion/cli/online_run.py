@@ -72,6 +72,7 @@ def run(args) -> int:
         "n_samples": int(used.size),
         "n_used": int(used.sum()),
         "selection": selection.document(),
+        "notes": list(recording.notes),
         "track": {"time": time, **{f: np.asarray(getattr(tr, f)) for f in TRACK_FIELDS}, "used": used},
         "warnings": [
             w
@@ -96,6 +97,7 @@ def run(args) -> int:
             "p2": float(fit.params[1]),
             "mae": float(fit.mae),
             "status": status_of(fit.status).label,
+            "converged": status_of(fit.status).converged,
         }
     if args.plot is not None:
         Path(args.plot).mkdir(parents=True, exist_ok=True)

@@ -80,11 +80,12 @@ def data_warnings(recording, selection, data, result) -> list:
 
 def slip_law_check(data, law: str, seed: int, result) -> tuple:
     """``(check, warning)``: LM's fit of ``data`` under the other slip law (``law``, ``method``,
-    ``params``, ``derived`` at the posterior's reference speed, ``status``, and ``interval90``: its
-    90 % intervals from ``fit``'s trust block, :func:`jadhesion.identify.trust.normal_intervals`)
-    and the warning ``slip_law_sensitive`` naming the quantities it puts outside this posterior's
-    own 90 % interval (``None`` where there is none; LM's robust loss may differ from the likelihood
-    too, so the warning says where, not why); ``(None, None)`` without a slip sd."""
+    ``params``, ``derived`` at the posterior's reference speed, ``status``, ``converged``, and
+    ``interval90``: its 90 % intervals from ``fit``'s trust block,
+    :func:`jadhesion.identify.trust.normal_intervals`) and the warning ``slip_law_sensitive``
+    naming the quantities it puts outside this posterior's own 90 % interval (``None`` where there
+    is none; LM's robust loss may differ from the likelihood too, so the warning says where, not
+    why); ``(None, None)`` without a slip sd."""
     if data.slip_sd is None:
         return None, None
     other = other_slip_law(law)
@@ -101,6 +102,7 @@ def slip_law_check(data, law: str, seed: int, result) -> tuple:
         "params": params,
         "derived": derived,
         "status": status_of(fit.status).label,
+        "converged": status_of(fit.status).converged,
         "interval90": normal_intervals(report, params, Z90),
     }
     ours = {**result.params, **result.derived}
@@ -308,6 +310,7 @@ def run(args) -> int:
     doc["slip_law"] = slip_law_used(args, data)
     doc["slip_sd_scale"] = sd_scale_summary(data)
     doc["selection"] = selection.document()
+    doc["notes"] = list(recording.notes)
     found = data_warnings(recording, selection, data, result)
     check, sensitive = (
         (None, None) if args.single_law else slip_law_check(data, args.slip_law, args.seed, result)

@@ -53,6 +53,8 @@ def largest_acceleration(t, v) -> tuple:
     rate = np.where((dv >= MIN_SPEED_CHANGE) & (dt > 0), dv / np.where(dt > 0, dt, 1.0), 0.0)
     i, j = np.unravel_index(np.argmax(rate), rate.shape)
     return float(rate[i, j]), float(dv[i, j]), float(dt[i, j])
+
+
 #: Largest median wheel/vehicle speed ratio over the moving samples (and smallest, its inverse) of
 #: a recording with both speeds in one unit: a median creepage of 50 %. Our simulator's, the
 #: independent and the kinematic generators' recordings: medians 1.00–1.05 (99th percentiles up to
