@@ -397,6 +397,21 @@ def test_a_size_the_effect_does_not_have_is_not_named():
         "(--replicas 19 at least), so the verdict 'none' is not a finding (best converged candidate "
         "rail_change, +2.5%, p = 0.05)."
     )
+    # no candidate converged: nothing was tested, which the text says instead of quoting a gain
+    stalled = [
+        {**rail, "status": "stalled", "p_value": None},
+        {**rail, "name": "signal_delay", "status": "max_steps"},
+    ]
+    open_text = explain({**result, "candidates": stalled}, LOCO_22E)
+    assert open_text.startswith(
+        "No effect can be named: no candidate's fit converged (rail change stalled, signal delay "
+        "max_steps), so none was tested and the verdict 'none' is not a finding."
+    )
+    # without a null the text does not speak of its re-synthesised recordings
+    below = [{**rail, "gain": 0.001, "p_value": None}]
+    zero = explain({**result, "candidates": below, "null": {**result["null"], "replicas": 0}}, LOCO_22E)
+    assert "beyond the calibrated threshold (best" in zero and "re-synthesised" not in zero
+    assert "re-synthesised" in explain({**result, "candidates": [{**rail, "gain": 0.001}]}, LOCO_22E)
 
 
 def test_warnings_say_what_was_not_tested():

@@ -153,6 +153,13 @@ def explain(result: dict, vehicle: Vehicle) -> str:
                 + ")."
                 + _blind_spots(result["sensitivity"])
             )
+        if not ranked:  # nothing was tested: 'none' is no finding either
+            return (
+                "No effect can be named: no candidate's fit converged ("
+                + ", ".join(f"{c['name'].replace('_', ' ')} {c['status']}" for c in result["candidates"])
+                + "), so none was tested and the verdict 'none' is not a finding."
+                + _blind_spots(result["sensitivity"])
+            )
         strong = [n for w in result.get("warnings", []) for n in w.get("above_critical", [])]
         opening = (
             "The verdict is open: the fits of "
@@ -176,13 +183,12 @@ def explain(result: dict, vehicle: Vehicle) -> str:
             )
         else:
             text = opening + "no catalogue effect "
-        text += (
-            "lowers the held-out error beyond the calibrated threshold and beyond what clean "
-            "re-synthesised versions of this recording show"
+        text += "lowers the held-out error beyond the calibrated threshold" + (
+            " and beyond what clean re-synthesised versions of this recording show" if replicas else ""
         )
         if not beyond:
             text += (
-                f" (best {'converged ' if ranked else ''}candidate {best['name']}, "
+                f" (best converged candidate {best['name']}, "
                 f"{best['gain']:+.1%}" + ("" if p is None else f", p = {p:.2f}") + ")"
             )
         text += "."
