@@ -167,6 +167,10 @@ def test_clean_is_none_and_base_fit(clean):
     assert seen["torque_offset"]["absorbed"] > 0.99 and not seen["torque_offset"]["visible"]
     assert seen["wheel_radius_error"]["visible"]
     assert seen["wheel_radius_error"]["min_detectable"] < 0.002
+    # a size beyond its extension's box is no size: inf (null in JSON), never e.g. a 1 828-fold drop
+    for name, s in seen.items():
+        box = next(p for p in EFFECTS[name].extension if p.name == EFFECTS[name].magnitude_param)
+        assert s["min_detectable"] <= max(abs(box.lower), abs(box.upper)) or s["min_detectable"] == np.inf
     assert "torque offset — a coasting run" in result["explanation"]
     # clean speed sensors: the fast residual is the torque noise's, within its sampling error
     power = result["null"]["noise"]["fast_power"]

@@ -57,7 +57,8 @@ def detectable_magnitudes(
     params, active, u_change, sig, n_valid: int, accepted=(), critical=None, threshold: float = GAIN_THRESHOLD
 ) -> dict:
     """Per effect: ``min_detectable`` (|magnitude| in the catalogue's units, ``inf`` when the fitted
-    model absorbs the signature entirely), ``absorbed`` (share of the signature the fitted model
+    model absorbs the signature entirely or the size lies beyond the extension's box: a relative
+    μ0 drop of 1 828 is none), ``absorbed`` (share of the signature the fitted model
     takes up), ``visible`` (``min_detectable`` within the catalogue's typical range,
     :attr:`~jadhesion.models.effect_spec.EffectSpec.typical`) and ``experiment`` (its ``exposing_run``).
 
@@ -91,6 +92,9 @@ def detectable_magnitudes(
         spread = float(np.sum(np.square(j - j.mean())))
         level = 2.0 * threshold if critical is None else max(2.0 * threshold, critical)
         m_min = float(np.sqrt(level * sse / q2)) if q2 > 0 else float("inf")
+        box = next(p for p in effect.extension if p.name == effect.magnitude_param)
+        if m_min > max(abs(box.lower), abs(box.upper)):  # beyond any size the model has: none
+            m_min = float("inf")
         out[effect.name] = {
             "min_detectable": m_min,
             "absorbed": float(np.clip(1.0 - q2 / spread, 0.0, 1.0)) if spread > 0 else 1.0,
