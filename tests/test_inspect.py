@@ -118,6 +118,20 @@ def test_inspect_says_when_the_speed_columns_look_swapped(tmp_path, capsys):
     assert "identifiability [creep_sign]: wheel slower than vehicle" in capsys.readouterr().out
 
 
+def test_inspect_says_a_recording_without_creep_has_nothing_to_identify(tmp_path, capsys):
+    """A vehicle speed computed from this wheel's own speed (creep 0 on every sample): fit refuses
+    it with one line; inspect said only 'slip_range' and 'no_peak' of it, and now says what fit
+    says, alone."""
+    cols = stretches_si()
+    cols["vehicle_speed"] = cols["wheel_speed"]
+    path = save_recording(cols, LOCO_22E, tmp_path / "zero.csv")
+    assert main(["inspect", str(path), "--json"]) == 0
+    (remark,) = json.loads(capsys.readouterr().out)["identifiability"]
+    assert remark["code"] == "zero_creep" and "nothing to identify" in remark["message"]
+    assert main(["fit", str(path), "--method", "lm"]) == 2
+    assert remark["message"] in capsys.readouterr().err
+
+
 def test_inspect_notes_a_misspelled_sidecar_key_with_the_key_it_likely_meant(tmp_path, capsys):
     path = save_recording(stretches_si(), LOCO_22E, tmp_path / "typo.csv")
     path.with_suffix(".json").write_text('{"axle_lod_kg": 21000, "comment": "x"}')

@@ -27,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from .segments import Selection
-from .selected import creep_sign_warning
+from .selected import creep_sign_warning, zero_creep_message
 
 SLIP_FOR_AB = 0.5
 CREEP_FOR_SLOPE = 0.005
@@ -162,7 +162,8 @@ def inspect_document(recording, selection: Selection, dataset) -> dict:
     ``notes``, ``sampling`` (:func:`sampling`, with ``gaps``), ``ranges`` of the selected samples
     (``vehicle_speed`` [m/s], ``creep`` [-], ``slip_velocity`` [m/s], ``adhesion`` μ̂ [-]) and
     ``ranges_all`` of every sample's speeds, ``selection`` and ``identifiability`` (the
-    selection's ``creep_sign`` remark first, where it applies)."""
+    selection's ``creep_sign`` remark first, where it applies; ``zero_creep`` alone where the
+    recorded creep is 0 on every selected sample, which the identifying commands refuse)."""
     cols = recording.columns
     timing = (
         sampling(cols["time"])
@@ -178,6 +179,12 @@ def inspect_document(recording, selection: Selection, dataset) -> dict:
     }
     every = {c: _range(cols[c]) for c in ("vehicle_speed", "wheel_speed", "traction_torque") if c in cols}
     sign = creep_sign_warning(recording, selection)
+    zero = zero_creep_message(recording, selection.mask) if selection.used else None
+    remarks = (
+        [{"code": "zero_creep", "message": zero}]  # fit, posterior and online refuse it
+        if zero is not None
+        else identifiability(dataset.creep, dataset.slip, dataset.adhesion, dataset.vehicle_speed)
+    )
     return {
         "file": str(recording.path),
         "samples": recording.n_samples,
@@ -189,5 +196,5 @@ def inspect_document(recording, selection: Selection, dataset) -> dict:
         "ranges_all": every,
         "selection": selection.document(),
         "identifiability": ([] if sign is None else [{"code": sign["code"], "message": sign["message"]}])
-        + identifiability(dataset.creep, dataset.slip, dataset.adhesion, dataset.vehicle_speed),
+        + remarks,
     }
