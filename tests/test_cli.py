@@ -328,6 +328,7 @@ def test_fit_of_one_creep_value_gives_no_standard_error_and_names_why(tmp_path, 
         assert name in undetermined | _named(doc, "at_bound")
     assert {"mu_max", "creep_opt"} <= undetermined
     assert all(d["stderr"] is None and d["ci95"] is None for d in doc["derived"].values())
+    assert doc["creep"] == "given" and doc["slip_law"] is None  # the file's creepage, not smoothed
     assert main(["fit", str(path), "--method", "lm"]) == 0
     text = capsys.readouterr().out
     assert "inf" not in text.split() and "n/a" in text.split() and "warning [undetermined]" in text

@@ -172,13 +172,15 @@ def _recording_report(recording, selection) -> dict:
     """``vehicle`` {:data:`VEHICLE_KEYS`} (the sidecar's, else 22E's defaults), ``warnings``
     ``{code, params, message}`` about the recording rather than the fit: unknown sidecar keys
     (:func:`jadhesion.data.sidecar.sidecar_warning`), most moving samples with the creep against
-    the drive (:func:`jadhesion.data.selected.creep_sign_warning`); and the reader's ``notes``
-    (:func:`.loading.say_notes`)."""
+    the drive (:func:`jadhesion.data.selected.creep_sign_warning`); the reader's ``notes``
+    (:func:`.loading.say_notes`); and whether it has the raw signals (``raw_signals``: else its
+    creep is the file's own, ``creep`` "given")."""
     found = (sidecar_warning(recording), creep_sign_warning(recording, selection))
     return {
         "vehicle": {k: getattr(recording.vehicle, k) for k in VEHICLE_KEYS},
         "warnings": [w for w in found if w is not None],
         "notes": list(recording.notes),
+        "raw_signals": recording.has_raw_signals,
     }
 
 
@@ -458,7 +460,7 @@ def run(args) -> int:
     _check_population(args, paths, datasets)
     docs = _fit_all(args, datasets)
     for doc, (dataset, selection, report) in zip(docs, loaded, strict=True):
-        doc["creep"] = args.creep
+        doc["creep"] = args.creep if report["raw_signals"] else "given"  # a creepage column as it is
         doc["slip_law"] = slip_law_used(args, dataset, args.model == "polach")
         doc["slip_sd_scale"] = sd_scale_summary(dataset)
         doc["selection"] = selection.document()

@@ -302,7 +302,8 @@ def run(args) -> int:
         out.mkdir(parents=True, exist_ok=True)
         corner_plot(result).savefig(out / "posterior_corner.png", dpi=90)
         predictive_plot(result, data).savefig(out / "posterior_predictive.png", dpi=110)
-    doc = _document(result, theta0, note, "smoothed" if data.slip_sd is not None else "raw")
+    creep = "given" if not recording.has_raw_signals else "smoothed" if data.slip_sd is not None else "raw"
+    doc = _document(result, theta0, note, creep)
     doc["status"] = "converged" if chain is None else chain["code"]
     doc["converged"] = chain is None  # as fit's and online's: the status as a bool
     doc["lm_start_status"] = status_of(start.status).label
