@@ -11,6 +11,7 @@ from jadhesion.cli.inspect_run import _excluded_line, _grouped
 from jadhesion.data.inspection import MU_IMPLAUSIBLE, identifiability, implausible_adhesion, sampling
 from jadhesion.data.recording import save_recording
 from jadhesion.data.vehicle import LOCO_22E
+from validation.foreign_generator import generate, write
 
 
 @pytest.fixture(scope="module")
@@ -162,3 +163,35 @@ def test_text_groups_close_runs_of_one_reason():
         "  excluded coasting: 5–8 s, 301 samples",
         "  excluded coasting: 9.5–9.7 s, 21 samples",
     ]
+
+
+def test_a_clipped_wheel_speed_is_named_by_every_command(tmp_path, capsys):
+    """The independent generator's start (30 s, 50 Hz, realistic sensors) with its wheel speed
+    clipped at 60 % of its largest value: 12.9 s of one exact value while the vehicle speed rises
+    by 2 m/s (a 'converged' fit whose 95 % interval of mu_max missed the truth, said nowhere).
+    inspect, fit and online name it (``stuck_signal``, with where); the unclipped run gets none."""
+    rec = generate(0, effect="none", sensor="realistic", rate_hz=50.0, profile="start", duration_s=30.0)
+    path = write(rec, tmp_path / "start.csv")
+    lines = path.read_text().splitlines()
+    rows = [line.split(",") for line in lines[1:]]
+    top = 0.6 * max(float(r[2]) for r in rows)
+    clipped = tmp_path / "clipped.csv"
+    clipped.write_text(
+        "\n".join([lines[0], *(",".join([r[0], r[1], repr(min(float(r[2]), top)), r[3]]) for r in rows)])
+        + "\n"
+    )
+    clipped.with_suffix(".json").write_text(path.with_suffix(".json").read_text())
+    for command in (["inspect"], ["fit", "--method", "lm", "--single-law"], ["online"]):
+        found = {}
+        for name, file in (("clean", path), ("clipped", clipped)):
+            assert main([command[0], str(file), *command[1:], "--json"]) == 0
+            doc = json.loads(capsys.readouterr().out)
+            found[name] = [
+                w for w in doc.get("warnings", doc.get("identifiability")) if w["code"] == "stuck_signal"
+            ]
+        assert not found["clean"], command
+        (warning,) = found["clipped"]
+        assert (
+            warning["message"].startswith("wheel_speed holds")
+            and "at its largest value" in warning["message"]
+        )

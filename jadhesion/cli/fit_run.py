@@ -25,7 +25,7 @@ from ..atomic import atomic_write
 from ..data.dataset import sd_scale_summary
 from ..data.formats import RECORDING_SUFFIXES
 from ..data.length_buckets import bucket_length
-from ..data.selected import creep_sign_warning
+from ..data.selected import creep_sign_warning, stuck_speed_warning
 from ..data.sidecar import sidecar_warning
 from ..identify.batch_fit import bucketed, fit_datasets
 from ..identify.kiencke_fit import fit_document, fit_kiencke
@@ -172,10 +172,15 @@ def _recording_report(recording, selection) -> dict:
     """``vehicle`` {:data:`VEHICLE_KEYS`} (the sidecar's, else 22E's defaults), ``warnings``
     ``{code, params, message}`` about the recording rather than the fit: unknown sidecar keys
     (:func:`jadhesion.data.sidecar.sidecar_warning`), most moving samples with the creep against
-    the drive (:func:`jadhesion.data.selected.creep_sign_warning`); the reader's ``notes``
+    the drive (:func:`jadhesion.data.selected.creep_sign_warning`), a stuck or clipped speed
+    (:func:`jadhesion.data.selected.stuck_speed_warning`); the reader's ``notes``
     (:func:`.loading.say_notes`); and whether it has the raw signals (``raw_signals``: else its
     creep is the file's own, ``creep`` "given")."""
-    found = (sidecar_warning(recording), creep_sign_warning(recording, selection))
+    found = (
+        sidecar_warning(recording),
+        creep_sign_warning(recording, selection),
+        stuck_speed_warning(recording),
+    )
     return {
         "vehicle": {k: getattr(recording.vehicle, k) for k in VEHICLE_KEYS},
         "warnings": [w for w in found if w is not None],

@@ -11,7 +11,7 @@ from pathlib import Path
 import jax
 import numpy as np
 
-from ..data.selected import creep_sign_warning, tracking_dataset
+from ..data.selected import creep_sign_warning, stuck_speed_warning, tracking_dataset
 from ..identify.kiencke_fit import A_S_LOG10_BOUNDS, MIN_SAMPLES
 from ..identify.online import (
     REFERENCE_STEP_S,
@@ -79,6 +79,7 @@ def run(args) -> int:
             for w in (
                 sidecar,
                 creep_sign_warning(recording, selection),
+                stuck_speed_warning(recording),
                 few_samples_warning(out),
                 singular_warning(out),
                 hold_warning(out, time if "time" in cols else None),

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..data.dataset import sd_scale_summary, thinned, valid_mask
-from ..data.selected import creep_sign_warning
+from ..data.selected import creep_sign_warning, stuck_speed_warning
 from ..identify.batch_fit import bucketed
 from ..identify.ensemble import ChainTooShortWarning
 from ..identify.laplace import colour_check, initial_spread, thinning
@@ -64,7 +64,8 @@ def tail_check(data, theta, kappa: float) -> dict:
 
 def data_warnings(recording, selection, data, result) -> list:
     """``fit``'s warnings {code, params, message} about the data, by its own code: ``creep_sign``
-    (:func:`jadhesion.data.selected.creep_sign_warning`), :func:`jadhesion.identify.trust.data_warnings`
+    (:func:`jadhesion.data.selected.creep_sign_warning`), ``stuck_signal``
+    (:func:`jadhesion.data.selected.stuck_speed_warning`), :func:`jadhesion.identify.trust.data_warnings`
     and ``peak_extrapolated`` for the posterior's median ``creep_opt`` outside the samples'
     ``|creep|`` (:func:`.peak.extrapolation_warning`)."""
     creep = np.abs(np.asarray(data.creep, float))[valid_mask(data)]
@@ -75,7 +76,8 @@ def data_warnings(recording, selection, data, result) -> list:
         f" at {result.vehicle_speed:.3g} m/s",
     )
     found = trust_data_warnings(data)
-    return [w for w in (creep_sign_warning(recording, selection), *found, peak) if w is not None]
+    recorded = (creep_sign_warning(recording, selection), stuck_speed_warning(recording))
+    return [w for w in (*recorded, *found, peak) if w is not None]
 
 
 def slip_law_check(data, law: str, seed: int, result) -> tuple:

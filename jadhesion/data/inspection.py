@@ -27,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from .segments import Selection
-from .selected import creep_sign_warning, zero_creep_message
+from .selected import creep_sign_warning, stuck_speed_warning, zero_creep_message
 
 SLIP_FOR_AB = 0.5
 CREEP_FOR_SLOPE = 0.005
@@ -179,6 +179,7 @@ def inspect_document(recording, selection: Selection, dataset) -> dict:
     }
     every = {c: _range(cols[c]) for c in ("vehicle_speed", "wheel_speed", "traction_torque") if c in cols}
     sign = creep_sign_warning(recording, selection)
+    stuck = stuck_speed_warning(recording)
     zero = zero_creep_message(recording, selection.mask) if selection.used else None
     remarks = (
         [{"code": "zero_creep", "message": zero}]  # fit, posterior and online refuse it
@@ -195,6 +196,8 @@ def inspect_document(recording, selection: Selection, dataset) -> dict:
         "ranges": ranges,
         "ranges_all": every,
         "selection": selection.document(),
-        "identifiability": ([] if sign is None else [{"code": sign["code"], "message": sign["message"]}])
+        "identifiability": [
+            {"code": w["code"], "message": w["message"]} for w in (sign, stuck) if w is not None
+        ]
         + remarks,
     }

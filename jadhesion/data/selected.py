@@ -12,6 +12,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..errors import RecordingError
+from ..models.effects import on_clock
 from .dataset import PolachDataset, adhesion_source, to_dataset
 from .segments import (
     MIN_DRIVE_MU,
@@ -88,6 +89,60 @@ def creep_sign_warning(recording, selection: Selection) -> dict | None:
         source = "creepage" if "creepage" in cols else "slip_velocity"
         check = f"is {source}'s sign inverted, or {drive}?"
     return {"code": "creep_sign", "params": [], "message": f"{what} of moving samples: {check}"}
+
+
+#: A speed that holds one exact value this long [s] while the other speed moves is stuck or clipped.
+STUCK_S = 2.0
+#: ... moves: by more than this [m/s], and by more than two of its own steps (a coarse quantum).
+STUCK_PARTNER_CHANGE = 0.2
+
+
+def _longest_hold(values, mask) -> tuple[int, int]:
+    """``(first, last)`` sample indices of the longest run of consecutive ``mask`` samples holding
+    one exact value; ``(0, 0)`` when none holds for two samples."""
+    same = (np.diff(values) == 0) & mask[1:] & mask[:-1]
+    edges = np.diff(np.concatenate([[0], same.astype(int), [0]]))
+    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    if not starts.size:
+        return 0, 0
+    k = int(np.argmax(ends - starts))
+    return int(starts[k]), int(ends[k])
+
+
+def stuck_speed_warning(recording) -> dict | None:
+    """``{code: "stuck_signal", params: [], message}`` when a speed column holds one exact value
+    for :data:`STUCK_S` or longer while moving (either speed at least ``MIN_SPEED``; not the
+    selection: the samples a stuck speed puts against the drive are excluded from it) while the
+    other speed changes by more than :data:`STUCK_PARTNER_CHANGE` and two of its steps: a stuck or
+    clipped sensor (a wheel speed
+    clipped for 12.9 s gave a 'converged' fit whose 95 % interval of mu_max missed the truth), with
+    where; the longest such hold, ``None`` without one (or without a time column)."""
+    cols = recording.columns
+    if "time" not in cols or not {"wheel_speed", "vehicle_speed"} <= set(cols):
+        return None
+    t = np.asarray(cols["time"], float)
+    moving = np.maximum(np.abs(cols["vehicle_speed"]), np.abs(cols["wheel_speed"])) >= MIN_SPEED
+    found = []
+    for col, other in (("wheel_speed", "vehicle_speed"), ("vehicle_speed", "wheel_speed")):
+        x, y = np.asarray(cols[col], float), np.asarray(cols[other], float)
+        i, j = _longest_hold(x, moving)
+        if t[j] - t[i] < STUCK_S:
+            continue
+        steps = np.abs(np.diff(y))
+        quantum = float(np.median(steps[steps > 0])) if np.any(steps > 0) else 0.0
+        change = float(np.ptp(y[i : j + 1]))
+        if change > max(STUCK_PARTNER_CHANGE, 2.0 * quantum):
+            found.append((t[j] - t[i], col, other, x[i], change, i, j, abs(x[i]) == np.max(np.abs(x))))
+    if not found:
+        return None
+    held, col, other, value, change, i, j, at_max = max(found)
+    return {
+        "code": "stuck_signal",
+        "params": [],
+        "message": f"{col} holds {value:.6g} m/s exactly for {held:.3g} s ({on_clock((t[i], t[j]), t[0])})"
+        f"{' at its largest value' if at_max else ''} while {other} changes by {change:.3g} m/s: a "
+        "stuck or clipped sensor? leave the stretch out with --start/--end",
+    }
 
 
 def no_samples_message(recording, selection: Selection) -> str:
