@@ -381,6 +381,29 @@ def test_missing_values_are_skipped_as_gaps_on_request(tmp_path):
         load_recording(holes, missing="skip")
 
 
+def test_rows_are_named_as_the_file_numbers_them_after_rows_are_skipped(tmp_path):
+    """Two rows skipped for a missing value (rows 4 and 10), then a time that goes back at row 21:
+    the error names row 21 (line 22), not the 19th row kept; a repeated stamp dropped after the
+    skip is named by its own row too."""
+
+    def edit(rows):
+        rows[3][2], rows[9][1] = "", "NaN"
+        rows[20][0] = rows[18][0]  # row 21 goes back to row 19's time
+
+    path = tmp_path / "back.csv"
+    path.write_text(_raw_text(30, edit))
+    with pytest.raises(RecordingError, match=r"column 'time', row 21 \(line 22\): time"):
+        load_recording(path, missing="skip")
+
+    def repeat(rows):
+        rows[3][2] = ""
+        rows[15][0] = rows[14][0]  # row 16 repeats row 15's stamp
+
+    path.write_text(_raw_text(30, repeat))
+    rec = load_recording(path, missing="skip", repeated_time="drop")
+    assert any("the first at row 16 (line 17)" in n for n in rec.notes) and rec.n_samples == 28
+
+
 def test_a_spreadsheet_error_value_is_a_missing_value_not_a_comment(tmp_path):
     """Excel writes '#N/A' (or '#DIV/0!', '#VALUE!') where a formula found nothing. In the first
     column such a row was taken for a '#' comment and dropped without a word (its samples lost, a

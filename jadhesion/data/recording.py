@@ -50,6 +50,7 @@ from .validate import (
     MAX_SPEED,
     MISSING_CELLS,
     RAW_COLUMNS,
+    Rows,
     _check_finite,
     _check_layout,
     _check_values,
@@ -213,9 +214,10 @@ def _missing_cells(idx, cells=None, parsed=None) -> np.ndarray:
     return np.stack([np.zeros(n, bool) if parsed[j] is None else np.isnan(parsed[j]) for j in idx], axis=1)
 
 
-def _skip_missing(hole, shown_names, lines, name: str) -> tuple:
+def _skip_missing(hole, shown_names, positions: Rows, name: str) -> tuple:
     """``(rows kept, notes)`` for ``missing="skip"``: every row without a missing value
-    (:func:`_missing_cells`), and a note counting the others and naming the first."""
+    (:func:`_missing_cells`), and a note counting the others and naming the first (where it
+    stands in the file: ``positions``)."""
     keep = ~hole.any(axis=1)
     rows = np.flatnonzero(~keep)
     if not rows.size:
@@ -223,29 +225,29 @@ def _skip_missing(hole, shown_names, lines, name: str) -> tuple:
     if not keep.any():
         raise _fail(name, f"every row has a missing value in {', '.join(map(repr, shown_names))}")
     first, col = int(rows[0]), int(np.flatnonzero(hole[rows[0]])[0])
-    where = f"row {first + 1}" + ("" if lines is None else f" (line {lines[first]})")
+    where = positions.at(first)
     return keep, (
         f"{name}: {rows.size} of {hole.shape[0]} rows skipped for a missing value (--missing skip; "
         f"the first at {where}, column {shown_names[col]!r}): each is a gap in time",
     )
 
 
-def _drop_repeated_time(columns: dict, required, lines, name: str, shown: dict) -> tuple:
-    """``(columns, lines, notes)`` for ``repeated_time="drop"``: the first row of every run of equal
+def _drop_repeated_time(columns: dict, required, positions: Rows, name: str, shown: dict) -> tuple:
+    """``(columns, positions, notes)`` for ``repeated_time="drop"``: the first row of every run of equal
     time stamps kept (a logger's duplicated row, or a stamp coarser than its rate), the others
     dropped, and a note counting them, naming the first and saying how many differ from the row
     kept in a column used. A time that goes back stays an error (:func:`._check_values`)."""
     t = columns["time"]
     repeat = np.r_[False, np.diff(t) == 0]
     if not repeat.any():
-        return columns, lines, ()
+        return columns, positions, ()
     kept_row = np.maximum.accumulate(np.where(repeat, 0, np.arange(len(t))))  # each row's run head
     differ = np.zeros(len(t), bool)
     for c in required:
         differ |= columns[c] != columns[c][kept_row]
     rows = np.flatnonzero(repeat)
     first = int(rows[0])
-    where = f"row {first + 1}" + ("" if lines is None else f" (line {lines[first]})")
+    where = positions.at(first)
     n_differ = int(differ[rows].sum())
     copies = f"{n_differ} differ{'s' * (n_differ == 1)} from the row kept" if n_differ else "all exact copies"
     note = (
@@ -253,8 +255,7 @@ def _drop_repeated_time(columns: dict, required, lines, name: str, shown: dict) 
         f"column {shown.get('time', 'time')!r} (--repeated-time drop; the first at {where}; {copies})"
     )
     keep = ~repeat
-    lines = None if lines is None else [line for line, k in zip(lines, keep, strict=True) if k]
-    return {c: v[keep] for c, v in columns.items()}, lines, (note,)
+    return {c: v[keep] for c, v in columns.items()}, positions.kept(keep), (note,)
 
 
 def load_recording(
@@ -310,6 +311,8 @@ def load_recording(
         else:
             header, parsed, lines = fast
         unread = []
+    n_rows = len(rows) if fast is None else next((len(a) for a in parsed if a is not None), 0)
+    positions = Rows.first(n_rows, lines)  # where each row kept stands in the file
     sidecar_path, sidecar, vehicle, notes = _load_sidecar(path)
     notes += read_notes
     specs, shown, hints = _column_map(columns, sidecar, str(sidecar_path), header, name, axle)
@@ -331,10 +334,10 @@ def load_recording(
         idx = [j for j, c in enumerate(renamed) if c in required]
         names = [shown.get(renamed[j], renamed[j]) for j in idx]
         hole = _missing_cells(idx, cells if fast is None else None, None if fast is None else parsed)
-        keep, skipped = _skip_missing(hole, names, lines, name)
+        keep, skipped = _skip_missing(hole, names, positions, name)
         notes += skipped
         if skipped:
-            lines = None if lines is None else [line for line, k in zip(lines, keep, strict=True) if k]
+            positions = positions.kept(keep)
             if fast is None:
                 cells = cells[keep]
             else:
@@ -347,7 +350,7 @@ def load_recording(
         if fast is not None:
             values = parsed[j]
         elif col == "time":
-            values, time_notes = convert_time_column(cells[:, j], shown.get(col, col), lines, name)
+            values, time_notes = convert_time_column(cells[:, j], shown.get(col, col), positions, name)
             notes += time_notes
             if time_notes and specs.get(col) is not None and specs[col].unit not in (None, "s"):
                 raise _fail(
@@ -356,8 +359,10 @@ def load_recording(
                     f"the unit [{specs[col].unit}]",
                 )
         else:
-            values = _convert_column(cells[:, j], shown.get(col, col), lines, name, strict=col in required)
-        if values is None and lines is None and col in required:
+            values = _convert_column(
+                cells[:, j], shown.get(col, col), positions, name, strict=col in required
+            )
+        if values is None and positions.lines is None and col in required:
             source = shown.get(col, col)
             why = [n for n in unread if repr(source) in n]
             raise _fail(name, "; ".join([f"column {source!r}: not numeric", *why]))
@@ -366,7 +371,7 @@ def load_recording(
         else:
             spec = specs.get(col)
             columns[col] = values if spec is None else values * to_si(spec, vehicle.wheel_radius_m)
-    if lines is None:  # a CSV's cells were checked as they were converted
+    if positions.lines is None:  # a CSV's cells were checked as they were converted
         for c in required:
             if c in columns:
                 _check_finite(columns[c], shown.get(c, c), name)
@@ -376,10 +381,10 @@ def load_recording(
             f"{', '.join(map(repr, ignored))} ignored",
         )
     if repeated_time == "drop" and "time" in columns:
-        columns, lines, dropped = _drop_repeated_time(columns, required, lines, name, shown)
+        columns, positions, dropped = _drop_repeated_time(columns, required, positions, name, shown)
         notes += dropped
     with np.errstate(all="ignore"):  # differences of huge finite values may overflow to inf
-        notes += _check_values({c: columns[c] for c in required}, vehicle, lines, name, max_speed, shown)
+        notes += _check_values({c: columns[c] for c in required}, vehicle, positions, name, max_speed, shown)
     return Recording(
         path=path,
         columns=columns,

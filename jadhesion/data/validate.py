@@ -4,6 +4,7 @@ Messages name the user's column (``shown``: canonical → source name), the row 
 from __future__ import annotations
 
 from datetime import datetime, time, timezone
+from typing import NamedTuple, Optional
 
 import numpy as np
 
@@ -119,7 +120,31 @@ _SKIP_HINT = "; --missing skip leaves such rows out (gaps in time)"
 _REPEAT_HINT = "; --repeated-time drop keeps the first row of each repeated stamp"
 
 
-def _convert_column(cells: np.ndarray, col: str, lines, name: str, strict: bool):
+class Rows(NamedTuple):
+    """Where the rows read stand in the file: ``numbers``, 1-based among its data rows (the rows a
+    ``--missing skip`` or ``--repeated-time drop`` keeps keep theirs), and ``lines``, a CSV's line
+    numbers, or ``None`` (Parquet, .mat: no lines)."""
+
+    numbers: np.ndarray
+    lines: Optional[list]
+
+    @classmethod
+    def first(cls, n: int, lines=None) -> "Rows":
+        """The ``n`` rows of a file as read (``lines``: theirs, or ``None``)."""
+        return cls(np.arange(1, n + 1), lines)
+
+    def at(self, i: int) -> str:
+        """``"row N (line L)"`` of the ``i``-th row kept (``"row N"`` without lines)."""
+        return f"row {int(self.numbers[i])}" + ("" if self.lines is None else f" (line {self.lines[i]})")
+
+    def kept(self, keep) -> "Rows":
+        """The rows ``keep`` (bool per row) leaves."""
+        keep = np.asarray(keep, bool)
+        lines = None if self.lines is None else [line for line, k in zip(self.lines, keep, strict=True) if k]
+        return Rows(self.numbers[keep], lines)
+
+
+def _convert_column(cells: np.ndarray, col: str, rows: Rows, name: str, strict: bool):
     """float64 values of one column; with ``strict``, the first bad cell raises a RecordingError."""
     try:
         values = cells.astype(np.float64)
@@ -128,14 +153,14 @@ def _convert_column(cells: np.ndarray, col: str, lines, name: str, strict: bool)
             return None
         for i, cell in enumerate(cells.tolist()):
             if not _is_number(cell):
-                where = f"column {col!r}, row {i + 1} (line {lines[i]})"
+                where = f"column {col!r}, {rows.at(i)}"
                 if not cell.strip():
                     raise _fail(name, f"{where}: empty cell (missing value{_SKIP_HINT})") from None
                 hint = f" (a missing value{_SKIP_HINT})" if cell.strip().lower() in MISSING_CELLS else ""
                 raise _fail(name, f"{where}: {_show(cell)} is not a number{hint}") from None
         raise  # pragma: no cover  (numpy and float() disagree)
     if strict:
-        _check_finite(values, col, name, lines, cells)
+        _check_finite(values, col, name, rows, cells)
     return values
 
 
@@ -166,18 +191,18 @@ _STAMPS = (
 )
 
 
-def convert_time_column(cells: np.ndarray, col: str, lines, name: str) -> tuple:
+def convert_time_column(cells: np.ndarray, col: str, rows: Rows, name: str) -> tuple:
     """``(values [s], notes)`` of a CSV's time column: numbers as they are; ISO 8601 date-times as
     seconds since the Unix epoch (as Parquet timestamps are read) or times of day as seconds since
     midnight, the kind row 1 holds, with a note. The first bad cell raises a RecordingError naming
     its row and line (a day change in times of day: time not increasing)."""
-    values = _convert_column(cells, col, lines, name, strict=False)
+    values = _convert_column(cells, col, rows, name, strict=False)
     if values is not None:
-        _check_finite(values, col, name, lines, cells)
+        _check_finite(values, col, name, rows, cells)
         return values, ()
     kind = next((k for k in _STAMPS if k[0](cells[0]) is not None), None)
     if kind is None:
-        return _convert_column(cells, col, lines, name, strict=True), ()  # raises at the first bad cell
+        return _convert_column(cells, col, rows, name, strict=True), ()  # raises at the first bad cell
     parse, one, several, since = kind
     seconds = np.empty(len(cells))
     for i, cell in enumerate(cells.tolist()):
@@ -185,32 +210,33 @@ def convert_time_column(cells: np.ndarray, col: str, lines, name: str) -> tuple:
         if value is None:
             raise _fail(
                 name,
-                f"column {col!r}, row {i + 1} (line {lines[i]}): {_show(cell)} is not an ISO 8601 "
+                f"column {col!r}, {rows.at(i)}: {_show(cell)} is not an ISO 8601 "
                 f"{one} like row 1's {_show(str(cells[0]))}",
             )
         seconds[i] = value
     return seconds, (f"{name}: column {col!r} read as ISO 8601 {several} (seconds since {since})",)
 
 
-def _check_finite(values, col: str, name: str, lines=None, cells=None):
+def _check_finite(values, col: str, name: str, rows: Optional[Rows] = None, cells=None):
     """Raise at the first NaN or inf of column ``col`` (the user's name for it). A CSV's error shows
-    the cell's text and its line (``lines``, ``cells``); a binary format's (no lines; a Parquet null
+    the cell's text and its line (``rows``, ``cells``); a binary format's (no lines; a Parquet null
     is NaN) shows the value."""
     bad = np.flatnonzero(~np.isfinite(values))
     if not bad.size:
         return
     i = int(bad[0])
-    if lines is None:
+    rows = Rows.first(len(values)) if rows is None else rows
+    if rows.lines is None:
         raise _fail(
             name,
-            f"column {col!r}, row {i + 1}: {values[i]} is not a "
+            f"column {col!r}, {rows.at(i)}: {values[i]} is not a "
             f"finite number (NaN, a missing value, and inf are not allowed"
             f"{_SKIP_HINT if np.isnan(values[i]) else ''})",
         )
     hint = _SKIP_HINT if np.isnan(values[i]) else ""
     raise _fail(
         name,
-        f"column {col!r}, row {i + 1} (line {lines[i]}): {_show(cells[i].strip())}"
+        f"column {col!r}, {rows.at(i)}: {_show(cells[i].strip())}"
         f" is not a finite number (NaN and inf are not allowed{hint})",
     )
 
@@ -241,14 +267,17 @@ def speed_units(ratio: float, column: str, wheel_radius_m: float) -> list:
     return [u for e, u in sorted((e, u) for u, e in by_factor.values()) if e <= UNIT_RATIO_TOLERANCE]
 
 
-def _check_values(cols, vehicle: Vehicle, lines, name: str, max_speed: float, shown: dict) -> tuple:
+def _check_values(
+    cols, vehicle: Vehicle, rows: Optional[Rows], name: str, max_speed: float, shown: dict
+) -> tuple:
     """Raise at the first implausible value of ``cols`` (SI; ``shown``: the user's column names);
     return notes of likely unit slips that may be right (:func:`_ms_note`)."""
     notes = ()
 
-    def _where(col, i, lines):
-        line = "" if lines is None else f" (line {lines[i]})"  # no lines in Parquet or .mat
-        return f"column {shown.get(col, col)!r}, row {i + 1}{line}"
+    rows = Rows.first(len(next(iter(cols.values())))) if rows is None else rows
+
+    def _where(col, i):
+        return f"column {shown.get(col, col)!r}, {rows.at(i)}"
 
     if "time" in cols and len(cols["time"]) > 1:
         dt = np.diff(cols["time"])
@@ -258,7 +287,7 @@ def _check_values(cols, vehicle: Vehicle, lines, name: str, max_speed: float, sh
             t = cols["time"]
             raise _fail(
                 name,
-                f"{_where('time', i, lines)}: time {t[i]:.10g} s is not after the "
+                f"{_where('time', i)}: time {t[i]:.10g} s is not after the "
                 f"previous row's {t[i - 1]:.10g} s (time must strictly increase"
                 f"{_REPEAT_HINT if t[i] == t[i - 1] else ''})",
             )
@@ -281,7 +310,7 @@ def _check_values(cols, vehicle: Vehicle, lines, name: str, max_speed: float, sh
                 fast = "wheel_speed" if ratio > 1 else "vehicle_speed"
                 i = int(np.flatnonzero(moving)[0])
                 where = (
-                    f"{_where(fast, i, lines)}: median wheel/vehicle speed ratio is {ratio:.4g} "
+                    f"{_where(fast, i)}: median wheel/vehicle speed ratio is {ratio:.4g} "
                     f"(creepage {ratio - 1:.3g})"
                 )
                 units = speed_units(max(ratio, 1 / ratio), fast, vehicle.wheel_radius_m)
@@ -308,7 +337,7 @@ def _check_values(cols, vehicle: Vehicle, lines, name: str, max_speed: float, sh
             i = int(bad[0])
             raise _fail(
                 name,
-                f"{_where(col, i, lines)}: {cols[col][i]:.6g} m/s exceeds the plausible "
+                f"{_where(col, i)}: {cols[col][i]:.6g} m/s exceeds the plausible "
                 f"{max_speed:g} m/s; looks like km/h? map it with --column "
                 f'{col}={shown.get(col, col)}[km/h] (or the sidecar\'s "columns")',
             )
@@ -320,7 +349,7 @@ def _check_values(cols, vehicle: Vehicle, lines, name: str, max_speed: float, sh
             i = int(np.argmax(torque))
             raise _fail(
                 name,
-                f"{_where('traction_torque', i, lines)}: the largest torque {peak:.4g} "
+                f"{_where('traction_torque', i)}: the largest torque {peak:.4g} "
                 f"implies mu = {peak / scale:.2g}; expected N·m at the wheelset — looks "
                 f"like kN·m? map it with --column "
                 f"traction_torque={shown.get('traction_torque', 'traction_torque')}[kN*m]",
@@ -330,7 +359,7 @@ def _check_values(cols, vehicle: Vehicle, lines, name: str, max_speed: float, sh
             i = int(bad[0])
             raise _fail(
                 name,
-                f"{_where('traction_torque', i, lines)}: torque "
+                f"{_where('traction_torque', i)}: torque "
                 f"{cols['traction_torque'][i]:.4g} N·m implies mu = "
                 f"{torque[i] / scale:.3g}, implausible for this axle "
                 f"({vehicle.axle_load_kg:g} kg, r = {vehicle.wheel_radius_m:g} m)",
@@ -341,7 +370,7 @@ def _check_values(cols, vehicle: Vehicle, lines, name: str, max_speed: float, sh
             i = int(bad[0])
             raise _fail(
                 name,
-                f"{_where('adhesion', i, lines)}: adhesion coefficient "
+                f"{_where('adhesion', i)}: adhesion coefficient "
                 f"{cols['adhesion'][i]:.4g} is implausible (|mu| <= {MAX_ADHESION:g}); "
                 f"a force or a percentage?",
             )
@@ -354,7 +383,7 @@ def _check_values(cols, vehicle: Vehicle, lines, name: str, max_speed: float, sh
             i = int(bad[0])
             raise _fail(
                 name,
-                f"{_where(col, i, lines)}: {cols[col][i]:.4g}{unit} is implausible (|{col}| <= "
+                f"{_where(col, i)}: {cols[col][i]:.4g}{unit} is implausible (|{col}| <= "
                 f"{limit:g}{unit} with both speeds within {max_speed:g} m/s)",
             )
     # last: a value beyond its range says more than the acceleration it makes
