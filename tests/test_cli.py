@@ -15,6 +15,7 @@ from jadhesion.cli.posterior_run import start_warning
 from jadhesion.data.recording import save_recording
 from jadhesion.identify.laplace import thinning
 from jadhesion.identify.uncertainty import Z95
+from jadhesion.report.text import table
 from jadhesion.status import Status
 from validation.foreign_generator import generate, write
 
@@ -450,3 +451,11 @@ def test_fit_slip_law_population_on_a_steady_start(tmp_path):
     raw = jadhesion("fit", rec, "--method", "lm", "--json", "--creep", "raw", "--slip-law", "population")
     assert json.loads(raw.stdout)["slip_law"] is None and "slip_law_check" not in json.loads(raw.stdout)
     assert "--slip-law population has no effect" in raw.stderr
+
+
+def test_text_tables_show_no_python_none():
+    """A missing value (a p-value where no null ran) is a dash in the text tables, not 'None';
+    floats in 4 significant digits, an absent key an empty cell."""
+    text = table([{"a": None, "b": 0.123456}, {"a": 2}], ["a", "b"])
+    assert "None" not in text and text.splitlines()[2].split() == ["-", "0.1235"]
+    assert text.splitlines()[3].split() == ["2"]

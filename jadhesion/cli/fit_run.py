@@ -395,12 +395,17 @@ def write_table(path, rows) -> None:
     atomic_write(Path(path), lambda tmp: tmp.write_text(buf.getvalue(), encoding="utf-8"))
 
 
+def _shown(value) -> str:
+    """A number of the text output in 5 significant digits; ``none`` for a missing one."""
+    return "none" if value is None else f"{value:.5g}"
+
+
 def _print_one(args, doc) -> None:
     if args.model == "kiencke":
         p = doc["params"]
         print(
             f"Kiencke by {args.method}: p1 {p['p1']:.5g}, p2 {p['p2']:.5g}, a_s {p['a_s']:.5g}; "
-            f"mu_max {doc['mu_max']}, creep_opt {doc['creep_opt']}; MAE {doc['mae']:.5g}; "
+            f"mu_max {_shown(doc['mu_max'])}, creep_opt {_shown(doc['creep_opt'])}; MAE {doc['mae']:.5g}; "
             f"{'converged' if doc['converged'] else 'NOT CONVERGED: ' + doc['status']}"
         )
         for w in doc["warnings"]:

@@ -58,7 +58,7 @@ def _text(doc) -> str:
     lines = [f"{doc['file']}: {doc['samples']} samples, columns {', '.join(doc['columns'])}"]
     if s["rate_hz"] is not None:
         lines.append(
-            f"duration {s['duration_s']:.4g} s, rate {s['rate_hz']:.4g} Hz, jitter "
+            f"duration {s['duration_s']:.6g} s, rate {s['rate_hz']:.4g} Hz, jitter "
             f"{100 * s['jitter']:.2g} % of the step, steps {s['step_s']['min']:.3g}–"
             f"{s['step_s']['max']:.3g} s, {len(s['gaps'])} gap(s)"
             + "".join(f"\n  gap {_time(a, step)} s → {_time(b, step)} s" for a, b in s["gaps"])
