@@ -59,6 +59,10 @@ MAX_CHAIN_BYTES = 2**30
 MOVES = ("de", "stretch")
 
 
+#: Fewest steps per walker a chain may have.
+MIN_STEPS = 50
+
+
 def register(sub) -> None:
     p = sub.add_parser("posterior", help=COMMANDS["posterior"])
     p.add_argument("file", help="recording or creepage CSV")
@@ -73,9 +77,9 @@ def register(sub) -> None:
         "--steps",
         type=int,
         default=None,
-        help=f"steps per walker, burn-in included, at most {MAX_CHAIN_BYTES / 2**30:g} GiB of chain "
-        "(walkers × steps × coordinates × 8 B; default: 5000, extended up to 20000 until the chain "
-        "holds 50 autocorrelation times)",
+        help=f"steps per walker, burn-in included, at least {MIN_STEPS}, at most "
+        f"{MAX_CHAIN_BYTES / 2**30:g} GiB of chain (walkers × steps × coordinates × 8 B; default: "
+        "5000, extended up to 20000 until the chain holds 50 autocorrelation times)",
     )
     p.add_argument(
         "--likelihood",

@@ -39,7 +39,7 @@ from .fit_program import lm_start, seed_key
 from .fit_program import to_dataset as kept_dataset
 from .fit_run import other_law_fits
 from .loading import load_dataset, load_from_args, say_notes, say_sidecar_warning, slip_law_used
-from .posterior import MAX_CHAIN_BYTES, MAX_WALKERS, MIN_WALKERS
+from .posterior import MAX_CHAIN_BYTES, MAX_WALKERS, MIN_STEPS, MIN_WALKERS
 
 #: Without ``--steps``: the chain's first length, and the most it is extended to while it holds
 #: fewer than 50 autocorrelation times (:func:`jadhesion.identify.ensemble.run_ensemble`); the
@@ -221,8 +221,8 @@ def _check_flags(args) -> None:
         )
     if args.steps is None:
         return
-    if args.steps < 50:
-        raise UserError(f"posterior: --steps must be at least 50, got {args.steps}")
+    if args.steps < MIN_STEPS:
+        raise UserError(f"posterior: --steps must be at least {MIN_STEPS}, got {args.steps}")
     if (need := chain_bytes(args.walkers, args.steps, args.likelihood)) > MAX_CHAIN_BYTES:
         raise UserError(
             f"posterior: --steps {args.steps} with --walkers {args.walkers} needs a "

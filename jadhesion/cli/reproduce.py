@@ -26,18 +26,20 @@ DEFAULT_SEEDS, DEFAULT_RUNS = 20, 1000
 def register(sub) -> None:
     """Add the ``reproduce`` subcommand to ``sub`` (argparse subparsers)."""
     p = sub.add_parser("reproduce", help=COMMANDS["reproduce"])
-    p.add_argument("target", nargs="?", choices=("table2", "online"), default=None)
+    p.add_argument(
+        "target", nargs="?", choices=("table2", "online"), default=None, help="one table (default: both)"
+    )
     p.add_argument(
         "--seeds",
         type=int,
         default=DEFAULT_SEEDS,
-        help=f"table2: data/optimiser seeds per cell (at most {MAX_SEEDS})",
+        help=f"table2: data/optimiser seeds per cell (default {DEFAULT_SEEDS}, at most {MAX_SEEDS})",
     )
     p.add_argument(
         "--runs",
         type=int,
         default=DEFAULT_RUNS,
-        help=f"online: Monte Carlo runs per algorithm (at most {MAX_RUNS:,})",
+        help=f"online: Monte Carlo runs per algorithm (default {DEFAULT_RUNS:,}, at most {MAX_RUNS:,})",
     )
     p.add_argument(
         "--no-mcmc", action="store_true", help="table2: leave out the emcee posterior row of each scenario"

@@ -23,6 +23,9 @@ from . import COMMANDS
 #: [s] (:data:`~jadhesion.data.simulator.SAMPLE_PERIOD`, ``DEFAULT_SAMPLES``), for the help text
 #: only: those modules import JAX; a test keeps these equal to them.
 SCENARIO_NAMES = ("dry", "wet", "sand")
+#: The sample rates [Hz] and the recording lengths [samples] ``simulate`` accepts.
+RATE_RANGE = (10.0, 1000.0)
+MIN_SAMPLES, MAX_SAMPLES = 100, 200_000
 EFFECT_NAMES = (
     "rail_change",
     "wheel_radius_error",
@@ -55,14 +58,15 @@ def register(sub) -> None:
         type=float,
         default=None,
         metavar="S",
-        help=f"recording length [s] (default {DEFAULT_DURATION_S:g})",
+        help=f"recording length [s] (default {DEFAULT_DURATION_S:g}; {MIN_SAMPLES} to {MAX_SAMPLES:,} "
+        "samples)",
     )
     p.add_argument(
         "--rate",
         type=float,
         default=DEFAULT_RATE_HZ,
         metavar="HZ",
-        help=f"sample rate [Hz] (default {DEFAULT_RATE_HZ:g})",
+        help=f"sample rate [Hz] (default {DEFAULT_RATE_HZ:g}; {RATE_RANGE[0]:g} to {RATE_RANGE[1]:g})",
     )
     p.add_argument(
         "--vehicle",

@@ -20,7 +20,7 @@ from ..errors import RecordingError
 from ..models.effects import magnitudes
 from ..models.polach import PARAM_NAMES
 from .common import UserError, emit_json, require_in_range, require_output_file, require_seed
-from .simulate import MAX_SENSOR_NOISE
+from .simulate import MAX_SAMPLES, MAX_SENSOR_NOISE, MIN_SAMPLES, RATE_RANGE
 
 #: Accepted ranges of ``--params`` values (physical validity, not the fit's box): name → (lo, hi,
 #: whether lo itself is allowed).
@@ -32,8 +32,6 @@ PARAM_RANGES = {
     "B": (0.0, 10.0, True),
 }
 #: ``--rate`` range [Hz] and the largest recording [samples].
-RATE_RANGE = (10.0, 1000.0)
-MIN_SAMPLES, MAX_SAMPLES = 100, 200_000
 
 
 def parse_params(text: str) -> dict:
