@@ -110,6 +110,7 @@ def test_fit_human_output_says_whether_it_converged(recording, tmp_path):
     assert "NOT CONVERGED" in proc.stdout and "max_steps" in proc.stdout
     assert "warning [not_converged]" in proc.stdout
     assert (tmp_path / "plots" / "fit.png").stat().st_size > 10_000
+    assert f"wrote {tmp_path / 'plots' / 'fit.png'}" in proc.stdout
 
 
 def test_bad_row_exits_2_with_one_line_naming_file_column_row(recording, tmp_path):

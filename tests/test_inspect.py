@@ -41,6 +41,7 @@ def test_inspect_json_values(logger_file, capsys, tmp_path):
     assert codes == ["slip_range", "no_small_creep"]
     assert "slip velocity never exceeds 0.5 m/s" in doc["identifiability"][0]["message"]
     assert (tmp_path / "plots" / "inspect.png").stat().st_size > 20_000
+    assert doc["plots"] == [str(tmp_path / "plots" / "inspect.png")]  # what it wrote, as online says
 
 
 def test_inspect_text_and_braking(logger_file, capsys):

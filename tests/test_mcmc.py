@@ -438,6 +438,9 @@ def test_cli_posterior_json(tmp_path, capsys):
     tau = doc["diagnostics"]["tau"]
     assert chain["params"][0] == max(tau, key=tau.get) and set(chain["params"]) <= set(tau)
     assert (tmp_path / "fig" / "posterior_corner.png").exists()
+    assert doc["plots"] == [
+        str(tmp_path / "fig" / f) for f in ("posterior_corner.png", "posterior_predictive.png")
+    ]
     bad = tmp_path / "bad.csv"
     bad.write_text("creepage,vehicle_speed\n0.1,1.0\n")
     assert main(["posterior", str(bad), "--json"]) == 2

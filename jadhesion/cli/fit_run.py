@@ -353,9 +353,11 @@ def _plot(args, path, dataset, doc, many: bool) -> None:
     out.mkdir(parents=True, exist_ok=True)
     theta = np.array([doc["params"][n] for n in PARAM_NAMES])
     peak = doc.get("derived")  # Polach fits only
+    figure = out / (f"{path.stem}.fit.png" if many else "fit.png")
     fit_figure(
         dataset, theta, title=f"{path.name}: {args.method}", peak=peak, speed=doc.get("vehicle_speed")
-    ).savefig(out / (f"{path.stem}.fit.png" if many else "fit.png"), dpi=110)
+    ).savefig(figure, dpi=110)
+    doc["plots"] = [str(figure)]  # as online's: what was written
 
 
 # ---- output -----------------------------------------------------------------------------------
@@ -492,4 +494,7 @@ def run(args) -> int:
     else:
         print(loaded[0][1].summary())
         _print_one(args, docs[0])
+    if not args.json:
+        for path in [p for d in docs for p in d.get("plots", [])] + ([] if args.out is None else [args.out]):
+            print(f"wrote {path}")
     return 0

@@ -101,11 +101,15 @@ def run(args) -> int:
     if args.plot is not None:
         out = Path(args.plot)
         out.mkdir(parents=True, exist_ok=True)
+        figure = out / "inspect.png"
         recording_overview(recording, mu_hat=np.asarray(full.adhesion), selection=selection).savefig(
-            out / "inspect.png", dpi=100
+            figure, dpi=100
         )
+        doc["plots"] = [str(figure)]
     if args.json:
         emit_json(doc)
     else:
         print(_text(doc))
+        for path in doc.get("plots", []):
+            print(f"wrote {path}")
     return 0

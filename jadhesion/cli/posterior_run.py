@@ -302,8 +302,9 @@ def run(args) -> int:
     if args.plot:
         out = Path(args.plot)
         out.mkdir(parents=True, exist_ok=True)
-        corner_plot(result).savefig(out / "posterior_corner.png", dpi=90)
-        predictive_plot(result, data).savefig(out / "posterior_predictive.png", dpi=110)
+        plots = [out / "posterior_corner.png", out / "posterior_predictive.png"]
+        corner_plot(result).savefig(plots[0], dpi=90)
+        predictive_plot(result, data).savefig(plots[1], dpi=110)
     creep = "given" if not recording.has_raw_signals else "smoothed" if data.slip_sd is not None else "raw"
     doc = _document(result, theta0, note, creep)
     doc["status"] = "converged" if chain is None else chain["code"]
@@ -326,6 +327,8 @@ def run(args) -> int:
     found += [] if sensitive is None else [sensitive]
     found += start_warning(start)
     doc["warnings"] = ([] if sidecar is None else [sidecar]) + found + ([] if chain is None else [chain])
+    if args.plot:
+        doc["plots"] = [str(p) for p in plots]
     if args.json:
         emit_json(doc)
         return 0
@@ -345,4 +348,6 @@ def run(args) -> int:
     )
     for w in doc["warnings"]:
         print(f"warning [{w['code']}]: {w['message']}")
+    for path in doc.get("plots", []):
+        print(f"wrote {path}")
     return 0
