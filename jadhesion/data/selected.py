@@ -114,9 +114,9 @@ def stuck_speed_warning(recording) -> dict | None:
     for :data:`STUCK_S` or longer while moving (either speed at least ``MIN_SPEED``; not the
     selection: the samples a stuck speed puts against the drive are excluded from it) while the
     other speed changes by more than :data:`STUCK_PARTNER_CHANGE` and two of its steps: a stuck or
-    clipped sensor (a wheel speed
-    clipped for 12.9 s gave a 'converged' fit whose 95 % interval of mu_max missed the truth), with
-    where; the longest such hold, ``None`` without one (or without a time column)."""
+    clipped sensor (a wheel speed clipped for 12.9 s gave a 'converged' fit whose 95 % interval of
+    mu_max missed the truth), with where; the longest such hold, ``None`` without one (or without
+    a time column)."""
     cols = recording.columns
     if "time" not in cols or not {"wheel_speed", "vehicle_speed"} <= set(cols):
         return None
