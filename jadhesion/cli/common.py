@@ -100,6 +100,12 @@ def _plain(obj):
     return obj
 
 
+def say_written(paths) -> None:
+    """``wrote PATH`` on stdout for each file a command wrote (its JSON lists them as ``plots``)."""
+    for path in paths:
+        print(f"wrote {path}")
+
+
 def emit_json(document) -> None:
     """Write one JSON document on stdout (NumPy/JAX values converted; NaN/inf become null)."""
     json.dump(_plain(document), sys.stdout, indent=2, allow_nan=False)

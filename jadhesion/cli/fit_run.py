@@ -46,6 +46,7 @@ from .common import (
     require_output_file,
     require_population_memory,
     require_seed,
+    say_written,
     table,
 )
 from .fit_program import fit_polach, seed_key, slip_nodes, to_dataset, trust_numbers
@@ -495,6 +496,5 @@ def run(args) -> int:
         print(loaded[0][1].summary())
         _print_one(args, docs[0])
     if not args.json:
-        for path in [p for d in docs for p in d.get("plots", [])] + ([] if args.out is None else [args.out]):
-            print(f"wrote {path}")
+        say_written([p for d in docs for p in d.get("plots", [])] + ([] if args.out is None else [args.out]))
     return 0

@@ -11,7 +11,7 @@ from ..data.inspection import inspect_document
 from ..data.segments import select
 from ..data.selected import per_stretch_dataset
 from ..plots.recording import recording_overview
-from .common import emit_json, require_output_dir
+from .common import emit_json, require_output_dir, say_written
 from .loading import load_from_args
 
 
@@ -110,6 +110,5 @@ def run(args) -> int:
         emit_json(doc)
     else:
         print(_text(doc))
-        for path in doc.get("plots", []):
-            print(f"wrote {path}")
+        say_written(doc.get("plots", []))
     return 0

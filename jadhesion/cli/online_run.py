@@ -25,7 +25,15 @@ from ..identify.online import (
 )
 from ..plots.online import recording_figure
 from ..status import status_of
-from .common import UserError, emit_json, require_in_range, require_output_dir, require_seed, table
+from .common import (
+    UserError,
+    emit_json,
+    require_in_range,
+    require_output_dir,
+    require_seed,
+    say_written,
+    table,
+)
 from .loading import load_from_args, say_notes, say_sidecar_warning
 
 TRACK_FIELDS = ("p1", "p2", "mu_max", "creep_opt", "eta")
@@ -48,8 +56,8 @@ def run(args) -> int:
         raise UserError(f"{args.file}: {rows} samples; online identification needs at least {MIN_SAMPLES}")
     data, selection = tracking_dataset(recording, args.phase)
     cols = recording.columns
-    time = np.asarray(cols["time"]) if "time" in cols else None
-    per_second = time if args.forgetting == "seconds" else None
+    clock = np.asarray(cols["time"]) if "time" in cols else None  # None: no time column
+    per_second = clock if args.forgetting == "seconds" else None
     out = track_dataset(data, args.algorithm, args.a_s, jax.random.key(args.seed), per_second)
     used = np.asarray(out.used)
     status = status_of(out.status)
@@ -58,7 +66,7 @@ def run(args) -> int:
             f"{args.file}: only {int(used.sum())} informative samples of --phase {args.phase} "
             f"(|v| >= 0.1 m/s, |adhesion| >= 0.02); online identification needs at least {MIN_SAMPLES}"
         )
-    time = np.arange(used.size, dtype=float) if time is None else time
+    time = np.arange(used.size, dtype=float) if clock is None else clock
     tr = out.trace
     doc = {
         "file": str(args.file),
@@ -82,9 +90,9 @@ def run(args) -> int:
                 stuck_speed_warning(recording),
                 few_samples_warning(out),
                 singular_warning(out),
-                hold_warning(out, time if "time" in cols else None),
+                hold_warning(out, clock),
                 optimum_warning(out),
-                below_data_warning(out, data.adhesion, time if "time" in cols else None),
+                below_data_warning(out, data.adhesion, clock),
                 extrapolated_warning(out, data.creep),
             )
             if w is not None
@@ -130,6 +138,5 @@ def run(args) -> int:
         )
         for w in doc["warnings"]:
             print(f"warning [{w['code']}]: {w['message']}")
-        for path in doc.get("plots", []):
-            print(f"wrote {path}")
+        say_written(doc.get("plots", []))
     return 0

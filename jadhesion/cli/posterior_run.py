@@ -33,7 +33,7 @@ from ..identify.uncertainty import Z90
 from ..models.polach import PARAM_NAMES, adhesion_peak
 from ..plots.posterior import corner_plot, predictive_plot
 from ..status import status_of
-from .common import Progress, UserError, emit_json, require_output_dir, require_seed, table
+from .common import Progress, UserError, emit_json, require_output_dir, require_seed, say_written, table
 from .fit_program import fit_polach as kept_fit
 from .fit_program import lm_start, seed_key
 from .fit_program import to_dataset as kept_dataset
@@ -348,6 +348,5 @@ def run(args) -> int:
     )
     for w in doc["warnings"]:
         print(f"warning [{w['code']}]: {w['message']}")
-    for path in doc.get("plots", []):
-        print(f"wrote {path}")
+    say_written(doc.get("plots", []))
     return 0

@@ -191,6 +191,17 @@ class Selection:
         }
 
 
+def longest_run(flags) -> tuple[int, int] | None:
+    """``(start, stop)`` (``stop`` exclusive) of the longest run of consecutive true ``flags``
+    (bool (n,)), the first of equal ones; ``None`` when none is true."""
+    edges = np.diff(np.concatenate([[0], np.asarray(flags, bool).astype(int), [0]]))
+    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    if not starts.size:
+        return None
+    k = int(np.argmax(ends - starts))
+    return int(starts[k]), int(ends[k])
+
+
 def gap_limit(dt) -> float:
     """The longest time step [s] that is not a gap, of the steps ``dt`` [s] (at least one):
     ``max(GAP_FACTOR × median step, GAP_MIN_S)``."""

@@ -19,6 +19,7 @@ from .segments import (
     MIN_SPEED,
     MIN_STRETCH_SAMPLES,
     Selection,
+    longest_run,
     raw_creep,
     select,
     slice_recording,
@@ -100,13 +101,8 @@ STUCK_PARTNER_CHANGE = 0.2
 def _longest_hold(values, mask) -> tuple[int, int]:
     """``(first, last)`` sample indices of the longest run of consecutive ``mask`` samples holding
     one exact value; ``(0, 0)`` when none holds for two samples."""
-    same = (np.diff(values) == 0) & mask[1:] & mask[:-1]
-    edges = np.diff(np.concatenate([[0], same.astype(int), [0]]))
-    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
-    if not starts.size:
-        return 0, 0
-    k = int(np.argmax(ends - starts))
-    return int(starts[k]), int(ends[k])
+    run = longest_run((np.diff(values) == 0) & mask[1:] & mask[:-1])  # run over pairs i, i + 1
+    return (0, 0) if run is None else run
 
 
 def stuck_speed_warning(recording) -> dict | None:

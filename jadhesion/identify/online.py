@@ -51,7 +51,7 @@ from jax import lax
 
 from ..data.creep_state import difference_sd
 from ..data.dataset import PolachDataset
-from ..data.segments import gap_limit
+from ..data.segments import gap_limit, longest_run
 from ..models.effects import on_clock
 from ..models.kiencke import DEFAULT_SLOPE, kiencke_adhesion, kiencke_regressors
 from ..status import Status
@@ -308,13 +308,11 @@ def longest_hold(hit, used) -> tuple[int, int, int]:
     informative samples on which the SNR step set ``η = η_max`` (skipped samples neither break nor
     extend a run); ``(-1, -1, 0)`` when the step never fired."""
     idx = np.flatnonzero(np.asarray(used, bool))
-    h = np.asarray(hit, bool)[idx].astype(int)
-    edges = np.diff(np.concatenate([[0], h, [0]]))
-    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
-    if not starts.size:
+    run = longest_run(np.asarray(hit, bool)[idx])
+    if run is None:
         return -1, -1, 0
-    k = int(np.argmax(ends - starts))
-    return int(idx[starts[k]]), int(idx[ends[k] - 1]), int(ends[k] - starts[k])
+    start, stop = run
+    return int(idx[start]), int(idx[stop - 1]), stop - start
 
 
 def hold_warning(tracked, time) -> dict | None:
