@@ -318,11 +318,13 @@ def _n_extra(names) -> int:
 
 def _generic(sig, residual, mu_pred) -> dict:
     """Sparse discrepancy (STLSQ) on the library of residual-analysis signals, cross-validated on
-    the same contiguous blocks (selected samples only)."""
+    the same contiguous blocks (selected samples only); its errors are weighted means as the
+    candidates' (:class:`~.fitting.FitTable`), so ``gain`` is against the extended fit's ``mae``."""
     lib = features.library(sig, mu_pred)
     names = [k for k in lib if k != "time"] + ["time"]
     phi = np.column_stack([lib[k] for k in names])
-    keep = np.asarray(sig.weight) > 0
+    weight = np.asarray(sig.weight)
+    keep = weight > 0
     weights = np.asarray(fitting.fold_weights(residual.size, weight=sig.weight))
     held = np.zeros_like(residual)
     for w in weights[1:]:
@@ -330,13 +332,16 @@ def _generic(sig, residual, mu_pred) -> dict:
         fit = features.stlsq(phi, residual, w)
         held[out] = (residual - features.stlsq_predict(phi, fit))[out]
     fit = features.stlsq(phi, residual, weights[0])
-    xi = fit[0]
-    mae = np.mean(np.abs(residual[keep]))
+
+    def weighted_mae(r):
+        return float(np.sum(weight[keep] * np.abs(r[keep])) / keep.sum())
+
+    heldout = weighted_mae(held)
     return {
-        "terms": {n: float(c) for n, c in zip(["const"] + names, xi, strict=True) if c != 0.0},
-        "mae": float(np.mean(np.abs(residual - features.stlsq_predict(phi, fit))[keep])),
-        "heldout_mae": float(np.mean(np.abs(held[keep]))),
-        "gain": float(1.0 - np.mean(np.abs(held[keep])) / mae),
+        "terms": {n: float(c) for n, c in zip(["const"] + names, fit[0], strict=True) if c != 0.0},
+        "mae": weighted_mae(residual - features.stlsq_predict(phi, fit)),
+        "heldout_mae": heldout,
+        "gain": 1.0 - heldout / weighted_mae(residual),
     }
 
 

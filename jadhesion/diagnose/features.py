@@ -103,22 +103,26 @@ def stlsq(
     """Sparse ``residual ≈ Φ ξ`` by sequentially thresholded least squares (SINDy, Brunton 2016).
 
     Columns of ``features`` (n, K) are standardised; coefficients with ``|ξ_k| < threshold·std(r)``
-    are zeroed and the rest refitted, ``iterations`` times. Rows with ``weights == 0`` are left out.
-    Returns ``(xi, mean, scale)`` with the prediction ``((Φ − mean)/scale) ξ``.
+    are zeroed and the rest refitted, ``iterations`` times. Each row's error is multiplied by its
+    ``weights`` (n,) ≥ 0 (rows at zero left out), as in the candidates' fits
+    (:mod:`.fitting`); ``std(r)`` weighted alike. Returns ``(xi, mean, scale)`` with the prediction ``((Φ − mean)/scale) ξ``.
     """
-    w = np.asarray(weights) > 0
+    weights = np.asarray(weights, float)
+    w = weights > 0
     phi, r = np.asarray(features), np.asarray(residual)
     mean, scale = phi[w].mean(0), phi[w].std(0)
     scale = np.where(scale > 0, scale, 1.0)
     z = (phi - mean) / scale
     z = np.column_stack([np.ones(len(r)), z])
+    row = weights[w]
     keep = np.ones(z.shape[1], bool)
     xi = np.zeros(z.shape[1])
-    cut = threshold * np.std(r[w])
+    level = np.average(r[w], weights=row**2)
+    cut = threshold * np.sqrt(np.average((r[w] - level) ** 2, weights=row**2))
     for _ in range(iterations):
         xi = np.zeros(z.shape[1])
         if keep.any():
-            xi[keep] = np.linalg.lstsq(z[w][:, keep], r[w], rcond=None)[0]
+            xi[keep] = np.linalg.lstsq(z[w][:, keep] * row[:, None], r[w] * row, rcond=None)[0]
         new_keep = np.abs(xi) >= cut
         new_keep[0] = True
         if np.array_equal(new_keep, keep):
