@@ -50,7 +50,7 @@ from .common import (
     table,
 )
 from .fit_program import fit_polach, seed_key, slip_nodes, to_dataset, trust_numbers
-from .loading import load_dataset, load_from_args, say_notes, say_sidecar_warning, slip_law_used
+from .loading import load_dataset, load_from_args, say_notes_and_sidecar_warning, slip_law_used
 
 
 def _given_budget(args) -> dict:
@@ -148,8 +148,7 @@ def _load(args, path):
     document says of the recording itself (:func:`_recording_report`). Unknown sidecar keys are
     said on stderr at once, before anything they may explain goes wrong."""
     recording = load_from_args(args, path)
-    say_notes(recording)
-    say_sidecar_warning(recording)
+    say_notes_and_sidecar_warning(recording)
     rows = recording.n_samples
     if rows < MIN_SAMPLES:
         raise UserError(

@@ -9,7 +9,7 @@ from ..data.dataset import adhesion_source, to_dataset
 from ..data.recording import Recording, load_recording
 from ..data.segments import trim
 from ..data.selected import selected_dataset
-from ..data.sidecar import sidecar_warning
+from ..data.sidecar import sidecar_warning, unknown_key_notes
 from ..errors import VehicleError
 
 
@@ -40,11 +40,16 @@ def say_notes(recording: Recording) -> None:
         sys.stderr.write(f"jadhesion: note: {note}\n")
 
 
-def say_sidecar_warning(recording: Recording) -> dict | None:
-    """The recording's ``sidecar_unknown_key`` warning
-    (:func:`jadhesion.data.sidecar.sidecar_warning`), said on stderr as soon as it is loaded,
-    before anything it may explain; ``None`` when its sidecar has no unknown key."""
-    if (warning := sidecar_warning(recording)) is not None:
+def say_notes_and_sidecar_warning(recording: Recording) -> dict | None:
+    """:func:`say_notes`, but the sidecar's unknown keys said once, as the recording's
+    ``sidecar_unknown_key`` warning (:func:`jadhesion.data.sidecar.sidecar_warning`, returned;
+    ``None`` when its sidecar has no unknown key), before anything it may explain."""
+    warning = sidecar_warning(recording)
+    said = unknown_key_notes(recording)
+    for note in recording.notes:
+        if note not in said:
+            sys.stderr.write(f"jadhesion: note: {note}\n")
+    if warning is not None:
         sys.stderr.write(f"jadhesion: warning: {warning['message']}\n")
     return warning
 

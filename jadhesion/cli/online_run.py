@@ -34,7 +34,7 @@ from .common import (
     say_written,
     table,
 )
-from .loading import load_from_args, say_notes, say_sidecar_warning
+from .loading import load_from_args, say_notes_and_sidecar_warning
 
 TRACK_FIELDS = ("p1", "p2", "mu_max", "creep_opt", "eta")
 
@@ -49,8 +49,7 @@ def run(args) -> int:
     require_in_range("online", *(10.0**b for b in A_S_LOG10_BOUNDS), a_s=args.a_s)  # the offline fit's box
     require_output_dir("online", "plot", args.plot)
     recording = load_from_args(args, args.file)
-    say_notes(recording)
-    sidecar = say_sidecar_warning(recording)
+    sidecar = say_notes_and_sidecar_warning(recording)
     rows = recording.n_samples
     if rows < MIN_SAMPLES:  # before the observer and smoother are compiled (2-9 s)
         raise UserError(f"{args.file}: {rows} samples; online identification needs at least {MIN_SAMPLES}")

@@ -38,7 +38,7 @@ from .fit_program import fit_polach as kept_fit
 from .fit_program import lm_start, seed_key
 from .fit_program import to_dataset as kept_dataset
 from .fit_run import other_law_fits
-from .loading import load_dataset, load_from_args, say_notes, say_sidecar_warning, slip_law_used
+from .loading import load_dataset, load_from_args, say_notes_and_sidecar_warning, slip_law_used
 from .posterior import MAX_CHAIN_BYTES, MAX_WALKERS, MIN_STEPS, MIN_WALKERS
 
 #: Without ``--steps``: the chain's first length, and the most it is extended to while it holds
@@ -234,8 +234,7 @@ def _check_flags(args) -> None:
 def run(args) -> int:
     _check_flags(args)
     recording = load_from_args(args, args.file)
-    say_notes(recording)
-    sidecar = say_sidecar_warning(recording)
+    sidecar = say_notes_and_sidecar_warning(recording)
     recording, data, selection = load_dataset(args, args.file, kept_dataset, recording=recording)
     data = with_slip_law(data, args.slip_law)  # --slip-law population: that law's nodes
     require_samples(data, args.file)

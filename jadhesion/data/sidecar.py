@@ -91,11 +91,22 @@ def unknown_key_note(name: str, key: str) -> str:
     return f"{name}: {_unknown(key)}"
 
 
+def _unknown_keys(recording) -> list:
+    return [k for k in recording.sidecar if k not in SIDECAR_KEYS and k != "columns"]
+
+
+def unknown_key_notes(recording) -> set:
+    """The notes (:func:`unknown_key_note`) ``recording``'s loading gave its sidecar's unknown
+    keys."""
+    name = str(recording.path.with_suffix(".json"))
+    return {unknown_key_note(name, key) for key in _unknown_keys(recording)}
+
+
 def sidecar_warning(recording) -> dict | None:
     """``{code: "sidecar_unknown_key", params: [keys], message}`` when ``recording``'s sidecar has
     keys that are neither vehicle keys nor ``columns`` (the message: their notes as
     :func:`unknown_key_note` words them), else ``None``."""
-    unknown = [k for k in recording.sidecar if k not in SIDECAR_KEYS and k != "columns"]
+    unknown = _unknown_keys(recording)
     if not unknown:
         return None
     notes = "; ".join(map(_unknown, unknown))
