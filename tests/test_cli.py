@@ -97,6 +97,7 @@ def test_fit_json_contract_and_accuracy(recording):
         assert d["value"] == pytest.approx(float(value), rel=0.05), name
     assert "not_converged" not in codes and "few_samples" not in codes
     for name, u in doc["uncertainty"].items():  # a parameter on a bound is said so, not given numbers
+        assert {"stderr", "ci95", "stderr_hac", "stderr_jackknife"} <= set(u), name  # null, not absent
         on_bound = min(doc["params"][name], 1 - doc["params"][name]) < 1e-6
         assert (u["stderr"] is None) == (on_bound or name in _named(doc, "undetermined"))
         if on_bound:

@@ -60,7 +60,13 @@ def test_no_interior_peak_and_an_unreached_peak_are_said_so():
     peak, jac = peak_numbers(rising, K_EPS, 2.0)
     derived, warnings = peak_report(peak, jac, 1e-4 * jnp.eye(5), 2.0, max_creep=0.5)
     assert float(peak[1]) == pytest.approx(S_MAX, rel=0.05)
-    assert derived["creep_opt"] == {"value": float(peak[1]), "stderr": None, "ci95": None}
+    assert derived["creep_opt"] == {
+        "value": float(peak[1]),
+        "stderr": None,
+        "ci95": None,
+        "stderr_hac": None,
+        "stderr_jackknife": None,
+    }
     assert [w["code"] for w in warnings] == ["peak_extrapolated"] and "no peak" in warnings[0]["message"]
     peak, jac = peak_numbers(DRY, K_EPS, 2.0)
     low = 0.5 * float(peak[1])
@@ -120,5 +126,11 @@ def test_box_bound_on_mu_max_holds_and_caps_a_huge_interval():
     assert derived["mu_max"]["ci95"] == [0.0, MU_BOX_MAX]
     assert "mu_max" not in [n for w in warnings if w["code"] == "undetermined" for n in w["params"]]
     derived, warnings = peak_report(peak, jac, 1e6 * np.eye(5), 2.0, max_creep=1.0)
-    assert derived["mu_max"] == {"value": float(peak[0]), "stderr": None, "ci95": None}
+    assert derived["mu_max"] == {
+        "value": float(peak[0]),
+        "stderr": None,
+        "ci95": None,
+        "stderr_hac": None,
+        "stderr_jackknife": None,
+    }
     assert "mu_max" in [n for w in warnings if w["code"] == "undetermined" for n in w["params"]]

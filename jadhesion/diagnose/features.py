@@ -104,8 +104,9 @@ def stlsq(
 
     Columns of ``features`` (n, K) are standardised; coefficients with ``|ξ_k| < threshold·std(r)``
     are zeroed and the rest refitted, ``iterations`` times. Each row's error is multiplied by its
-    ``weights`` (n,) ≥ 0 (rows at zero left out), as in the candidates' fits
-    (:mod:`.fitting`); ``std(r)`` weighted alike. Returns ``(xi, mean, scale)`` with the prediction ``((Φ − mean)/scale) ξ``.
+    ``weights`` (n,) ≥ 0 (rows at zero left out), as in the candidates' fits (:mod:`.fitting`);
+    ``std(r)`` weighted alike. Returns ``(xi, mean, scale)`` with the prediction
+    ``((Φ − mean)/scale) ξ``.
     """
     weights = np.asarray(weights, float)
     w = weights > 0

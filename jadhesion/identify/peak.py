@@ -28,7 +28,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..models.polach import adhesion_peak
-from .uncertainty import Z95, determined, normal_interval, undetermined_warning
+from .uncertainty import UNDETERMINED, Z95, determined, normal_interval, undetermined_warning
 
 #: The creep range [-] searched for the peak (:func:`adhesion_peak`'s defaults).
 S_MIN, S_MAX = 1e-5, 1.0
@@ -94,7 +94,7 @@ def peak_report(
     derived = {"mu_max": _entry(mu_max, sd_mu, ci_mu, determined(sd_mu, MU_BOX_MAX), (hac_mu, jackknife[0]))}
     undetermined = [] if derived["mu_max"]["stderr"] is not None else ["mu_max"]
     if edge:
-        derived["creep_opt"] = {"value": creep_opt, "stderr": None, "ci95": None}
+        derived["creep_opt"] = {"value": creep_opt, **UNDETERMINED}
     else:
         hac_log = np.sqrt(_variance(jac[1] / creep_opt, cov))
         sd_log = max(hac_log, jackknife[1])
@@ -138,7 +138,7 @@ def extrapolation_warning(creep_opt, min_creep, max_creep, where="") -> dict | N
 def _entry(value, sd, ci, ok, parts):
     """A derived quantity's entry; ``parts``: its delta-method and jackknife standard errors."""
     if not ok:  # not determined: no number that would pretend otherwise
-        return {"value": value, "stderr": None, "ci95": None}
+        return {"value": value, **UNDETERMINED}
     hac, jackknife = (float(x) for x in parts)
     return {
         "value": value,

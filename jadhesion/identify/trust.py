@@ -78,6 +78,7 @@ from .batch_fit import bucketed, valid_samples
 from .peak import DERIVED, MU_BOX_MAX, S_MAX, S_MIN, peak_numbers, peak_report, reference_speed
 from .polach_fit import LM_RESIDUAL, RECOMMENDED_SAMPLES, refit_lm, scaled
 from .uncertainty import (
+    UNDETERMINED,
     Z95,
     block_jackknife_sd,
     correlation,
@@ -254,7 +255,7 @@ def fit_report(data, fit, numbers=None) -> dict:
     uncertainty, warnings, undetermined = {}, [], []
     for i, name in enumerate(PARAM_NAMES):
         if fixed[i] or not determined(sd[i]):
-            uncertainty[name] = {"stderr": None, "ci95": None}
+            uncertainty[name] = dict(UNDETERMINED)
             undetermined += [] if fixed[i] else [name]
             continue
         uncertainty[name] = {

@@ -41,6 +41,8 @@ from .small_linalg import svd_tall
 RCOND = 1e-9
 #: Two-sided 95 % and 90 % normal quantiles.
 Z95, Z90 = 1.959963984540054, 1.6448536269514722
+#: A fit's undetermined (or held) quantity's numbers: every key a determined one has, null.
+UNDETERMINED = dict.fromkeys(("stderr", "ci95", "stderr_hac", "stderr_jackknife"))
 
 
 def normal_interval(value, sd, z, lo, hi, log=False) -> list:
