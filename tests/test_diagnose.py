@@ -787,6 +787,7 @@ def test_cli_json_and_report(tmp_path, capsys):
     path = save_recording(_raw(sim), sim.vehicle, tmp_path / "rec.csv")
     assert main(["diagnose", str(path), "--json", "--report", str(tmp_path / "rep")]) == 0
     doc = json.loads(capsys.readouterr().out)
+    assert doc["file"] == str(path)
     # a 0.03 torque bias on a saturated curve is absorbed by mu0/kA: the recording says it cannot
     # see it (and names the coasting run) instead of naming an unrelated effect; nothing outside
     # the intercept family (offset / radius / load) may be named

@@ -429,6 +429,7 @@ def test_cli_posterior_json(tmp_path, capsys):
         == 0
     )
     doc = json.loads(capsys.readouterr().out)
+    assert doc["file"] == str(path)
     assert set(doc["params"]) == {"kA", "kS", "mu0", "A", "B", "sigma"}
     assert set(doc["derived"]["mu_max"]) == {"median", "q05", "q95"}
     assert doc["diagnostics"]["warnings"] and set(doc["diagnostics"]["tau"]) == set(doc["params"])

@@ -59,6 +59,7 @@ def diagnose_file(
     if (message := zero_creep_message(recording, mask)) is not None:
         raise UserError(message)
     result = diagnose(recording.columns, recording.vehicle, str(path), replicas, seed, mask)
+    result["file"] = str(path)
     result["notes"] = list(recording.notes)
     result["selection"] = {
         **selection.document(),

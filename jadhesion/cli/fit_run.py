@@ -486,7 +486,7 @@ def run(args) -> int:
         write_table(args.out, table_rows(paths, docs))
     if args.json:
         fits = [{"file": str(p), **d} for p, d in zip(paths, docs, strict=True)]
-        emit_json({"fits": fits, **({"skipped": skipped} if args.keep_going else {})} if many else docs[0])
+        emit_json({"fits": fits, **({"skipped": skipped} if args.keep_going else {})} if many else fits[0])
     elif many:
         _print_many(args, paths, docs)
         if skipped:

@@ -305,7 +305,7 @@ def run(args) -> int:
         corner_plot(result).savefig(plots[0], dpi=90)
         predictive_plot(result, data).savefig(plots[1], dpi=110)
     creep = "given" if not recording.has_raw_signals else "smoothed" if data.slip_sd is not None else "raw"
-    doc = _document(result, theta0, note, creep)
+    doc = {"file": str(args.file), **_document(result, theta0, note, creep)}
     doc["status"] = "converged" if chain is None else chain["code"]
     doc["converged"] = chain is None  # as fit's and online's: the status as a bool
     doc["lm_start_status"] = status_of(start.status).label
