@@ -1025,3 +1025,21 @@ def test_generic_term_weighs_samples_as_the_fits_do(clean):
     np.testing.assert_allclose(generic["heldout_mae"], (1.0 - generic["gain"]) * weighted_mae, rtol=1e-12)
     assert generic["mae"] < 1.01 * weighted_mae  # not pulled off by the samples that count little
     assert generic["gain"] < select.GENERIC_THRESHOLD  # white noise elsewhere: nothing to find
+
+
+def test_generic_term_is_not_extrapolated_beyond_its_fitted_range():
+    """Two features collinear on the first half (time, and a speed ramping with it), fitted there
+    with cancelling coefficients; on the second half the speed levels off while time runs on: the
+    prediction holds the fitted edge instead of growing with time beyond its fitted range (a
+    held-out error 700× the residual's on a clean foreign recording before)."""
+    from jadhesion.diagnose import features
+
+    rng = np.random.default_rng(3)
+    t = np.linspace(0.0, 1.0, 400)
+    phi = np.column_stack([t, np.minimum(t, 0.5) + 1e-3 * rng.standard_normal(t.size)])
+    residual = 1e-3 * rng.standard_normal(t.size)
+    weights = (t < 0.5).astype(float)
+    fit = features.stlsq(phi, residual, weights)
+    prediction = features.stlsq_predict(phi, fit)
+    inside = np.abs(prediction[t < 0.5]).max()
+    assert np.abs(prediction[t >= 0.5]).max() <= inside + 1e-12
