@@ -6,6 +6,7 @@ import subprocess
 import sys
 import warnings
 from pathlib import Path
+from types import SimpleNamespace
 
 import emcee
 import jax.numpy as jnp
@@ -513,3 +514,16 @@ def test_thinning_keeps_the_effective_samples(samples, kappa, every):
     """The tempered posterior thins only where the residuals are correlated over at least 4·d
     samples and there are more than POSTERIOR_SAMPLES of them."""
     assert thinning(samples, kappa) == every
+
+
+def test_chain_warning_names_the_coordinates_that_never_moved_and_the_short_ones():
+    """A 45-step chain where kA and B never moved and the others are short of 50 τ: the warning's
+    params list all six (unmoved first), and its message names which is which (it said "in 2 of
+    6 coordinates a walker never moved" beside six names)."""
+    names = ("kA", "kS", "mu0", "A", "B", "sigma")
+    tau = np.array([np.nan, 3.0, 2.0, 4.0, np.nan, 1.5])
+    diagnostics = SimpleNamespace(warnings=["the chain did not mix: in 2 of 6 coordinates ..."], tau=tau)
+    stand_in = SimpleNamespace(diagnostics=diagnostics, chain=np.zeros((45, 12, 6)), names=names)
+    warning = PosteriorResult.chain_warning(stand_in)
+    assert warning["params"][:2] == ["kA", "B"] and warning["params"][2:] == ["A", "kS", "mu0", "sigma"]
+    assert "(never moved: kA, B; short of 50 tau: A, kS, mu0, sigma)" in warning["message"]

@@ -72,13 +72,19 @@ class PosteriorResult(NamedTuple):
         """``{code: "chain_too_short", params, message}`` when the kept chain is shorter than
         :data:`MIN_TAU_MULTIPLE` autocorrelation times of some coordinates or did not mix in some
         (a walker that never moved: τ undefined) — ``params``: those, the unmixed and then the
-        slowest first — else None. The message is the diagnostics' own."""
+        slowest first — else None. The message is the diagnostics' own, naming them."""
         if not self.diagnostics.warnings:
             return None
         tau = np.asarray(self.diagnostics.tau, float)
         short = unmixed(tau, self.chain.shape[0])
         slow = [self.names[i] for i in np.argsort(-np.where(np.isfinite(tau), tau, np.inf)) if short[i]]
-        message = f"{self.diagnostics.warnings[-1]}; intervals from this chain are rough"
+        still = [n for n, t in zip(self.names, tau, strict=True) if not np.isfinite(t)]
+        named = ([f"never moved: {', '.join(still)}"] if still else []) + (
+            [f"short of {MIN_TAU_MULTIPLE} tau: {', '.join(n for n in slow if n not in still)}"]
+            if len(slow) > len(still)
+            else []
+        )
+        message = f"{self.diagnostics.warnings[-1]} ({'; '.join(named)}); intervals from this chain are rough"
         return {"code": "chain_too_short", "params": slow, "message": message}
 
     def theta(self) -> np.ndarray:
