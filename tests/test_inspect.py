@@ -47,7 +47,7 @@ def test_inspect_json_values(logger_file, capsys, tmp_path):
 def test_inspect_text_and_braking(logger_file, capsys):
     assert main(["inspect", str(logger_file), "--phase", "braking"]) == 0
     out = capsys.readouterr().out
-    assert "selected: 300 of 1200 samples (braking); 2 stretch(es)" in out
+    assert "selected: 300 of 1200 samples (braking); 2 stretches between gaps" in out
     assert "excluded traction: 11–13.99 s, 300 samples" in out
     assert "gap 8.99 s → 11 s" in out
 
@@ -102,6 +102,7 @@ def test_inspect_text_of_a_selection_without_samples(logger_file, capsys):
     assert main(["inspect", str(logger_file), "--phase", "braking", "--end", "4.9"]) == 0
     out = capsys.readouterr().out
     assert "selected: 0 of" in out and "creep: no selected samples" in out
+    assert "stretch" not in out  # one stretch, no gap: nothing to count (it said "1 stretch(es)")
     assert "identifiability [few_samples]: no sample selected: nothing to identify" in out
     assert main(["inspect", str(logger_file), "--phase", "braking", "--end", "4.9", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["ranges"]["creep"] is None

@@ -64,8 +64,8 @@ def _text(doc) -> str:
             + "".join(f"\n  gap {_time(a, step)} s → {_time(b, step)} s" for a, b in s["gaps"])
         )
     lines.append(
-        f"selected: {sel['used']} of {sel['samples']} samples ({sel['phase']}); "
-        f"{len(sel['stretches'])} stretch(es)"
+        f"selected: {sel['used']} of {sel['samples']} samples ({sel['phase']})"
+        + (f"; {len(sel['stretches'])} stretches between gaps" if len(sel["stretches"]) > 1 else "")
     )
     lines += [_excluded_line(g, step) for g in _grouped(sel["excluded"])]
     if not sel["excluded_listed_all"]:

@@ -167,10 +167,9 @@ class Selection:
         counts = self.counts()
         wanted = ("traction", "braking") if self.phase == "both" else (self.phase,)
         out = [f"{k} {v}" for k, v in sorted(counts.items()) if k not in wanted]
-        gaps = f", {len(self.gaps)} gap(s)" if self.gaps else ""
+        gaps = f", {len(self.stretches)} stretches between {len(self.gaps)} gap(s)" if self.gaps else ""
         return (
-            f"samples: {self.used} of {self.mask.size} used ({self.phase}, "
-            f"{len(self.stretches)} stretch(es){gaps}); excluded: "
+            f"samples: {self.used} of {self.mask.size} used ({self.phase}{gaps}); excluded: "
             f"{', '.join(out) if out else 'none'}"
         )
 
